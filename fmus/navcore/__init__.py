@@ -1,0 +1,9 @@
+"""navcore: the navigation algorithms of navfmu as plain numpy/scipy code (no FMI).
+
+Modules are named for what they compute: ``earth`` (WGS-84), ``rotations``, ``strapdown``
+(mechanization), ``trajectory`` (motion profiles -> truth and ideal IMU), ``imu_errors`` and
+``gnss_errors`` (sensor error models), ``error_model`` (15-state INS error dynamics),
+``ins_gnss_kf`` (error-state Kalman filter), ``adaptive_laws`` (papers 001 and 004),
+``unscented``/``ctfa``/``imm`` (paper 000), ``components`` (the step-wise models wrapped by
+the FMUs) and ``signals`` (the variable contracts).
+"""

@@ -1,0 +1,348 @@
+"""The components wrapped by the FMUs: TrajectoryImu, GnssReceiver and the INS/GNSS filters.
+
+Each class is a :class:`~navcore.component.Component`: it declares its variables (signal names
+and units from :mod:`navcore.signals`) and advances with ``step(t, h, inputs)``.  ``REGISTRY``
+maps the FMU model names to these classes, so the master can run the same objects directly.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import signals
+from .component import Component, InputError, ParameterError, integer, real, string
+from .gnss_errors import GnssErrorModel
+from .imu_errors import DPH, DPSH, UG, ImuErrorModel, INTENSITY_REFERENCE_RATE
+from .ins_gnss_kf import MEASUREMENTS, ErrorStateKf, KfConfig
+from .rotations import dcm_to_euler
+from .strapdown import Strapdown
+from .trajectory import TrajectoryGenerator, load_profile
+
+#: relative tolerance on times compared across components (s)
+TIME_TOLERANCE = 1e-9
+
+_UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug",
+                      "ug/sqrt(Hz)": "ug/sqrt(Hz)", "ppm": "ppm", "urad": "urad",
+                      "deg/h/g": "deg/h/g", "s": "s", "m": "m", "m/s": "m/s", "rad/s": "rad/s",
+                      "m/s2": "m/s2", "": ""}
+
+
+def ports_from_table(table):
+    """Ports for a ``{name: (default, unit, description)}`` parameter table of a navcore model."""
+    ports = []
+    for name, (default, unit, description) in table.items():
+        if isinstance(default, str):
+            ports.append(string(name, description, default))
+        else:
+            ports.append(real(name, _UNIT_OF_DATASHEET[unit], description, default))
+    return tuple(ports)
+
+
+def _check_step(component, name, h, expected):
+    if not h > 0:
+        raise InputError(f"{component.model_name}: step size {h} s must be > 0")
+    if abs(h - expected) > TIME_TOLERANCE * max(1.0, expected):
+        raise ParameterError(
+            f"{component.model_name}: parameter '{name}' = {expected} s but the component is "
+            f"stepped with {h} s; step it at its own period")
+
+
+# ---------------------------------------------------------------------------------------
+class TrajectoryImu(Component):
+    """6-DOF truth from a motion profile and the IMU increments measured along it."""
+
+    model_name = "TrajectoryImu"
+    description = ("Truth trajectory from a motion profile on WGS-84 and the strapdown IMU "
+                   "increments along it, with bias, noise, Gauss-Markov, scale-factor, "
+                   "misalignment and manoeuvre-dependent noise errors.")
+    parameters = (
+        string("profile", "built-in motion profile name (static, aircraft_500s, manoeuvre_1h, "
+               "uav_maneuver) or path of a JSON profile file", "aircraft_500s"),
+        real("imu_period", "s", "IMU sampling interval; the component is stepped with it", 0.01),
+        integer("seed", "seed of every random error of the IMU", 1),
+        *ports_from_table(ImuErrorModel.PARAMETERS),
+    )
+    inputs = ()
+    outputs = signals.TRUTH + signals.IMU
+    default_experiment = (0.0, 500.0, 0.01)
+
+    def initialize(self, start_time):
+        self.require_positive("imu_period")
+        self.dt = self.params["imu_period"]
+        profile = load_profile(self.params["profile"])
+        self.generator = TrajectoryGenerator(profile, self.dt)
+        error_params = {k: self.params[k] for k in ImuErrorModel.PARAMETERS}
+        self.errors = ImuErrorModel(error_params, self.params["seed"])
+        self.start_time = float(start_time)
+        self.n = 0
+        out = self._truth(self.generator.state())
+        out.update({p.name: 0.0 for p in signals.IMU})
+        out["imu_time"] = self.start_time
+        return out
+
+    def _truth(self, s):
+        return {"truth_time": self.start_time + s["time"], "truth_lat": s["lat"],
+                "truth_lon": s["lon"], "truth_h": s["h"], "truth_vn": s["vn"],
+                "truth_ve": s["ve"], "truth_vd": s["vd"], "truth_roll": s["roll"],
+                "truth_pitch": s["pitch"], "truth_yaw": s["yaw"]}
+
+    def step(self, t, h, inputs):
+        _check_step(self, "imu_period", h, self.dt)
+        truth, dtheta, dvel = self.generator.step()
+        self.n += 1
+        t_end = self.start_time + self.n * self.dt
+        intensity = self.generator.last_rate_norm / INTENSITY_REFERENCE_RATE
+        dtheta, dvel = self.errors.apply(t_end, self.dt, dtheta, dvel, intensity)
+        out = self._truth(truth)
+        out["imu_time"] = t_end
+        out["imu_dt"] = self.dt
+        for i, a in enumerate(signals.AXES_BODY):
+            out[f"imu_dtheta_{a}"] = dtheta[i]
+            out[f"imu_dvel_{a}"] = dvel[i]
+            out[f"imu_gyro_{a}"] = dtheta[i] / self.dt
+            out[f"imu_accel_{a}"] = dvel[i] / self.dt
+        return out
+
+
+# ---------------------------------------------------------------------------------------
+class GnssReceiver(Component):
+    """Position/velocity fixes from the truth at the receiver's own rate, with its errors."""
+
+    model_name = "GnssReceiver"
+    description = ("GNSS receiver: position and velocity fixes from the truth at its own rate "
+                   "with per-axis noise, noise steps, outlier patches, periodic m-times "
+                   "outliers and outages; 'gnss_epoch' counts fixes.")
+    parameters = (
+        integer("seed", "seed of every random error of the receiver", 2),
+        *ports_from_table(GnssErrorModel.PARAMETERS),
+    )
+    inputs = signals.TRUTH[:7]
+    outputs = signals.GNSS + signals.GNSS_INJECTED
+    default_experiment = (0.0, 500.0, 1.0)
+
+    def initialize(self, start_time):
+        self.require_positive("fix_interval")
+        self.model = GnssErrorModel({k: self.params[k] for k in GnssErrorModel.PARAMETERS},
+                                    self.params["seed"])
+        self.interval = self.params["fix_interval"]
+        self.next_fix = float(start_time) + self.interval
+        self.n_fix = 0
+        self.start_time = float(start_time)
+        self.out = {p.name: p.default() for p in self.outputs}
+        self.out["gnss_time"] = float(start_time)
+        return dict(self.out)
+
+    def step(self, t, h, inputs):
+        if not h > 0:
+            raise InputError(f"{self.model_name}: step size {h} s must be > 0")
+        self.check_inputs_finite(inputs, ("truth_time", "truth_lat", "truth_lon", "truth_h",
+                                          "truth_vn", "truth_ve", "truth_vd"))
+        t_truth = inputs["truth_time"]
+        if t_truth + TIME_TOLERANCE * max(1.0, abs(t_truth)) < self.next_fix:
+            return self.out
+        # one fix per due epoch; epochs missed by a coarse step are skipped, not queued
+        k = math.floor((t_truth - self.start_time) / self.interval + 1e-9)
+        self.next_fix = self.start_time + (k + 1) * self.interval
+        fix = self.model.measure(t_truth, inputs["truth_lat"], inputs["truth_lon"],
+                                 inputs["truth_h"],
+                                 np.array([inputs["truth_vn"], inputs["truth_ve"],
+                                           inputs["truth_vd"]]))
+        self.n_fix += 1
+        self.out = {"gnss_time": t_truth, "gnss_lat": fix["lat"], "gnss_lon": fix["lon"],
+                    "gnss_h": fix["h"], "gnss_vn": fix["vn"], "gnss_ve": fix["ve"],
+                    "gnss_vd": fix["vd"], "gnss_valid": bool(fix["valid"]),
+                    "gnss_epoch": self.n_fix, "gnss_outlier": bool(fix["outlier"])}
+        return self.out
+
+
+# ---------------------------------------------------------------------------------------
+_FILTER_PARAMETERS = (
+    real("init_lat", "rad", "initial latitude", 0.0),
+    real("init_lon", "rad", "initial longitude", 0.0),
+    real("init_h", "m", "initial height", 0.0),
+    real("init_vn", "m/s", "initial velocity north", 0.0),
+    real("init_ve", "m/s", "initial velocity east", 0.0),
+    real("init_vd", "m/s", "initial velocity down", 0.0),
+    real("init_roll", "rad", "initial roll", 0.0),
+    real("init_pitch", "rad", "initial pitch", 0.0),
+    real("init_yaw", "rad", "initial yaw", 0.0),
+    real("p0_pos", "m", "initial 1-sigma position error, each axis", 5.0),
+    real("p0_vel", "m/s", "initial 1-sigma velocity error, each axis", 0.3),
+    real("p0_att_level", "rad", "initial 1-sigma roll/pitch (north/east tilt) error",
+         math.radians(1.0)),
+    real("p0_att_yaw", "rad", "initial 1-sigma heading error", math.radians(1.0)),
+    real("p0_gyro_bias_dph", "deg/h", "initial 1-sigma gyro bias", 0.1),
+    real("p0_accel_bias_ug", "ug", "initial 1-sigma accelerometer bias", 100.0),
+    real("q_gyro_arw_dpsh", "deg/sqrt(h)", "gyro angle random walk assumed by the filter", 0.001),
+    real("q_accel_vrw_ugpsHz", "ug/sqrt(Hz)", "accel velocity random walk assumed by the filter",
+         5.0),
+    real("q_gyro_bias_instability_dph", "deg/h", "Gauss-Markov gyro bias sigma assumed", 0.0),
+    real("q_gyro_bias_tau_s", "s", "Gauss-Markov gyro bias correlation time (0 = constant)", 0.0),
+    real("q_accel_bias_instability_ug", "ug", "Gauss-Markov accel bias sigma assumed", 0.0),
+    real("q_accel_bias_tau_s", "s", "Gauss-Markov accel bias correlation time (0 = constant)",
+         0.0),
+    real("r_pos_n", "m", "GNSS position 1-sigma assumed, north", 5.0),
+    real("r_pos_e", "m", "GNSS position 1-sigma assumed, east", 5.0),
+    real("r_pos_d", "m", "GNSS position 1-sigma assumed, down", 5.0),
+    real("r_vel_n", "m/s", "GNSS velocity 1-sigma assumed, north", 0.3),
+    real("r_vel_e", "m/s", "GNSS velocity 1-sigma assumed, east", 0.3),
+    real("r_vel_d", "m/s", "GNSS velocity 1-sigma assumed, down", 0.3),
+    string("measurement", "GNSS measurement used: 'position' or 'position_velocity'",
+           "position_velocity"),
+    real("max_fix_age", "s", "fixes older than this (by gnss_time vs imu_time) are ignored", 0.5),
+)
+
+_IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
+_GNSS_VALUE_NAMES = ("gnss_time", "gnss_lat", "gnss_lon", "gnss_h", "gnss_vn", "gnss_ve",
+                     "gnss_vd")
+
+
+class InsGnssFilter(Component):
+    """Common shell of every INS/GNSS filter: same parameters, inputs and outputs.
+
+    Subclasses name their engine (``engine_class``), may add parameters (``extra_parameters``)
+    and diagnostic outputs (``extra_outputs``), and build the engine in :meth:`make_engine`.
+    """
+
+    engine_class = ErrorStateKf
+    extra_parameters = ()
+    extra_outputs = ()
+    inputs = signals.FILTER_INPUTS
+    default_experiment = (0.0, 500.0, 0.01)
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls.parameters = _FILTER_PARAMETERS + tuple(cls.extra_parameters)
+        cls.outputs = signals.FILTER_OUTPUTS + tuple(cls.extra_outputs)
+
+    # -- configuration -----------------------------------------------------------------
+    def make_config(self):
+        p = self.params
+        self.require_nonnegative(
+            "p0_pos", "p0_vel", "p0_att_level", "p0_att_yaw", "p0_gyro_bias_dph",
+            "p0_accel_bias_ug", "q_gyro_arw_dpsh", "q_accel_vrw_ugpsHz",
+            "q_gyro_bias_instability_dph", "q_gyro_bias_tau_s", "q_accel_bias_instability_ug",
+            "q_accel_bias_tau_s", "max_fix_age")
+        self.require_positive("r_pos_n", "r_pos_e", "r_pos_d", "r_vel_n", "r_vel_e", "r_vel_d")
+        self.require_finite("init_lat", "init_lon", "init_h", "init_vn", "init_ve", "init_vd",
+                            "init_roll", "init_pitch", "init_yaw")
+        if abs(p["init_lat"]) >= math.pi / 2:
+            raise ParameterError(f"{self.model_name}: parameter 'init_lat' = {p['init_lat']} rad "
+                                 "is not a latitude (|lat| < pi/2)")
+        if p["measurement"] not in MEASUREMENTS:
+            raise ParameterError(f"{self.model_name}: parameter 'measurement' = "
+                                 f"{p['measurement']!r}; expected one of {sorted(MEASUREMENTS)}")
+        p0 = np.concatenate([
+            np.full(3, p["p0_pos"]), np.full(3, p["p0_vel"]),
+            [p["p0_att_level"], p["p0_att_level"], p["p0_att_yaw"]],
+            np.full(3, p["p0_gyro_bias_dph"] * DPH), np.full(3, p["p0_accel_bias_ug"] * UG)])
+        r = [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"], p["r_vel_n"], p["r_vel_e"], p["r_vel_d"]]
+        return KfConfig(
+            p0=p0, gyro_arw=p["q_gyro_arw_dpsh"] * DPSH, accel_vrw=p["q_accel_vrw_ugpsHz"] * UG,
+            gyro_bias_sigma=p["q_gyro_bias_instability_dph"] * DPH,
+            gyro_bias_tau=p["q_gyro_bias_tau_s"],
+            accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
+            accel_bias_tau=p["q_accel_bias_tau_s"],
+            r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
+            measurement=p["measurement"])
+
+    def make_engine(self, config, nav):
+        return self.engine_class(config, nav)
+
+    # -- life cycle --------------------------------------------------------------------
+    def initialize(self, start_time):
+        p = self.params
+        config = self.make_config()
+        nav = Strapdown.from_euler(p["init_lat"], p["init_lon"], p["init_h"],
+                                   np.array([p["init_vn"], p["init_ve"], p["init_vd"]]),
+                                   p["init_roll"], p["init_pitch"], p["init_yaw"])
+        self.engine = self.make_engine(config, nav)
+        self.nav_time = float(start_time)
+        self.last_epoch = 0
+        self.out = {q.name: q.default() for q in self.outputs}
+        self._write_solution()
+        return dict(self.out)
+
+    def step(self, t, h, inputs):
+        if not h > 0:
+            raise InputError(f"{self.model_name}: step size {h} s must be > 0")
+        self.check_inputs_finite(inputs, _IMU_INPUT_NAMES)
+        imu_dt = inputs["imu_dt"]
+        imu_time = inputs["imu_time"]
+        out = self.out
+        out["updated"] = False
+        # a new IMU interval ends after the one already integrated: mechanize it
+        if imu_time > self.nav_time + 0.5 * imu_dt and imu_dt > 0:
+            if abs(imu_dt - h) > 1e-6 * h:
+                raise InputError(
+                    f"{self.model_name}: input 'imu_dt' = {imu_dt} s but the filter is stepped "
+                    f"with {h} s; step the filter at the IMU rate so no increment is lost")
+            dtheta = np.array([inputs["imu_dtheta_x"], inputs["imu_dtheta_y"],
+                               inputs["imu_dtheta_z"]])
+            dvel = np.array([inputs["imu_dvel_x"], inputs["imu_dvel_y"], inputs["imu_dvel_z"]])
+            self.engine.propagate(dtheta, dvel, imu_dt)
+            self.nav_time = imu_time
+        epoch = inputs["gnss_epoch"]
+        if epoch != self.last_epoch:
+            self.last_epoch = epoch
+            if inputs["gnss_valid"]:
+                self._update(inputs)
+        self._write_solution()
+        return out
+
+    def _update(self, inputs):
+        self.check_inputs_finite(inputs, _GNSS_VALUE_NAMES)
+        age = self.nav_time - inputs["gnss_time"]
+        if abs(age) > self.params["max_fix_age"]:
+            return
+        engine = self.engine
+        z = engine.measurement(inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
+                               np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]),
+                               age)
+        result = engine.update(z)
+        out = self.out
+        out["updated"] = True
+        out["nis"] = result.nis
+        out["nis_dof"] = len(z)
+        out["q_scale"] = result.q_scale
+        out["r_scale"] = result.r_scale
+        out["fading_factor"] = result.fading_factor
+        out["outlier"] = result.outlier
+        self.write_diagnostics(result)
+
+    def write_diagnostics(self, result):
+        """Subclasses write their extra outputs from the update result here."""
+
+    def _write_solution(self):
+        engine = self.engine
+        nav = engine.nav
+        out = self.out
+        out["nav_time"] = self.nav_time
+        out["nav_lat"], out["nav_lon"], out["nav_h"] = nav.lat, nav.lon, nav.h
+        out["nav_vn"], out["nav_ve"], out["nav_vd"] = (float(x) for x in nav.v_ned)
+        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = (float(x) for x in
+                                                             dcm_to_euler(nav.C_bn))
+        for i, a in enumerate(signals.AXES_BODY):
+            out[f"nav_bg_{a}"] = float(engine.gyro_bias[i])
+            out[f"nav_ba_{a}"] = float(engine.accel_bias[i])
+        std = np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0))
+        for i, name in enumerate(_STD_NAMES):
+            out[name] = float(std[i])
+        if not all(math.isfinite(out[k]) for k in ("nav_lat", "nav_lon", "nav_h", "std_pn")):
+            raise InputError(f"{self.model_name}: the navigation solution became non-finite "
+                             f"at t = {self.nav_time} s (filter diverged)")
+
+
+_STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
+
+
+class Kf(InsGnssFilter):
+    """Baseline 15-state loosely coupled error-state Kalman filter (closed loop)."""
+
+    model_name = "Kf"
+    description = ("INS/GNSS loosely coupled 15-state error-state Kalman filter with closed-loop "
+                   "feedback (baseline, fixed Q and R).")
+
+
+REGISTRY = {cls.model_name: cls for cls in (TrajectoryImu, GnssReceiver, Kf)}

@@ -1,0 +1,263 @@
+"""Attitude representations: direction cosine matrices, Euler angles, rotation vectors,
+quaternions.
+
+Conventions (shared by all of navcore):
+
+* ``C_bn`` is the direction cosine matrix that takes a body-frame vector (forward, right,
+  down) to the NED navigation frame: ``x_n = C_bn @ x_b``.
+* Euler angles are ZYX (yaw psi, then pitch theta, then roll phi):
+  ``C_bn = Rz(psi) Ry(theta) Rx(phi)`` (Groves 2nd ed. eq. 2.22, transposed to body->nav).
+* A rotation vector ``phi`` (axis times angle, rad) maps to ``C = exp([phi x])`` (Rodrigues,
+  Groves eq. 2.26 / Savage 1998 eq. 7.1.1-4); a body frame turning through ``phi`` relative to
+  a reference frame gives ``C_b(new)^(ref) = exp([phi x])``.
+* Quaternions are scalar-first ``[w, x, y, z]`` (Hamilton), with ``quat_to_dcm(q)`` equal to
+  the DCM of the same rotation and ``quat_to_dcm(quat_multiply(p, q)) ==
+  quat_to_dcm(p) @ quat_to_dcm(q)``.
+
+The public functions work on numpy arrays.  The underscore helpers work on Python floats and
+nested lists: the strapdown mechanization calls them once per IMU sample, where a numpy call
+on a 3-vector costs more than the arithmetic itself (``np.cross`` on two 3-vectors takes tens
+of microseconds).  The public functions are thin wrappers over the same helpers, so there is
+one implementation of each formula.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+# Below this angle [rad] the Rodrigues coefficients are evaluated by their Taylor series;
+# truncation error of the kept terms is < theta^6/5040 ~ 2e-22 there, far below rounding.
+_SMALL_ANGLE = 1e-3
+
+
+# ---------------------------------------------------------------------------------------
+# scalar helpers (Python floats, row lists)
+# ---------------------------------------------------------------------------------------
+def _rodrigues_rows(x, y, z):
+    """Rows of exp([phi x]) for phi = (x, y, z): I + a [phi x] + b [phi x]^2 with
+    a = sin(t)/t, b = (1 - cos t)/t^2 = 2 sin^2(t/2)/t^2 (no cancellation at small t)."""
+    t2 = x * x + y * y + z * z
+    if t2 < _SMALL_ANGLE * _SMALL_ANGLE:
+        a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
+        b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+    else:
+        t = math.sqrt(t2)
+        a = math.sin(t) / t
+        s = math.sin(0.5 * t) / t
+        b = 2.0 * s * s
+    # [phi x]^2 = phi phi^T - t^2 I, written out so the matrix is exactly b-symmetric
+    bxy = b * x * y
+    bxz = b * x * z
+    byz = b * y * z
+    ax, ay, az = a * x, a * y, a * z
+    return [
+        [1.0 - b * (y * y + z * z), bxy - az, bxz + ay],
+        [bxy + az, 1.0 - b * (x * x + z * z), byz - ax],
+        [bxz - ay, byz + ax, 1.0 - b * (x * x + y * y)],
+    ]
+
+
+def _rodrigues_delta_rows(x, y, z):
+    """Rows of exp([phi x]) - I, i.e. a [phi x] + b [phi x]^2 (see _rodrigues_rows).  Kept
+    apart from the identity so that a DCM update C + dC rounds once, relative to dC, instead
+    of once per product term relative to 1 (which biases the DCM by ~1e-16 per step)."""
+    t2 = x * x + y * y + z * z
+    if t2 < _SMALL_ANGLE * _SMALL_ANGLE:
+        a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
+        b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
+    else:
+        t = math.sqrt(t2)
+        a = math.sin(t) / t
+        s = math.sin(0.5 * t) / t
+        b = 2.0 * s * s
+    bxy = b * x * y
+    bxz = b * x * z
+    byz = b * y * z
+    ax, ay, az = a * x, a * y, a * z
+    return [
+        [-b * (y * y + z * z), bxy - az, bxz + ay],
+        [bxy + az, -b * (x * x + z * z), byz - ax],
+        [bxz - ay, byz + ax, -b * (x * x + y * y)],
+    ]
+
+
+def _quat_from_rows(m):
+    """Shepperd's method (Shepperd 1978): pick the largest of 4w^2, 4x^2, 4y^2, 4z^2 to
+    avoid dividing by a small number; returns (w, x, y, z) with w >= 0."""
+    m00, m01, m02 = m[0]
+    m10, m11, m12 = m[1]
+    m20, m21, m22 = m[2]
+    tr = m00 + m11 + m22
+    if tr >= m00 and tr >= m11 and tr >= m22:
+        w4 = 2.0 * math.sqrt(1.0 + tr)
+        w, x, y, z = 0.25 * w4, (m21 - m12) / w4, (m02 - m20) / w4, (m10 - m01) / w4
+    elif m00 >= m11 and m00 >= m22:
+        x4 = 2.0 * math.sqrt(1.0 + 2.0 * m00 - tr)
+        w, x, y, z = (m21 - m12) / x4, 0.25 * x4, (m01 + m10) / x4, (m02 + m20) / x4
+    elif m11 >= m22:
+        y4 = 2.0 * math.sqrt(1.0 + 2.0 * m11 - tr)
+        w, x, y, z = (m02 - m20) / y4, (m01 + m10) / y4, 0.25 * y4, (m12 + m21) / y4
+    else:
+        z4 = 2.0 * math.sqrt(1.0 + 2.0 * m22 - tr)
+        w, x, y, z = (m10 - m01) / z4, (m02 + m20) / z4, (m12 + m21) / z4, 0.25 * z4
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    return w, x, y, z
+
+
+def _rotvec_from_rows(m):
+    """Rotation vector of a DCM given as rows, accurate for tiny angles (the vector part
+    comes from the antisymmetric part of the matrix, the angle from atan2)."""
+    w, x, y, z = _quat_from_rows(m)
+    n = math.sqrt(x * x + y * y + z * z)
+    if n < 1e-8:
+        # 2 atan2(n, w)/n = (2/w)(1 - n^2/(3 w^2) + ...); the dropped term is < 4e-17
+        k = 2.0 / w
+    else:
+        k = 2.0 * math.atan2(n, w) / n
+    return k * x, k * y, k * z
+
+
+def _euler_rows(roll, pitch, yaw):
+    """Rows of C_bn = Rz(yaw) Ry(pitch) Rx(roll)."""
+    sr, cr = math.sin(roll), math.cos(roll)
+    sp, cp = math.sin(pitch), math.cos(pitch)
+    sy, cy = math.sin(yaw), math.cos(yaw)
+    return [
+        [cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
+        [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
+        [-sp, sr * cp, cr * cp],
+    ]
+
+
+def _euler_from_rows(m):
+    roll = math.atan2(m[2][1], m[2][2])
+    # atan2 instead of asin: exact near +-90 deg and immune to |C20| > 1 by rounding
+    pitch = math.atan2(-m[2][0], math.hypot(m[2][1], m[2][2]))
+    yaw = math.atan2(m[1][0], m[0][0])
+    if yaw <= -math.pi:
+        yaw = math.pi
+    return roll, pitch, yaw
+
+
+def _matmul_rows(a, b):
+    b0, b1, b2 = b
+    out = []
+    for r0, r1, r2 in a:
+        out.append([
+            r0 * b0[0] + r1 * b1[0] + r2 * b2[0],
+            r0 * b0[1] + r1 * b1[1] + r2 * b2[1],
+            r0 * b0[2] + r1 * b1[2] + r2 * b2[2],
+        ])
+    return out
+
+
+def _matTmul_rows(a, b):
+    """a^T b for row lists."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+    b0, b1, b2 = b
+    return [
+        [a00 * b0[j] + a10 * b1[j] + a20 * b2[j] for j in range(3)],
+        [a01 * b0[j] + a11 * b1[j] + a21 * b2[j] for j in range(3)],
+        [a02 * b0[j] + a12 * b1[j] + a22 * b2[j] for j in range(3)],
+    ]
+
+
+def wrap_angle(a):
+    """Wrap an angle [rad] (scalar or array) to (-pi, pi]."""
+    w = np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi)
+    return float(w) if np.ndim(w) == 0 else w
+
+
+# ---------------------------------------------------------------------------------------
+# public numpy API
+# ---------------------------------------------------------------------------------------
+def skew(v):
+    """Skew-symmetric (cross-product) matrix: ``skew(a) @ b == np.cross(a, b)``."""
+    x, y, z = (float(c) for c in v)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def euler_to_dcm(roll, pitch, yaw):
+    """C_bn (body -> NED) from ZYX Euler angles [rad]: ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    return np.array(_euler_rows(float(roll), float(pitch), float(yaw)))
+
+
+def dcm_to_euler(C):
+    """ZYX Euler angles ``(roll, pitch, yaw)`` [rad] of C_bn; yaw in (-pi, pi],
+    roll in (-pi, pi], pitch in [-pi/2, pi/2]."""
+    return _euler_from_rows(np.asarray(C, dtype=float).tolist())
+
+
+def rotvec_to_dcm(phi):
+    """exp([phi x]) by the exact Rodrigues formula, with a series for tiny angles."""
+    x, y, z = (float(c) for c in phi)
+    return np.array(_rodrigues_rows(x, y, z))
+
+
+def dcm_to_rotvec(C):
+    """Rotation vector (angle in [0, pi]) with ``rotvec_to_dcm(dcm_to_rotvec(C)) == C``;
+    accurate to rounding for tiny angles, and near pi (through Shepperd's quaternion)."""
+    return np.array(_rotvec_from_rows(np.asarray(C, dtype=float).tolist()))
+
+
+def quat_from_dcm(C):
+    """Unit quaternion [w, x, y, z] (w >= 0) of a DCM (Shepperd's method)."""
+    return np.array(_quat_from_rows(np.asarray(C, dtype=float).tolist()))
+
+
+def quat_to_dcm(q):
+    """DCM of a quaternion [w, x, y, z] (normalised first)."""
+    w, x, y, z = quat_normalize(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def quat_multiply(p, q):
+    """Hamilton product p (x) q, so that ``quat_to_dcm(p (x) q) = quat_to_dcm(p) @ quat_to_dcm(q)``."""
+    pw, px, py, pz = (float(c) for c in p)
+    qw, qx, qy, qz = (float(c) for c in q)
+    return np.array([
+        pw * qw - px * qx - py * qy - pz * qz,
+        pw * qx + px * qw + py * qz - pz * qy,
+        pw * qy - px * qz + py * qw + pz * qx,
+        pw * qz + px * qy - py * qx + pz * qw,
+    ])
+
+
+def quat_from_rotvec(phi):
+    """Quaternion [cos(t/2), sin(t/2) phi/t] of a rotation vector (series for tiny t)."""
+    x, y, z = (float(c) for c in phi)
+    t2 = x * x + y * y + z * z
+    if t2 < _SMALL_ANGLE * _SMALL_ANGLE:
+        s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0  # sin(t/2)/t
+        c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0
+    else:
+        t = math.sqrt(t2)
+        s = math.sin(0.5 * t) / t
+        c = math.cos(0.5 * t)
+    return np.array([c, s * x, s * y, s * z])
+
+
+def quat_normalize(q):
+    """Unit quaternion with the same direction; raises ValueError for a zero quaternion."""
+    q = np.asarray(q, dtype=float)
+    n = float(np.sqrt(q @ q))
+    if not n > 0.0 or not math.isfinite(n):
+        raise ValueError(f"quaternion {q} cannot be normalised")
+    return q / n
+
+
+def orthonormalize(C):
+    """Nearest proper rotation matrix to C in the Frobenius norm (polar decomposition
+    via SVD: U V^T, with the sign fixed so det = +1)."""
+    u, _, vt = np.linalg.svd(np.asarray(C, dtype=float))
+    r = u @ vt
+    if np.linalg.det(r) < 0.0:
+        u[:, -1] = -u[:, -1]
+        r = u @ vt
+    return r

@@ -1,0 +1,97 @@
+"""The signal contracts shared by components: names, types and SI units.
+
+Every INS/GNSS filter declares ``FILTER_INPUTS`` and at least ``FILTER_OUTPUTS`` so that any
+filter can replace any other in a system model.  Time of validity travels with the data:
+``imu_time`` is the end of the interval the increments cover (the interval is
+``[imu_time - imu_dt, imu_time]``), ``gnss_time`` is when the fix was taken, ``nav_time`` is
+the time the navigation solution is valid for, ``truth_time`` the time of the truth sample.
+"""
+from __future__ import annotations
+
+from .component import boolean, integer, real
+
+AXES_NED = ("n", "e", "d")
+AXES_BODY = ("x", "y", "z")
+
+TRUTH = (
+    real("truth_time", "s", "time the truth sample is valid for"),
+    real("truth_lat", "rad", "true geodetic latitude"),
+    real("truth_lon", "rad", "true longitude"),
+    real("truth_h", "m", "true height above the WGS-84 ellipsoid"),
+    real("truth_vn", "m/s", "true velocity north"),
+    real("truth_ve", "m/s", "true velocity east"),
+    real("truth_vd", "m/s", "true velocity down"),
+    real("truth_roll", "rad", "true roll (ZYX Euler)"),
+    real("truth_pitch", "rad", "true pitch (ZYX Euler)"),
+    real("truth_yaw", "rad", "true yaw / heading (ZYX Euler), (-pi, pi]"),
+)
+
+IMU = (
+    real("imu_time", "s", "end of the interval the increments cover"),
+    real("imu_dt", "s", "length of the interval the increments cover"),
+    *(real(f"imu_dtheta_{a}", "rad", f"angle increment about body {a} over the interval")
+      for a in AXES_BODY),
+    *(real(f"imu_dvel_{a}", "m/s", f"specific-force velocity increment along body {a}")
+      for a in AXES_BODY),
+    *(real(f"imu_gyro_{a}", "rad/s", f"mean angular rate about body {a} (dtheta/dt)")
+      for a in AXES_BODY),
+    *(real(f"imu_accel_{a}", "m/s2", f"mean specific force along body {a} (dvel/dt)")
+      for a in AXES_BODY),
+)
+
+GNSS = (
+    real("gnss_time", "s", "time the latest fix was taken"),
+    real("gnss_lat", "rad", "measured latitude"),
+    real("gnss_lon", "rad", "measured longitude"),
+    real("gnss_h", "m", "measured height above the ellipsoid"),
+    real("gnss_vn", "m/s", "measured velocity north"),
+    real("gnss_ve", "m/s", "measured velocity east"),
+    real("gnss_vd", "m/s", "measured velocity down"),
+    boolean("gnss_valid", "the latest fix is usable (false during outages)"),
+    integer("gnss_epoch", "counter of fixes; a filter updates when it changes"),
+)
+
+#: diagnostic output of the receiver model, for evaluation only (a filter never reads it)
+GNSS_INJECTED = (
+    boolean("gnss_outlier", "an outlier was injected into the latest fix (evaluation only)"),
+)
+
+#: inputs of every INS/GNSS filter (a filter never reads truth)
+FILTER_INPUTS = IMU[:8] + GNSS
+
+_NAV = (
+    real("nav_time", "s", "time the navigation solution is valid for"),
+    real("nav_lat", "rad", "estimated latitude"),
+    real("nav_lon", "rad", "estimated longitude"),
+    real("nav_h", "m", "estimated height above the ellipsoid"),
+    real("nav_vn", "m/s", "estimated velocity north"),
+    real("nav_ve", "m/s", "estimated velocity east"),
+    real("nav_vd", "m/s", "estimated velocity down"),
+    real("nav_roll", "rad", "estimated roll"),
+    real("nav_pitch", "rad", "estimated pitch"),
+    real("nav_yaw", "rad", "estimated yaw"),
+    *(real(f"nav_bg_{a}", "rad/s", f"estimated gyro bias, body {a}") for a in AXES_BODY),
+    *(real(f"nav_ba_{a}", "m/s2", f"estimated accelerometer bias, body {a}") for a in AXES_BODY),
+)
+
+_STD = (
+    *(real(f"std_p{a}", "m", f"1-sigma of the position error, {a.upper()}") for a in AXES_NED),
+    *(real(f"std_v{a}", "m/s", f"1-sigma of the velocity error, {a.upper()}") for a in AXES_NED),
+    *(real(f"std_att_{a}", "rad", f"1-sigma of the attitude error angle about {a.upper()}")
+      for a in AXES_NED),
+    *(real(f"std_bg_{a}", "rad/s", f"1-sigma of the gyro bias error, body {a}") for a in AXES_BODY),
+    *(real(f"std_ba_{a}", "m/s2", f"1-sigma of the accel bias error, body {a}") for a in AXES_BODY),
+)
+
+_DIAGNOSTICS = (
+    real("nis", "", "normalized innovation squared of the latest update (0 without update)"),
+    integer("nis_dof", "degrees of freedom of nis (measurement dimension, 0 without update)"),
+    boolean("updated", "a measurement update happened in the last step"),
+    real("q_scale", "", "adaptive process-noise scale (1 for a fixed-Q filter)", 1.0),
+    real("r_scale", "", "adaptive measurement-noise scale, trace(R_used)/trace(R0)", 1.0),
+    real("fading_factor", "", "fading-memory factor lambda of the latest update (1 = none)", 1.0),
+    boolean("outlier", "the latest measurement was judged an outlier"),
+)
+
+#: outputs every INS/GNSS filter has (filters may add their own diagnostics)
+FILTER_OUTPUTS = _NAV + _STD + _DIAGNOSTICS

@@ -1,0 +1,41 @@
+"""Errors a user of the master can act on.
+
+Every error the master raises on purpose derives from :class:`NavfmuError`; the command line
+prints its message (no traceback) and exits with a non-zero status.  Any other exception is a
+bug and keeps its traceback.
+"""
+from __future__ import annotations
+
+
+class NavfmuError(Exception):
+    """Base class of the user-facing errors; the message says what is wrong and where."""
+
+
+class SspError(NavfmuError):
+    """A system structure file (.ssd/.ssv) is malformed or uses something unsupported.
+
+    The message names the file and the element or attribute.
+    """
+
+
+class WiringError(NavfmuError):
+    """A connection or parameter names a component or variable that does not exist (or has the
+    wrong causality/type), e.g. after swapping a component's FMU."""
+
+
+class SimulationError(NavfmuError):
+    """A component failed while running (FMU status Error/Discard/Fatal, or a component raised).
+
+    The message names the component and the simulation time and includes the component's log.
+    ``component``, ``time`` and ``log`` keep the details for programs.
+    """
+
+    def __init__(self, message: str, component: str = "", time: float | None = None,
+                 log: tuple[str, ...] = ()):
+        super().__init__(message)
+        self.component = component
+        self.time = time
+        self.log = tuple(log)
+
+
+__all__ = ["NavfmuError", "SspError", "WiringError", "SimulationError"]
