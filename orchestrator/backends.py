@@ -347,13 +347,15 @@ class FmuInstance(Instance):
         return "\nFMU log:\n  " + "\n  ".join(self.log)
 
     def _fail(self, what: str, status: Optional[int] = None, time: Optional[float] = None,
-              detail: str = "") -> SimulationError:
+              at: bool = True) -> SimulationError:
+        """The error for a failed FMI call; ``time`` is stored (and shown if ``at``)."""
         if status == 4:
             self._fatal = True
-        label = f" with status {STATUS_LABELS[status]}" if status is not None and status < 6 else ""
-        when = f" at t = {time:.9g} s" if time is not None else ""
+        label = (f" with status {STATUS_LABELS[status]}"
+                 if status is not None and 0 <= status < len(STATUS_LABELS) else "")
+        when = f" at t = {time:.9g} s" if time is not None and at else ""
         msg = (f"component '{self.name}' ({self.path.name}): {what} failed{label}{when}"
-               f"{': ' + detail if detail else ''}{self._log_text()}")
+               f"{self._log_text()}")
         return SimulationError(msg, component=self.name, time=time, log=tuple(self.log))
 
     def _checked(self, what: str, call, *args, time=None):
@@ -438,7 +440,8 @@ class FmuInstance(Instance):
     def do_step(self, t: float, h: float) -> None:
         status = self._fn_do_step(self._c, t, h, 1)
         if status > 1:
-            raise self._fail(f"fmi2DoStep from t = {t:.9g} s with step {h:.9g} s", status, t + h)
+            raise self._fail(f"fmi2DoStep from t = {t:.9g} s to t = {t + h:.9g} s", status, t,
+                             at=False)
         self.time = t + h
 
     def get_state(self):
@@ -533,8 +536,9 @@ class DirectInstance(Instance):
             )
         return cls(component_class(), name)
 
-    def _error(self, what: str, exc: Exception, time: Optional[float]) -> SimulationError:
-        when = f" at t = {time:.9g} s" if time is not None else ""
+    def _error(self, what: str, exc: Exception, time: Optional[float],
+               at: bool = True) -> SimulationError:
+        when = f" at t = {time:.9g} s" if time is not None and at else ""
         return SimulationError(f"component '{self.name}' ({self.model_name}): {what} failed{when}: "
                                f"{exc}", component=self.name, time=time, log=(str(exc),))
 
@@ -606,7 +610,8 @@ class DirectInstance(Instance):
         try:
             outputs = self.component.step(t, h, self._inputs)
         except self._errors as exc:
-            raise self._error(f"step from t = {t:.9g} s with step {h:.9g} s", exc, t + h) from None
+            raise self._error(f"step from t = {t:.9g} s to t = {t + h:.9g} s", exc, t,
+                              at=False) from None
         self.time = t + h
         self._outputs = outputs
 

@@ -64,7 +64,7 @@ def _dcm(roll, pitch, yaw):
 def find_component(results, prefix, required):
     """Name of the recorded component whose columns include ``prefix + required``."""
     for comp in results.components:
-        names = results.names(comp)
+        names = results.columns[comp]
         if all(prefix + r in names for r in required):
             return comp
     raise NavfmuError(f"no component records the '{prefix}*' signals {', '.join(required)}; "
@@ -136,7 +136,7 @@ def filter_metrics(results, filter_name, window=None, truth_name=None):
     out["attitude_max_deg"] = {a: math.degrees(peak(e["att_" + a]))
                                for a in ("roll", "pitch", "yaw")}
     col = results.column
-    names = results.names(filter_name)
+    names = results.columns[filter_name]
     if all(f"std_p{a}" in names for a in AXES):
         groups = {"position": ("pos_", "std_p"), "velocity": ("vel_", "std_v"),
                   "attitude": ("phi_", "std_att_")}

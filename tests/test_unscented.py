@@ -246,3 +246,36 @@ def test_state_is_deep_copyable_and_deterministic():
     a.update(z, lambda x: H @ x, R)
     snapshot.update(z, lambda x: H @ x, R)
     assert np.array_equal(a.x, snapshot.x) and np.array_equal(a.P, snapshot.P)
+
+
+def test_filter_with_singular_covariance_uses_fallback_and_matches_kf():
+    # a state with exactly zero variance (not excited): Cholesky fails, eigen fallback works
+    rng, F, H, Q, R = linear_model(seed=17)
+    Q = np.diag([1e-2, 1e-2, 1e-3, 0.0])
+    F = np.diag([1.0, 1.0, 0.9, 1.0])
+    F[0, 2] = 0.5
+    P0 = np.diag([1.0, 1.0, 0.1, 0.0])
+    x0 = np.array([0.0, 0.0, 0.0, 0.2])
+    ukf = UnscentedKalmanFilter(4, x0=x0, P0=P0)
+    kf = LinearKalmanFilter(x0, P0)
+    for _ in range(10):
+        z = rng.normal(size=2)
+        ukf.predict(lambda x: F @ x, Q)
+        kf.predict(F, Q)
+        ukf.update(z, lambda x: H @ x, R)
+        kf.update(z, H, R)
+    assert ukf.sqrt_fallbacks >= 10
+    assert np.allclose(ukf.x, kf.x, rtol=1e-9, atol=1e-12)
+    assert np.allclose(ukf.P, kf.P, rtol=1e-9, atol=1e-12)
+    assert ukf.x[3] == pytest.approx(0.2, abs=1e-12) and abs(ukf.P[3, 3]) < 1e-12
+
+
+def test_caller_set_covariance_is_symmetrized_before_use():
+    ukf = UnscentedKalmanFilter(2)
+    ukf.P = np.array([[2.0, 0.3], [0.1, 1.0]])          # asymmetric by a caller
+    X = ukf.sigma_points()
+    _, cov = unscented_transform(X, ukf.Wm, ukf.Wc)
+    assert np.allclose(cov, [[2.0, 0.2], [0.2, 1.0]], rtol=1e-13)
+    ukf.P = np.array([[1.0, np.nan], [np.nan, 1.0]])
+    with pytest.raises(InputError, match="'P'"):
+        ukf.predict(lambda x: x, np.eye(2))

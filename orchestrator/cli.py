@@ -1,0 +1,244 @@
+"""The ``navfmu`` command line: build, validate, run, compare, bench.
+
+User errors (:class:`~orchestrator.errors.NavfmuError`) print one line ``navfmu: error: ...``
+and exit with status 2; no traceback.  ``--debug`` shows tracebacks of internal errors.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from .errors import NavfmuError
+
+DEFAULT_OUT = Path("navfmu-results")
+
+
+def _progress_bar(label):
+    from tqdm import tqdm
+
+    bar = {}
+
+    def progress(done, total):
+        if "bar" not in bar:
+            bar["bar"] = tqdm(total=total, desc=label, unit="step", leave=False,
+                              mininterval=0.5, file=sys.stderr)
+        bar["bar"].update(done - bar["bar"].n)
+        if done >= total:
+            bar["bar"].close()
+
+    return progress
+
+
+def _parse_window(text):
+    if not text:
+        return None
+    try:
+        t0, t1 = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise NavfmuError(f"--window: expected 't0:t1' in seconds, got {text!r}") from None
+    if not t1 > t0:
+        raise NavfmuError(f"--window: t1 must be greater than t0, got {text!r}")
+    return t0, t1
+
+
+def _parse_sets(items):
+    values = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or "." not in key:
+            raise NavfmuError(f"--set: expected Component.variable=value, got {item!r}")
+        for conv in (int, float):
+            try:
+                value = conv(value)
+                break
+            except ValueError:
+                continue
+        else:
+            if value.lower() in ("true", "false"):
+                value = value.lower() == "true"
+        values[key] = value
+    return values
+
+
+@click.group()
+@click.option("--debug", is_flag=True, help="Show tracebacks of internal errors.")
+@click.pass_context
+def cli(ctx, debug):
+    """navfmu: INS/GNSS co-simulation with adaptive Kalman filter FMUs."""
+    ctx.obj = {"debug": debug}
+
+
+@cli.command()
+@click.argument("names", nargs=-1)
+@click.option("--force", is_flag=True, help="Rebuild even if up to date.")
+def build(names, force):
+    """Build the FMUs (all, or NAMES) into fmus/dist/ when missing or stale."""
+    from . import build as fmu_build
+
+    built = fmu_build.build(list(names) or None, force=force)
+    for p in built:
+        click.echo(f"built {p}")
+    if not built:
+        click.echo(f"FMUs in {fmu_build.DIST} are up to date")
+
+
+@cli.command()
+@click.argument("fmus", nargs=-1, type=click.Path())
+def validate(fmus):
+    """Validate FMUs with fmpy (default: every FMU in fmus/dist, built first)."""
+    from fmpy.validation import validate_fmu
+
+    from . import build as fmu_build
+
+    if not fmus:
+        fmu_build.build()
+        fmus = [str(fmu_build.fmu_path(s.stem)) for s in fmu_build.slave_scripts()]
+    bad = 0
+    for f in fmus:
+        if not Path(f).is_file():
+            raise NavfmuError(f"FMU file not found: {f}")
+        problems = validate_fmu(f)
+        if problems:
+            bad += 1
+            click.echo(f"{f}: {len(problems)} problem(s)")
+            for p in problems:
+                click.echo(f"  {p}")
+        else:
+            click.echo(f"{f}: no problems found")
+    if bad:
+        raise NavfmuError(f"{bad} FMU(s) failed validation")
+
+
+def _common_run_options(f):
+    f = click.option("--out", "out", type=click.Path(file_okay=False),
+                     help="Output folder (default: navfmu-results/<scenario>).")(f)
+    f = click.option("--stop", "stop", type=float, help="Stop time [s] (default: the SSD's).")(f)
+    f = click.option("--backend", type=click.Choice(["fmu", "direct"]), default="fmu",
+                     show_default=True, help="Run the FMUs, or the navcore objects directly.")(f)
+    f = click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")(f)
+    f = click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
+                     help="Override a parameter (repeatable).")(f)
+    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz"]), default="csv",
+                     show_default=True, help="Result file format.")(f)
+    f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
+    return f
+
+
+def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title):
+    from . import scenarios
+
+    model = scenarios.load_scenario(scenario)
+    window = _parse_window(window)
+    parameters = _parse_sets(sets)
+    out = Path(out) if out else DEFAULT_OUT / model.name
+    runs = []
+    for f in filters:
+        label = f or "scenario"
+        runs.append(scenarios.simulate_scenario(
+            model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
+            window=window, progress=_progress_bar(label),
+            log=lambda m: click.echo(m, err=True)))
+    reference = scenarios.paper_reference(model)
+    click.echo(f"\n{model.name}: RMS errors over "
+               f"{runs[0].metrics and next(iter(runs[0].metrics.values()))['window_s']} s")
+    click.echo(scenarios.report_table(runs, reference))
+    for run in runs:
+        for f, m in run.metrics.items():
+            extra = []
+            if "nis" in m:
+                extra.append(f"mean NIS {m['nis']['mean']:.2f} (dof {m['nis']['dof']}, 95 % band "
+                             f"{m['nis']['band95'][0]:.2f}-{m['nis']['band95'][1]:.2f})")
+            if "nees" in m:
+                extra.append("NEES pos/vel/att " + "/".join(f"{m['nees'][g]:.2f}" for g in
+                                                            ("position", "velocity", "attitude")))
+            if "time_per_step_ms" in m:
+                extra.append(f"{m['time_per_step_ms'] * 1e3:.0f} us per filter step")
+            click.echo(f"  {run.label}: " + "; ".join(extra))
+    written = scenarios.write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title)
+    click.echo(f"\nwrote {len(written)} files to {out}/: "
+               + ", ".join(p.name for p in written))
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--filter", "filter_", help="Swap the 'filter' component: an FMU name (Kf, "
+              "SageHusaFading, ...) or the path of an .fmu file.")
+@_common_run_options
+def run(scenario, filter_, out, stop, backend, window, sets, fmt, no_plots):
+    """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
+    _execute(scenario, [filter_], out, stop, backend, window, sets, fmt, no_plots,
+             title=f"{Path(scenario).name}")
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
+@_common_run_options
+def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots):
+    """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
+    names = [f.strip() for f in filters.split(",") if f.strip()]
+    if not names:
+        raise NavfmuError("--filters: give at least one filter")
+    _execute(scenario, names, out, stop, backend, window, sets, fmt, no_plots,
+             title=f"{Path(scenario).name}: {', '.join(names)}")
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path(), default="models/aircraft_500s")
+@click.option("--stop", type=float, default=100.0, show_default=True,
+              help="Simulated time of each of the two runs [s].")
+@click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
+def bench(scenario, stop, as_json):
+    """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
+    time ratio and the per-step cost of each component."""
+    from . import scenarios
+
+    model = scenarios.load_scenario(scenario)
+    out = scenarios.bench(model, stop_time=stop, progress_factory=_progress_bar,
+                          log=lambda m: click.echo(m, err=True))
+    if as_json:
+        click.echo(json.dumps(out, indent=2))
+        return
+    click.echo(f"{model.name}, {out['fmu']['steps']} steps of the base step, one process:")
+    click.echo(f"  wall time direct {out['direct']['wall_s']:.2f} s, co-simulation "
+               f"{out['fmu']['wall_s']:.2f} s, ratio {out['ratio']:.3f}")
+    click.echo(f"  identical results through both paths: {out['identical']}")
+    click.echo(f"  {'component':14s} {'direct step':>12s} {'FMU step':>10s} "
+               f"{'FMU set+step+get':>17s}   [us per call]")
+    for c in out["fmu"]["do_step_us"]:
+        click.echo(f"  {c:14s} {out['direct']['do_step_us'][c]:12.1f} "
+                   f"{out['fmu']['do_step_us'][c]:10.1f} {out['fmu']['exchange_us'][c]:17.1f}")
+    click.echo(f"  master overhead per base step: direct {out['direct']['master_overhead_us']:.1f}"
+               f" us, FMU {out['fmu']['master_overhead_us']:.1f} us")
+
+
+def main(argv=None):
+    debug = "--debug" in (argv if argv is not None else sys.argv[1:])
+    try:
+        cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
+    except NavfmuError as exc:
+        click.echo(f"navfmu: error: {exc}", err=True)
+        sys.exit(2)
+    except click.exceptions.Abort:
+        click.echo("navfmu: interrupted", err=True)
+        sys.exit(130)
+    except click.ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    except KeyboardInterrupt:
+        click.echo("navfmu: interrupted", err=True)
+        sys.exit(130)
+    except Exception as exc:  # a bug: say so in one line unless --debug
+        if debug:
+            raise
+        click.echo(f"navfmu: internal error: {exc!r} (run with --debug for the traceback)",
+                   err=True)
+        sys.exit(3)
+    sys.exit(0)
+
+
+if __name__ == "__main__":
+    main()

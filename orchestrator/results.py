@@ -1,0 +1,203 @@
+"""Recorded results of a run: time column, per-component arrays, units, timings, metadata.
+
+Files are written atomically: to a temporary file in the target's directory, then moved over
+the target with ``os.replace``, so a reader never sees a half-written file and a failed write
+leaves the previous file (or none) in place.
+
+* CSV: one file, header ``time [s]`` then ``Component.variable [unit]`` (no brackets for a
+  variable without unit), values with 17 significant digits (a float64 round trip is exact).
+* NPZ: numpy's uncompressed archive; arrays plus one JSON document with the column names,
+  units, step times and metadata.  No pickles; use it for long runs.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import re
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Dict, List
+
+import numpy as np
+
+from .errors import NavfmuError
+
+TIME_HEADER = "time [s]"
+_HEADER_RE = re.compile(r"^(?P<name>.*?)(?: \[(?P<unit>[^\]]*)\])?$")
+NPZ_FORMAT = "navfmu-results-1"
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write(path, write: Callable[[Any], None], binary: bool = False) -> Path:
+    """Call ``write(file)`` on a temporary file next to ``path``, then move it onto ``path``.
+
+    On any failure the temporary file is removed and ``path`` is left untouched.
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise NavfmuError(f"cannot write {path}: the folder {directory} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "wb" if binary else "w", newline=None if binary else "") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual permissions
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    return path
+
+
+@dataclass
+class Results:
+    """``time`` (n_rows,), and per component: ``data[c]`` (n_rows, n_columns) float64,
+    ``columns[c]`` variable names, ``units[c]`` their units ("" if none).
+    ``step_time_s[c]``: mean wall time of one ``do_step`` call; ``exchange_step_time_s[c]``:
+    mean wall time of set-inputs + do_step + get-outputs."""
+
+    time: np.ndarray
+    data: Dict[str, np.ndarray]
+    columns: Dict[str, List[str]]
+    units: Dict[str, List[str]]
+    step_time_s: Dict[str, float] = field(default_factory=dict)
+    exchange_step_time_s: Dict[str, float] = field(default_factory=dict)
+    metadata: Dict[str, Any] = field(default_factory=dict)
+
+    # -- access -------------------------------------------------------------------------
+    @property
+    def components(self) -> List[str]:
+        return list(self.data)
+
+    def _index(self, component: str, variable: str) -> int:
+        if component not in self.data:
+            raise NavfmuError(f"results have no component '{component}' "
+                              f"(components: {', '.join(self.data)})")
+        try:
+            return self.columns[component].index(variable)
+        except ValueError:
+            raise NavfmuError(f"results have no variable '{variable}' for component "
+                              f"'{component}' (recorded: {', '.join(self.columns[component])})"
+                              ) from None
+
+    def column(self, component: str, variable: str) -> np.ndarray:
+        """The recorded values of ``component.variable`` (a view, one value per row)."""
+        return self.data[component][:, self._index(component, variable)]
+
+    def unit(self, component: str, variable: str) -> str:
+        return self.units[component][self._index(component, variable)]
+
+    def has(self, component: str, variable: str) -> bool:
+        return component in self.columns and variable in self.columns[component]
+
+    def header(self) -> List[str]:
+        """CSV column titles: ``time [s]``, then ``Component.variable [unit]``."""
+        titles = [TIME_HEADER]
+        for comp in self.data:
+            for name, unit in zip(self.columns[comp], self.units[comp]):
+                titles.append(f"{comp}.{name} [{unit}]" if unit else f"{comp}.{name}")
+        return titles
+
+    def table(self) -> np.ndarray:
+        """All values as one (n_rows, 1 + n_columns) array, time first."""
+        return np.column_stack([self.time] + [self.data[c] for c in self.data])
+
+    # -- files --------------------------------------------------------------------------
+    def to_csv(self, path, fmt: str = "%.17g") -> Path:
+        """Write one CSV file (atomically); returns the path."""
+        table = self.table()
+
+        def write(f):
+            csv.writer(f, lineterminator="\n").writerow(self.header())
+            np.savetxt(f, table, fmt=fmt, delimiter=",")
+
+        return atomic_write(path, write)
+
+    def to_npz(self, path) -> Path:
+        """Write a binary ``.npz`` archive (atomically); returns the path."""
+        comps = list(self.data)
+        index = {
+            "format": NPZ_FORMAT,
+            "components": comps,
+            "columns": self.columns,
+            "units": self.units,
+            "step_time_s": self.step_time_s,
+            "exchange_step_time_s": self.exchange_step_time_s,
+            "metadata": self.metadata,
+        }
+        arrays = {"time": self.time, "index": np.array(json.dumps(index, default=str))}
+        for i, c in enumerate(comps):
+            arrays[f"data_{i}"] = self.data[c]
+        return atomic_write(path, lambda f: np.savez(f, **arrays), binary=True)
+
+    @classmethod
+    def from_csv(cls, path) -> "Results":
+        path = Path(path)
+        if not path.is_file():
+            raise NavfmuError(f"results file not found: {path}")
+        with open(path, newline="") as f:
+            header = next(csv.reader(f), None)
+            if not header or header[0] != TIME_HEADER:
+                raise NavfmuError(f"{path}: not a results CSV (the first column must be "
+                                  f"'{TIME_HEADER}')")
+            body = f.read()
+        if body.strip():
+            try:
+                table = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2)
+            except ValueError as exc:
+                raise NavfmuError(f"{path}: unreadable values: {exc}") from None
+        else:
+            table = np.zeros((0, len(header)))
+        if table.shape[1] != len(header):
+            raise NavfmuError(f"{path}: {table.shape[1]} values per row but {len(header)} titles")
+        data_cols: Dict[str, List[int]] = {}
+        columns: Dict[str, List[str]] = {}
+        units: Dict[str, List[str]] = {}
+        for j, title in enumerate(header[1:], start=1):
+            m = _HEADER_RE.match(title)
+            comp, dot, name = m.group("name").partition(".")
+            if not dot:
+                raise NavfmuError(f"{path}: column title '{title}' is not 'Component.variable "
+                                  f"[unit]'")
+            data_cols.setdefault(comp, []).append(j)
+            columns.setdefault(comp, []).append(name)
+            units.setdefault(comp, []).append(m.group("unit") or "")
+        data = {c: np.ascontiguousarray(table[:, js]) for c, js in data_cols.items()}
+        return cls(time=table[:, 0].copy(), data=data, columns=columns, units=units,
+                   metadata={"source_file": str(path)})
+
+    @classmethod
+    def from_npz(cls, path) -> "Results":
+        path = Path(path)
+        if not path.is_file():
+            raise NavfmuError(f"results file not found: {path}")
+        with np.load(path, allow_pickle=False) as z:
+            if "index" not in z or "time" not in z:
+                raise NavfmuError(f"{path}: not a navfmu results archive")
+            index = json.loads(str(z["index"]))
+            if index.get("format") != NPZ_FORMAT:
+                raise NavfmuError(f"{path}: unknown results format {index.get('format')!r}")
+            comps = index["components"]
+            data = {c: z[f"data_{i}"] for i, c in enumerate(comps)}
+            time = z["time"]
+        return cls(time=time, data=data, columns={c: list(index["columns"][c]) for c in comps},
+                   units={c: list(index["units"][c]) for c in comps},
+                   step_time_s=index.get("step_time_s", {}),
+                   exchange_step_time_s=index.get("exchange_step_time_s", {}),
+                   metadata=index.get("metadata", {}))
+
+
+__all__ = ["Results", "atomic_write", "TIME_HEADER"]
