@@ -1,7 +1,12 @@
 """Thin pythonfmu shell around a navcore :class:`~navcore.component.Component`.
 
-Each FMU script in ``fmus/`` is a few lines: a subclass of :class:`ComponentSlave` naming the
-navcore component it wraps.  This module does the FMI side once for all of them:
+Each FMU script in ``fmus/`` is a few lines: a class deriving directly from ``Fmi2Slave``,
+defined in the script itself, whose ``__init__`` calls :func:`setup` with the navcore component
+it wraps and whose other FMI methods are the functions of this module.  (pythonfmu's native
+loader finds the slave class in the script's module and keeps the module alive only in that
+shape: with an intermediate base class, or without an ``__init__`` of the script's own, a
+second instantiation of the same FMU in one process crashed the interpreter.)  This module
+does the FMI side once for all of them:
 
 * registers every declared parameter, input and output with legal causality, variability and
   initial (Integer/Boolean ``discrete``; parameters ``fixed`` with ``initial="exact"``;
@@ -57,138 +62,142 @@ _MD_ORDER = ["ModelExchange", "CoSimulation", "UnitDefinitions", "TypeDefinition
              "ModelStructure"]
 
 
-class ComponentSlave(Fmi2Slave):
-    """Base of the FMU slaves; subclasses set ``component_class``."""
+def setup(slave, component_class):
+    """Declare the component's variables on ``slave`` (called from the slave's __init__)."""
+    cls = component_class
+    slave.component_class = cls
+    slave.modelName = cls.model_name
+    slave.description = cls.description
+    start, stop, step = cls.default_experiment
+    slave.default_experiment = DefaultExperiment(start_time=start, stop_time=stop, step_size=step)
+    slave.author = "navfmu"
+    slave.version = "0.1.0"
+    slave._values = {}
+    slave._units = {}
+    slave._input_names = tuple(p.name for p in cls.inputs)
+    slave._component = None
+    slave._start_time = 0.0
+    slave._failed = None
+    for port in cls.parameters:
+        _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
+    for port in cls.inputs:
+        variability = Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
+        _register(slave, port, Fmi2Causality.input, variability, None)
+    for port in cls.outputs:
+        variability = Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
+        _register(slave, port, Fmi2Causality.output, variability, None)
 
-    component_class = None  # a navcore Component subclass, set by each FMU script
 
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        cls = self.component_class
-        self.modelName = cls.model_name
-        self.description = cls.description
-        start, stop, step = cls.default_experiment
-        self.default_experiment = DefaultExperiment(start_time=start, stop_time=stop, step_size=step)
-        self.author = "navfmu"
-        self.version = "0.1.0"
-        self._values = {}
-        self._units = {}
-        self._input_names = tuple(p.name for p in cls.inputs)
-        self._component = None
-        self._start_time = 0.0
-        self._failed = None
-        for port in cls.parameters:
-            self._register(port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
-        for port in cls.inputs:
-            variability = Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
-            self._register(port, Fmi2Causality.input, variability, None)
-        for port in cls.outputs:
-            variability = Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
-            self._register(port, Fmi2Causality.output, variability, None)
+def _register(slave, port, causality, variability, initial):
+    name = port.name
+    slave._values[name] = port.default()
+    slave._units[name] = port.unit
+    values = slave._values
+    var = _VAR_CLASSES[port.type](
+        name,
+        causality=causality,
+        variability=variability,
+        initial=initial,
+        description=port.description or None,
+        getter=lambda: values[name],
+        setter=lambda v: values.__setitem__(name, v),
+    )
+    slave.register_variable(var, nested=False)
 
-    def _register(self, port, causality, variability, initial):
-        name = port.name
-        self._values[name] = port.default()
-        self._units[name] = port.unit
-        values = self._values
-        var = _VAR_CLASSES[port.type](
-            name,
-            causality=causality,
-            variability=variability,
-            initial=initial,
-            description=port.description or None,
-            getter=lambda: values[name],
-            setter=lambda v: values.__setitem__(name, v),
-        )
-        self.register_variable(var, nested=False)
 
-    # -- life cycle -----------------------------------------------------------------------
-    def setup_experiment(self, start_time, stop_time, tolerance):
-        self._start_time = float(start_time)
+# -- life cycle (bound as methods of each slave class) ------------------------------------
+def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
+    slave._start_time = float(start_time)
 
-    def exit_initialization_mode(self):
-        params = {p.name: self._values[p.name] for p in self.component_class.parameters}
-        try:
-            self._component = self.component_class(**params)
-            self._values.update(self._component.initialize(self._start_time))
-        except NavcoreError as exc:
-            self._fail(str(exc))
-        except Exception as exc:  # a bug, not a user error: still never crash the host
-            self._fail(f"internal error during initialization: {exc!r}\n{traceback.format_exc()}")
 
-    def do_step(self, current_time, step_size):
-        if self._failed is not None:
-            self.log(f"{self.instance_name}: refusing to step after an earlier error: {self._failed}",
-                     Fmi2Status.error)
-            return False
-        values = self._values
-        try:
-            inputs = {n: values[n] for n in self._input_names}
-            values.update(self._component.step(current_time, step_size, inputs))
-        except NavcoreError as exc:
-            self._fail(f"t={current_time:.6g} s: {exc}")
-            return False
-        except Exception as exc:
-            self._fail(f"t={current_time:.6g} s: internal error: {exc!r}\n{traceback.format_exc()}")
-            return False
-        return True
+def exit_initialization_mode(slave):
+    params = {p.name: slave._values[p.name] for p in slave.component_class.parameters}
+    try:
+        slave._component = slave.component_class(**params)
+        slave._values.update(slave._component.initialize(slave._start_time))
+    except NavcoreError as exc:
+        _fail(slave, str(exc))
+    except Exception as exc:  # a bug, not a user error: still never crash the host
+        _fail(slave, f"internal error during initialization: {exc!r}\n{traceback.format_exc()}")
 
-    def _fail(self, message):
-        self._failed = message
-        self.log(f"{self.instance_name}: {message}", Fmi2Status.error)
 
-    # -- FMU state: the registered values plus the whole component ----------------------
-    def _get_fmu_state(self):
-        blob = pickle.dumps((self._component, self._failed, self._start_time), protocol=4)
-        return {"values": dict(self._values), "component": base64.b64encode(blob).decode("ascii")}
+def do_step(slave, current_time, step_size):
+    if slave._failed is not None:
+        slave.log(f"{slave.instance_name}: refusing to step after an earlier error: "
+                  f"{slave._failed}", Fmi2Status.error)
+        return False
+    values = slave._values
+    try:
+        inputs = {n: values[n] for n in slave._input_names}
+        values.update(slave._component.step(current_time, step_size, inputs))
+    except NavcoreError as exc:
+        _fail(slave, f"t={current_time:.6g} s: {exc}")
+        return False
+    except Exception as exc:
+        _fail(slave, f"t={current_time:.6g} s: internal error: {exc!r}\n{traceback.format_exc()}")
+        return False
+    return True
 
-    def _set_fmu_state(self, state):
-        self._values.clear()
-        self._values.update(state["values"])
-        self._component, self._failed, self._start_time = pickle.loads(
-            base64.b64decode(state["component"]))
 
-    # -- model description: units, legal attributes -------------------------------------
-    def to_xml(self, model_options=dict()):
-        options = dict(model_options)
-        options.setdefault("canGetAndSetFMUstate", True)
-        options.setdefault("canSerializeFMUstate", True)
-        root = super().to_xml(options)
-        cosim = root.find("CoSimulation")
-        cosim.set("canGetAndSetFMUstate", "true")
-        cosim.set("canSerializeFMUstate", "true")
-        used_units = []
-        output_indices = []
-        for index, sv in enumerate(root.find("ModelVariables"), start=1):
-            name = sv.get("name")
-            child = sv[0] if len(sv) else None
-            unit = self._units.get(name, "")
-            if child is not None and child.tag == "Real" and unit:
-                child.set("unit", unit)
-                if unit not in used_units:
-                    used_units.append(unit)
-            if sv.get("causality") == "output":
-                output_indices.append(index)
-        if used_units:
-            unit_defs = Element("UnitDefinitions")
-            for unit in used_units:
-                u = SubElement(unit_defs, "Unit", name=unit)
-                exponents, factor = UNITS[unit]
-                if exponents is not None:
-                    attrib = {k: str(v) for k, v in exponents.items()}
-                    if factor != 1.0:
-                        attrib["factor"] = repr(factor)
-                    SubElement(u, "BaseUnit", attrib)
-            root.append(unit_defs)
-        structure = root.find("ModelStructure")
-        if output_indices and structure.find("InitialUnknowns") is None:
-            initial = SubElement(structure, "InitialUnknowns")
-            for index in output_indices:
-                SubElement(initial, "Unknown", index=str(index))
-        # put the children in the order the FMI 2.0 schema prescribes
-        children = list(root)
-        for c in children:
-            root.remove(c)
-        children.sort(key=lambda e: _MD_ORDER.index(e.tag))
-        root.extend(children)
-        return root
+def _fail(slave, message):
+    slave._failed = message
+    slave.log(f"{slave.instance_name}: {message}", Fmi2Status.error)
+
+
+# -- FMU state: the registered values plus the whole component ----------------------------
+def get_fmu_state(slave):
+    blob = pickle.dumps((slave._component, slave._failed, slave._start_time), protocol=4)
+    return {"values": dict(slave._values), "component": base64.b64encode(blob).decode("ascii")}
+
+
+def set_fmu_state(slave, state):
+    slave._values.clear()
+    slave._values.update(state["values"])
+    slave._component, slave._failed, slave._start_time = pickle.loads(
+        base64.b64decode(state["component"]))
+
+
+# -- model description: units, legal attributes -------------------------------------------
+def to_xml(slave, model_options=None):
+    options = dict(model_options or {})
+    options.setdefault("canGetAndSetFMUstate", True)
+    options.setdefault("canSerializeFMUstate", True)
+    root = Fmi2Slave.to_xml(slave, options)
+    cosim = root.find("CoSimulation")
+    cosim.set("canGetAndSetFMUstate", "true")
+    cosim.set("canSerializeFMUstate", "true")
+    used_units = []
+    output_indices = []
+    for index, sv in enumerate(root.find("ModelVariables"), start=1):
+        name = sv.get("name")
+        child = sv[0] if len(sv) else None
+        unit = slave._units.get(name, "")
+        if child is not None and child.tag == "Real" and unit:
+            child.set("unit", unit)
+            if unit not in used_units:
+                used_units.append(unit)
+        if sv.get("causality") == "output":
+            output_indices.append(index)
+    if used_units:
+        unit_defs = Element("UnitDefinitions")
+        for unit in used_units:
+            u = SubElement(unit_defs, "Unit", name=unit)
+            exponents, factor = UNITS[unit]
+            if exponents is not None:
+                attrib = {k: str(v) for k, v in exponents.items()}
+                if factor != 1.0:
+                    attrib["factor"] = repr(factor)
+                SubElement(u, "BaseUnit", attrib)
+        root.append(unit_defs)
+    structure = root.find("ModelStructure")
+    if output_indices and structure.find("InitialUnknowns") is None:
+        initial = SubElement(structure, "InitialUnknowns")
+        for index in output_indices:
+            SubElement(initial, "Unknown", index=str(index))
+    # put the children in the order the FMI 2.0 schema prescribes
+    children = list(root)
+    for c in children:
+        root.remove(c)
+    children.sort(key=lambda e: _MD_ORDER.index(e.tag))
+    root.extend(children)
+    return root

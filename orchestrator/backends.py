@@ -25,6 +25,7 @@ from __future__ import annotations
 import collections
 import ctypes
 import itertools
+import operator
 import shutil
 import weakref
 from abc import ABC, abstractmethod
@@ -229,18 +230,23 @@ _LOG_SINKS: Dict[int, "collections.deque"] = {}
 _LOG_SINKS_BY_NAME: Dict[bytes, "collections.deque"] = {}
 _ENV_IDS = itertools.count(1)
 _LOGGER_CALLBACK = None
+#: shared libraries of freed FMU instances, kept loaded for the life of the process
+_LOADED_LIBRARIES: list = []
 
 
 def _dispatch_log(env, instance_name, status, category, message):
     sink = _LOG_SINKS.get(env) if env is not None else None
     if sink is None:
         sink = _LOG_SINKS_BY_NAME.get(instance_name)
-    if sink is None:
-        return
     label = STATUS_LABELS[status] if 0 <= status < len(STATUS_LABELS) else str(status)
     text = message.decode("utf-8", "replace") if message else ""
     cat = category.decode("utf-8", "replace") if category else ""
-    sink.append(f"[{label}] {cat + ': ' if cat else ''}{text.rstrip()}")
+    line = f"[{label}] {cat + ': ' if cat else ''}{text.rstrip()}"
+    if sink is None:
+        # an FMU instantiated by other fmpy code in this process: print, as fmpy's default does
+        print(line)
+        return
+    sink.append(line)
 
 
 def _logger_callback():
@@ -471,11 +477,14 @@ class FmuInstance(Instance):
                 pass
             try:
                 if self._state != "new" and fmu.component is not None:
-                    fmu.freeInstance()
-                else:
-                    fmu.freeLibrary()
+                    # free the instance but never unload the shared library: a pythonfmu
+                    # FMU leaves Python objects behind that point into its library, and the
+                    # interpreter crashes when it later collects them after a dlclose
+                    fmu.fmi2FreeInstance(fmu.component)
+                    fmu.component = None
             except Exception:
                 pass
+            _LOADED_LIBRARIES.append(fmu.dll)
             self._state = "terminated"
         _LOG_SINKS.pop(getattr(self, "_env_id", None), None)
         if _LOG_SINKS_BY_NAME.get(self.name.encode("utf-8")) is self.log:
@@ -494,6 +503,21 @@ def _component_error_types() -> Tuple[type, ...]:
     except ImportError:  # the master also runs components that do not come from navcore
         return ()
     return (NavcoreError,)
+
+
+def _output_writer(buf: np.ndarray, names: Sequence[str]):
+    """A function copying ``outputs[name]`` for ``names`` into ``buf`` (one numpy store)."""
+    if len(names) == 1:
+        name = names[0]
+
+        def write(outputs):
+            buf[0] = outputs[name]
+    else:
+        getter = operator.itemgetter(*names)
+
+        def write(outputs):
+            buf[:] = getter(outputs)
+    return write
 
 
 class DirectInstance(Instance):
@@ -546,9 +570,13 @@ class DirectInstance(Instance):
         self._in_real = self.input_names["Real"]
         self._in_int = self.input_names["Integer"]
         self._in_bool = self.input_names["Boolean"]
-        self._out_real = self.output_names["Real"]
-        self._out_int = self.output_names["Integer"]
-        self._out_bool = self.output_names["Boolean"]
+        self._writers = tuple(
+            _output_writer(buf, names)
+            for buf, names in ((self.real_out, self.output_names["Real"]),
+                               (self.int_out, self.output_names["Integer"]),
+                               (self.bool_out, self.output_names["Boolean"]))
+            if names
+        )
 
     def set_parameters(self, values: Mapping[str, Any]) -> None:
         for name, value in values.items():
@@ -593,12 +621,8 @@ class DirectInstance(Instance):
     def get_outputs(self):
         out = self._outputs
         try:
-            if self._out_real:
-                self.real_out[:] = [out[n] for n in self._out_real]
-            if self._out_int:
-                self.int_out[:] = [out[n] for n in self._out_int]
-            if self._out_bool:
-                self.bool_out[:] = [out[n] for n in self._out_bool]
+            for write in self._writers:
+                write(out)
         except KeyError as exc:
             raise SimulationError(
                 f"component '{self.name}' ({self.model_name}) returned no value for output "

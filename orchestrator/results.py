@@ -12,11 +12,11 @@ leaves the previous file (or none) in place.
 from __future__ import annotations
 
 import csv
-import io
 import json
 import os
 import re
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List
@@ -149,17 +149,17 @@ class Results:
         if not path.is_file():
             raise NavfmuError(f"results file not found: {path}")
         with open(path, newline="") as f:
-            header = next(csv.reader(f), None)
+            header = next(csv.reader([f.readline()]), None)
             if not header or header[0] != TIME_HEADER:
                 raise NavfmuError(f"{path}: not a results CSV (the first column must be "
                                   f"'{TIME_HEADER}')")
-            body = f.read()
-        if body.strip():
             try:
-                table = np.loadtxt(io.StringIO(body), delimiter=",", ndmin=2)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", UserWarning)  # "no data": header only
+                    table = np.loadtxt(f, delimiter=",", ndmin=2)
             except ValueError as exc:
                 raise NavfmuError(f"{path}: unreadable values: {exc}") from None
-        else:
+        if table.size == 0:
             table = np.zeros((0, len(header)))
         if table.shape[1] != len(header):
             raise NavfmuError(f"{path}: {table.shape[1]} values per row but {len(header)} titles")

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import os
-import time
 
 import numpy as np
 import pytest
@@ -87,6 +86,15 @@ class Adder(Component):
         return {"y": inputs["u"] + 1.0}
 
 
+class UnitRamp(Ramp):
+    """A ramp without parameters (slope 1): swapping it in drops the SSD's 'slope'."""
+    model_name = "UnitRamp"
+    parameters = ()
+
+    def _out(self, t, t_seen):
+        return {"y": t, "t_seen": t_seen, "steps": self.steps, "odd": bool(self.steps % 2)}
+
+
 class GainWithoutU(Component):
     model_name = "GainWithoutU"
     inputs = (real("x", "m"),)
@@ -99,7 +107,8 @@ class GainWithoutU(Component):
         return {"y": inputs["x"]}
 
 
-REGISTRY = {c.model_name: c for c in (Ramp, Gain, LimitedGain, Accumulator, Adder, GainWithoutU)}
+REGISTRY = {c.model_name: c for c in (Ramp, UnitRamp, Gain, LimitedGain, Accumulator, Adder,
+                                      GainWithoutU)}
 
 RAMP = component_xml("ramp", "Ramp.fmu", [("y", "output", "Real", "m"),
                                           ("steps", "output", "Integer")],
@@ -162,8 +171,12 @@ def test_order_gauss_seidel_decimation_and_hold(write_ssd):
     assert all(v > 0 for v in res.step_time_s.values())
 
 
-def test_partial_last_interval_holds(write_ssd):
-    res = run_direct(chain_model(write_ssd, stop=2.5))  # 10 steps: acc due at 4 and 8 only
+def test_partial_last_interval_holds_and_progress(write_ssd):
+    calls = []
+    sim = Simulation(chain_model(write_ssd, stop=2.5), backend="direct", registry=REGISTRY)
+    res = sim.run(progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(k, 10) for k in range(1, 11)]
+    # 10 steps: acc (every 4) is due at 4 and 8 only and holds to the end
     np.testing.assert_array_equal(res.column("acc", "s")[-3:], [6, 6, 6])
     assert res.metadata["step_calls"]["acc"] == 2
 
@@ -219,6 +232,33 @@ def test_swap_keeps_applicable_parameters(write_ssd, tmp_path):
                      parameters={"gain.limit": 100.0})
     assert sim.skipped_parameters == []
     np.testing.assert_array_equal(sim.run().column("gain", "y"), 2 * np.arange(13) * 0.25)
+
+
+def test_swap_skips_parameters_the_new_component_lacks(write_ssd, tmp_path):
+    model = chain_model(write_ssd).replace_source("ramp", tmp_path / "UnitRamp.fmu")
+    with pytest.warns(UserWarning, match="ramp.slope"):
+        sim = Simulation(model, backend="direct", registry=REGISTRY)
+    assert sim.skipped_parameters == ["ramp.slope"]
+    res = sim.run()
+    assert res.metadata["skipped_parameters"] == ["ramp.slope"]
+    assert res.metadata["replaced_sources"] == {"ramp": str(model.path.parent / "Ramp.fmu")}
+
+
+def test_direct_instance_state_round_trip():
+    from orchestrator.backends import DirectInstance
+
+    inst = DirectInstance.from_registry("Accumulator", "acc", REGISTRY)
+    inst.prepare(["u", "count_in"], ["s"])
+    inst.initialize(0.0)
+    inst.set_inputs(np.array([2.0]), np.array([1], dtype=np.int32))
+    inst.do_step(0.0, 0.5)
+    saved = inst.get_state()
+    inst.do_step(0.5, 0.5)
+    assert inst.get_outputs()[0][0] == 2.0
+    inst.set_state(saved)
+    assert inst.get_outputs()[0][0] == 1.0
+    inst.do_step(0.5, 0.5)
+    assert inst.get_outputs()[0][0] == 2.0
 
 
 def test_wiring_errors_for_parameters_and_overrides(write_ssd):

@@ -346,3 +346,191 @@ class Kf(InsGnssFilter):
 
 
 REGISTRY = {cls.model_name: cls for cls in (TrajectoryImu, GnssReceiver, Kf)}
+
+
+# ---------------------------------------------------------------------------------------
+# Adaptive / robust filters of papers 001 and 004 (engines in navcore.adaptive_filters).
+from .adaptive_filters import (  # noqa: E402  (kept with the classes that use them)
+    DEFAULT_FORGETTING_FACTOR, DEFAULT_RESERVE_GAMMA, REPLACEMENT_VARIANCES, IakfKf,
+    Igg3RobustKf as _Igg3Engine, InsOnlyKf, NewtonRobustKf as _NewtonEngine, SageHusaFadingKf)
+from .adaptive_laws import CHI2_THRESHOLD_PAPER_004, DEFAULT_R_FLOOR_FRACTION  # noqa: E402
+
+_R_EST_OUTPUTS = (
+    *(real(f"r_est_p{a}", "m", f"Sage-Husa estimate of the GNSS position 1-sigma, {a.upper()} "
+           "(sqrt of the R diagonal after the latest update)") for a in signals.AXES_NED),
+    *(real(f"r_est_v{a}", "m/s", f"Sage-Husa estimate of the GNSS velocity 1-sigma, {a.upper()} "
+           "(0 when velocity is not measured)") for a in signals.AXES_NED),
+)
+_R_EST_NAMES = tuple(p.name for p in _R_EST_OUTPUTS)
+
+
+class SageHusaFading(InsGnssFilter):
+    """Simplified Sage-Husa R estimation + fading memory (paper 001 eqs. 9-12)."""
+
+    model_name = "SageHusaFading"
+    description = ("INS/GNSS 15-state error-state KF with the simplified Sage-Husa measurement-"
+                   "noise estimator (paper 001 eq. 9) and the fading-memory filter (eqs. 10-12).")
+    engine_class = SageHusaFadingKf
+    extra_parameters = (
+        real("forgetting_factor", "", "Sage-Husa forgetting factor b, 0 < b <= 1 (paper 001: "
+             "0.95-0.99; memory about 1/(1-b) updates)", DEFAULT_FORGETTING_FACTOR),
+        real("reserve_gamma", "", "reserve coefficient gamma of the divergence test (paper 001 "
+             "eq. 11; 1 = strictest)", DEFAULT_RESERVE_GAMMA),
+        real("r_floor_fraction", "", "floor of the estimated R as a fraction of the initial R "
+             "diagonal (variances)", DEFAULT_R_FLOOR_FRACTION),
+        real("max_fading_factor", "", "cap on the fading factor lambda (0 = no cap, as in the "
+             "paper)", 0.0),
+    )
+    extra_outputs = _R_EST_OUTPUTS
+
+    def engine_options(self):
+        p = self.params
+        self.require_positive("forgetting_factor", "reserve_gamma", "r_floor_fraction")
+        self.require_nonnegative("max_fading_factor")
+        if p["forgetting_factor"] > 1.0:
+            raise ParameterError(f"{self.model_name}: parameter 'forgetting_factor' = "
+                                 f"{p['forgetting_factor']} must be in (0, 1]")
+        cap = p["max_fading_factor"]
+        if 0.0 < cap < 1.0:
+            raise ParameterError(f"{self.model_name}: parameter 'max_fading_factor' = {cap} "
+                                 "must be 0 (no cap) or >= 1")
+        return dict(forgetting_factor=p["forgetting_factor"], reserve_gamma=p["reserve_gamma"],
+                    r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None)
+
+    def make_engine(self, config, nav):
+        return self.engine_class(config, nav, **self.engine_options())
+
+    def initialize(self, start_time):
+        out = super().initialize(start_time)
+        self.write_diagnostics(None)  # r_est_* start at the initial R (the scenario's R0)
+        out.update({name: self.out[name] for name in _R_EST_NAMES})
+        return out
+
+    def write_diagnostics(self, result):
+        sigma = self.engine.r_sigma_estimate()
+        for i, value in enumerate(sigma):
+            self.out[_R_EST_NAMES[i]] = float(value)
+
+
+class Iakf(SageHusaFading):
+    """Paper 001's improved adaptive KF: Sage-Husa + fading + outlier compression (eqs. 9-14)."""
+
+    model_name = "Iakf"
+    description = ("Improved adaptive Kalman filter of paper 001: simplified Sage-Husa R "
+                   "estimation, fading memory and chi-square outlier compression of the "
+                   "innovation (eqs. 9-14), on the 15-state INS/GNSS error-state KF.")
+    engine_class = IakfKf
+    extra_parameters = SageHusaFading.extra_parameters + (
+        real("outlier_alpha", "", "significance alpha of the chi2(m) outlier gate of eq. 14 "
+             "(paper 001: 0.05 or 0.02)", 0.05),
+    )
+    extra_outputs = SageHusaFading.extra_outputs + (
+        real("compression", "", "outlier compression factor Y of the latest update (eq. 14; "
+             "1 = no outlier)", 1.0),
+    )
+
+    def engine_options(self):
+        options = super().engine_options()
+        alpha = self.params["outlier_alpha"]
+        if not 0.0 < alpha < 1.0:
+            raise ParameterError(f"{self.model_name}: parameter 'outlier_alpha' = {alpha} "
+                                 "must be in (0, 1)")
+        options["outlier_alpha"] = alpha
+        return options
+
+    def write_diagnostics(self, result):
+        super().write_diagnostics(result)
+        self.out["compression"] = self.engine.compression
+
+
+class NewtonRobustKf(InsGnssFilter):
+    """Paper 004: per-observation chi-square test + Newton extrapolation of failed ones."""
+
+    model_name = "NewtonRobustKf"
+    description = ("Robust INS/GNSS KF of paper 004: per-observation chi-square test "
+                   "(threshold 6.635) and replacement of failed observations by the Newton "
+                   "forward extrapolation of the previous observations.")
+    engine_class = _NewtonEngine
+    extra_parameters = (
+        real("chi2_threshold", "", "gate of the per-observation chi-square statistic "
+             "v_i^2/S_ii (paper 004: 6.635 = chi2(1) at alpha 0.01)", CHI2_THRESHOLD_PAPER_004),
+        integer("newton_order", "order of the Newton extrapolation polynomial (paper 004: 4)", 4),
+        string("replacement_variance", "R of a replaced observation: 'propagated' (R times the "
+               "noise gain of the extrapolation) or 'nominal' (R unchanged)", "propagated"),
+    )
+    extra_outputs = (
+        real("chi2_max", "", "largest per-observation chi-square statistic of the latest "
+             "update"),
+        integer("n_rejected", "observation components replaced at the latest update"),
+    )
+
+    def make_engine(self, config, nav):
+        p = self.params
+        self.require_positive("chi2_threshold")
+        if p["newton_order"] < 0:
+            raise ParameterError(f"{self.model_name}: parameter 'newton_order' = "
+                                 f"{p['newton_order']} must be >= 0")
+        if p["replacement_variance"] not in REPLACEMENT_VARIANCES:
+            raise ParameterError(f"{self.model_name}: parameter 'replacement_variance' = "
+                                 f"{p['replacement_variance']!r}; expected one of "
+                                 f"{list(REPLACEMENT_VARIANCES)}")
+        return self.engine_class(config, nav, chi2_threshold=p["chi2_threshold"],
+                                 newton_order=p["newton_order"],
+                                 replacement_variance=p["replacement_variance"])
+
+    def write_diagnostics(self, result):
+        self.out["chi2_max"] = self.engine.chi2_max
+        self.out["n_rejected"] = self.engine.n_rejected
+
+
+class Igg3RobustKf(InsGnssFilter):
+    """IGG-III equivalent-weight robust KF (the equivalent-weight method of paper 004 1.2)."""
+
+    model_name = "Igg3RobustKf"
+    description = ("Robust INS/GNSS KF with IGG-III equivalent weights on the standardized "
+                   "innovations (R_ii / w_i; w = 1 below k0, 0 above k1).")
+    engine_class = _Igg3Engine
+    extra_parameters = (
+        real("igg_k0", "", "IGG-III constant k0: standardized innovations up to k0 keep full "
+             "weight", 1.5),
+        real("igg_k1", "", "IGG-III constant k1: standardized innovations above k1 are "
+             "rejected", 3.0),
+    )
+    extra_outputs = (
+        real("min_weight", "", "smallest IGG-III weight of the latest update (1 = none "
+             "down-weighted)", 1.0),
+        integer("n_rejected", "observation components rejected (weight 0) at the latest update"),
+    )
+
+    def make_engine(self, config, nav):
+        p = self.params
+        self.require_positive("igg_k0", "igg_k1")
+        if not p["igg_k1"] > p["igg_k0"]:
+            raise ParameterError(f"{self.model_name}: parameter 'igg_k1' = {p['igg_k1']} must "
+                                 f"be > igg_k0 = {p['igg_k0']}")
+        return self.engine_class(config, nav, igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
+
+    def write_diagnostics(self, result):
+        self.out["min_weight"] = float(self.engine.weights.min())
+        self.out["n_rejected"] = self.engine.n_rejected
+
+
+class InsOnly(InsGnssFilter):
+    """Free inertial navigation: the Kf's mechanization with no measurement update.
+
+    GNSS inputs are accepted (same contract as every filter, so it swaps in) and ignored:
+    ``updated`` stays False, the diagnostics keep their start values, and the std_* outputs
+    show the covariance propagated from P0 with the process noise alone.
+    """
+
+    model_name = "InsOnly"
+    description = ("Free strapdown inertial navigation (no GNSS update), same inputs and "
+                   "outputs as the INS/GNSS filters; the covariance only propagates.")
+    engine_class = InsOnlyKf
+
+    def _update(self, inputs):
+        """No measurement update: the GNSS fix is ignored."""
+
+
+REGISTRY.update({cls.model_name: cls for cls in (SageHusaFading, Iakf, NewtonRobustKf,
+                                                 Igg3RobustKf, InsOnly)})

@@ -153,7 +153,8 @@ class CtfaQSchedule:
             if not np.allclose(Q, Q.T, rtol=1e-12, atol=0.0):
                 raise ParameterError(f"CtfaQSchedule: '{name}' must be symmetric")
         if Qmin.shape != Qmax.shape:
-            raise ParameterError(f"CtfaQSchedule: 'Qmin' {Qmin.shape} and 'Qmax' {Qmax.shape} differ in shape")
+            raise ParameterError(
+                f"CtfaQSchedule: 'Qmin' {Qmin.shape} and 'Qmax' {Qmax.shape} differ in shape")
         span = Qmax - Qmin
         min_eig = float(np.linalg.eigvalsh(span).min())
         if min_eig < -1e-12 * max(float(np.abs(Qmax).max()), 1e-300):

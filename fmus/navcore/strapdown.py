@@ -205,8 +205,8 @@ class Strapdown:
         gx, gy, gz = float(dtheta[0]), float(dtheta[1]), float(dtheta[2])
         fx, fy, fz = float(dvel[0]), float(dvel[1]), float(dvel[2])
         dt = float(dt)
-        v = self.v_ned.tolist()
-        C = self.C_bn.tolist()
+        v = np.asarray(self.v_ned, dtype=float).tolist()
+        C = np.asarray(self.C_bn, dtype=float).tolist()
         zeta, g_cor = self._nav_terms(v, dt)
         px, py, pz = self._dtheta_prev
         qx, qy, qz = self._dvel_prev
@@ -265,8 +265,8 @@ class Strapdown:
         above 1e-6 m raises ValueError.  ``C_bn`` must be a rotation matrix.
         """
         dt = float(dt)
-        v = self.v_ned.tolist()
-        C = self.C_bn.tolist()
+        v = np.asarray(self.v_ned, dtype=float).tolist()
+        C = np.asarray(self.C_bn, dtype=float).tolist()
         v1 = [float(v_ned[0]), float(v_ned[1]), float(v_ned[2])]
         C1 = C_bn.tolist() if isinstance(C_bn, np.ndarray) else [list(map(float, r)) for r in C_bn]
         lat, lon, h = float(lat), float(lon), float(h)

@@ -214,7 +214,8 @@ class UnscentedKalmanFilter:
     State lives in the plain attributes ``x`` (shape ``(n,)``) and ``P`` (``(n, n)``), which the
     caller may read, overwrite (e.g. reset the error state to zero after feedback to the INS)
     and deep-copy.  After each update ``last_nis`` and ``last_log_likelihood`` hold the chi-square
-    statistic (eq. 24) and the Gaussian log-likelihood of that innovation (for IMM);
+    statistic (eq. 24) and the Gaussian log-likelihood of that innovation (for IMM; both 0
+    before the first update);
     ``sqrt_fallbacks`` counts the square roots that needed the eigenvalue fallback.
 
     Parameters
@@ -236,11 +237,13 @@ class UnscentedKalmanFilter:
         if self.x.shape != (self.n,):
             raise ParameterError(f"UnscentedKalmanFilter: 'x0' must have shape ({n},), got {self.x.shape}")
         if self.P.shape != (self.n, self.n):
-            raise ParameterError(f"UnscentedKalmanFilter: 'P0' must have shape ({n}, {n}), got {self.P.shape}")
+            raise ParameterError(
+                f"UnscentedKalmanFilter: 'P0' must have shape ({n}, {n}), got {self.P.shape}")
         _require_finite("x0", self.x, "UnscentedKalmanFilter")
         _require_finite("P0", self.P, "UnscentedKalmanFilter")
-        self.last_nis = float("nan")
-        self.last_log_likelihood = float("nan")
+        # 0 until the first update, so a diagnostic output is never NaN
+        self.last_nis = 0.0
+        self.last_log_likelihood = 0.0
         self.sqrt_fallbacks = 0
 
     # -- helpers --------------------------------------------------------------------------

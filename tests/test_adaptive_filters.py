@@ -1,0 +1,328 @@
+"""Adaptive / robust filters of papers 001 and 004 (navcore.adaptive_filters + components).
+
+Default tests run short stretches of the scenarios through the navcore components directly
+(tests/scenario_runner.py, no FMI): no NaN, diagnostics that behave as the equations say,
+bit-identical continuation after a state copy, parameter errors.  The acceptance Monte Carlo
+campaigns of the issue are marked ``slow`` (run with ``pytest -m slow``).
+"""
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+
+from navcore import adaptive_laws as laws
+from navcore import components, signals
+from navcore.adaptive_filters import (IakfKf, NewtonRobustKf, SageHusaFadingKf,
+                                      UNUSABLE_VARIANCE_FACTOR, masked_update)
+from navcore.component import ParameterError
+from navcore.ins_gnss_kf import ErrorStateKf, KfConfig
+from navcore.strapdown import Strapdown
+
+from scenario_runner import MODELS, rms_table, run_filter, simulate_sensors
+
+FILTERS = [components.Kf, components.SageHusaFading, components.Iakf,
+           components.NewtonRobustKf, components.Igg3RobustKf, components.InsOnly]
+
+
+# ------------------------------------------------------------------------------------------
+# fixtures: sensor records shared by the tests of this module
+# ------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def clean_then_noisy():
+    """aircraft_500s, first 130 s: clean until 50 s, velocity noise 1.5 m/s at 50-100 s."""
+    return simulate_sensors(MODELS / "aircraft_500s", stop_time=130.0)
+
+
+@pytest.fixture(scope="module")
+def early_patch():
+    """aircraft_500s with paper 001's outlier patch moved to 60-70 s (no noise steps)."""
+    return simulate_sensors(MODELS / "aircraft_500s", stop_time=90.0, overrides={
+        "gnss": {"noise_steps": "", "outlier_patches": "60,70,vel,ne,15"}})
+
+
+@pytest.fixture(scope="module")
+def outliers_120s():
+    """aircraft_outliers, first 120 s: m = 20 outliers at 5, 15, ..., 115 s."""
+    return simulate_sensors(MODELS / "aircraft_outliers", stop_time=120.0)
+
+
+# ------------------------------------------------------------------------------------------
+# contract
+# ------------------------------------------------------------------------------------------
+def test_registry_and_shared_contract():
+    for name in ("SageHusaFading", "Iakf", "NewtonRobustKf", "Igg3RobustKf", "InsOnly"):
+        cls = components.REGISTRY[name]
+        assert cls.model_name == name
+        assert cls.inputs == signals.FILTER_INPUTS
+        assert cls.outputs[:len(signals.FILTER_OUTPUTS)] == signals.FILTER_OUTPUTS
+        # the Kf's parameters come first, unchanged: a scenario's filter.ssv fits every filter
+        assert cls.parameters[:len(components.Kf.parameters)] == components.Kf.parameters
+        names = [p.name for p in cls.parameters + cls.outputs]
+        assert len(names) == len(set(names))
+    extra = {p.name: p for p in components.Iakf.outputs[len(signals.FILTER_OUTPUTS):]}
+    assert extra["r_est_pn"].unit == "m" and extra["r_est_vd"].unit == "m/s"
+    assert extra["compression"].unit == "" and extra["compression"].start == 1.0
+    newton = {p.name: p for p in components.NewtonRobustKf.outputs}
+    assert newton["n_rejected"].type == "Integer" and newton["chi2_max"].type == "Real"
+
+
+@pytest.mark.parametrize("cls,name,value,fragment", [
+    (components.SageHusaFading, "forgetting_factor", 1.2, "forgetting_factor"),
+    (components.SageHusaFading, "forgetting_factor", 0.0, "forgetting_factor"),
+    (components.SageHusaFading, "reserve_gamma", -1.0, "reserve_gamma"),
+    (components.SageHusaFading, "max_fading_factor", 0.5, "max_fading_factor"),
+    (components.Iakf, "outlier_alpha", 1.0, "outlier_alpha"),
+    (components.NewtonRobustKf, "newton_order", -1, "newton_order"),
+    (components.NewtonRobustKf, "chi2_threshold", 0.0, "chi2_threshold"),
+    (components.NewtonRobustKf, "replacement_variance", "huge", "replacement_variance"),
+    (components.Igg3RobustKf, "igg_k1", 1.0, "igg_k1"),
+])
+def test_bad_parameters_name_the_parameter(cls, name, value, fragment):
+    comp = cls(**{name: value})
+    with pytest.raises(ParameterError, match=fragment):
+        comp.initialize(0.0)
+
+
+# ------------------------------------------------------------------------------------------
+# every filter runs, no NaN
+# ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("cls", FILTERS, ids=lambda c: c.model_name)
+def test_filter_runs_clean_and_noisy_stretch(cls, clean_then_noisy):
+    run = run_filter(clean_then_noisy, cls)
+    for name, values in run.outputs.items():
+        assert np.all(np.isfinite(values)), name
+    pos = run.position_error_ned()
+    vel = run.velocity_error_ned()
+    table = rms_table(run)
+    if cls is components.InsOnly:
+        assert not run.outputs["updated"].any()
+        # covariance only propagates: the position sigma grows monotonically
+        assert np.all(np.diff(run.outputs["std_pn"]) > 0)
+        assert np.abs(pos).max() < 100.0
+    else:
+        assert run.outputs["updated"].all()
+        # integrated filters stay at the GNSS noise level (5 m, 0.3-1.5 m/s)
+        assert np.all(table["position_ned_m"] < 4.0), table
+        assert np.all(table["velocity_ned_mps"] < 0.4), table
+        assert np.abs(pos).max() < 15.0 and np.abs(vel).max() < 1.5
+
+
+# ------------------------------------------------------------------------------------------
+# paper 001: Sage-Husa + fading, IAKF
+# ------------------------------------------------------------------------------------------
+def test_sage_husa_fading_diagnostics(clean_then_noisy):
+    run = run_filter(clean_then_noisy, components.SageHusaFading)
+    t = clean_then_noisy.time[run.rows]
+    lam = run.outputs["fading_factor"]
+    # eq. 11 holds on the clean stretch (gamma = 5): the fading factor is exactly 1
+    assert np.all(lam[t < 50.0] == 1.0)
+    assert np.all(lam >= 1.0)
+    # eq. 9 follows the velocity noise step (0.3 -> 1.5 m/s at 50-100 s) ...
+    r_vn = run.outputs["r_est_vn"]
+    at50, at100 = r_vn[np.argmin(abs(t - 50.0))], r_vn[np.argmin(abs(t - 100.0))]
+    assert 0.2 < at50 < 0.45
+    assert at100 > 2.0 * at50
+    # ... while the position noise (5 m throughout) stays estimated near 5 m
+    for axis in ("pn", "pe", "pd"):
+        assert np.all((run.outputs[f"r_est_{axis}"][t > 20] > 3.0)
+                      & (run.outputs[f"r_est_{axis}"][t > 20] < 7.0))
+    # r_scale is trace(R used)/trace(R0): 1 at the first update, then > 1 with the noise step
+    assert run.outputs["r_scale"][0] == 1.0
+    assert run.outputs["r_scale"][np.argmin(abs(t - 100.0))] > 1.0
+
+
+def test_iakf_compresses_the_outlier_patch(early_patch):
+    iakf = run_filter(early_patch, components.Iakf)
+    shf = run_filter(early_patch, components.SageHusaFading)
+    kf = run_filter(early_patch, components.Kf)
+    t = early_patch.time[iakf.rows]
+    patch = (t > 60.0 - 1e-6) & (t < 70.0 - 1e-6)
+    Y = iakf.outputs["compression"]
+    # every epoch of the 15 m/s patch is flagged and compressed (Y < 1, outlier True)
+    assert np.all(iakf.outputs["outlier"][patch] == 1.0)
+    assert np.all(Y[patch] < 0.3)
+    # outside the patch: only the chi2(6) alpha = 0.05 tail is compressed, and mildly
+    assert np.mean(Y[~patch] < 1.0) < 0.15
+    assert np.all(Y[~patch] > 0.5)
+    assert np.all(iakf.outputs["fading_factor"][patch] == 1.0)   # compressed: no fading
+    # the compression keeps the velocity error of the patch far below the Kf's and SHF's
+    sel = (t > 60.0) & (t < 80.0)
+    err = {r.model: np.abs(r.velocity_error_ned()[sel, :2]).max() for r in (iakf, shf, kf)}
+    assert err["Iakf"] < 0.35
+    assert err["Iakf"] < 0.5 * err["Kf"]
+    assert err["Iakf"] < 0.5 * err["SageHusaFading"]
+
+
+def test_iakf_without_outliers_is_sage_husa_fading(clean_then_noisy):
+    """Paper 001: with Y = 1 the IAKF degenerates to the Sage-Husa + fading filter."""
+    never = {"outlier_alpha": 1e-15}          # gate chi2(6) quantile ~ 90: never reached
+    iakf = run_filter(clean_then_noisy, components.Iakf, never, stop_row=4000)
+    shf = run_filter(clean_then_noisy, components.SageHusaFading, stop_row=4000)
+    assert np.all(iakf.outputs["compression"] == 1.0)
+    for name in ("nav_lat", "nav_lon", "nav_h", "nav_vn", "r_est_vn", "fading_factor",
+                 "std_pn"):
+        np.testing.assert_array_equal(iakf.outputs[name], shf.outputs[name])
+
+
+# ------------------------------------------------------------------------------------------
+# paper 004: Newton robust KF
+# ------------------------------------------------------------------------------------------
+def test_newton_rejects_the_injected_epochs(outliers_120s):
+    run = run_filter(outliers_120s, components.NewtonRobustKf)
+    kf = run_filter(outliers_120s, components.Kf)
+    injected = outliers_120s.gnss_outlier[run.rows]
+    t = outliers_120s.time[run.rows]
+    assert injected.sum() == 12
+    np.testing.assert_allclose(t[injected], 5.0 + 10.0 * np.arange(12))
+    n_rej = run.outputs["n_rejected"]
+    # all 6 components of every injected epoch fail the 6.635 gate and are replaced
+    assert np.all(n_rej[injected] == 6)
+    assert np.all(run.outputs["outlier"][injected] == 1.0)
+    assert np.all(run.outputs["chi2_max"][injected] > 100.0)
+    # clean epochs: rare false alarms (alpha = 0.01 per component)
+    assert n_rej[~injected].sum() / (6 * (~injected).sum()) < 0.03
+    # the replacement keeps the solution at its clean level; the Kf jumps at each outlier
+    assert np.abs(run.position_error_ned()).max() < 6.0
+    assert np.abs(run.velocity_error_ned()).max() < 0.5
+    ratio = (np.linalg.norm(rms_table(run)["position_ned_m"])
+             / np.linalg.norm(rms_table(kf)["position_ned_m"]))
+    assert ratio < 0.5
+
+
+def test_newton_extrapolated_variance_and_first_epoch():
+    config = KfConfig(p0=np.r_[np.full(3, 5.0), np.full(3, 0.3), np.full(3, 0.01),
+                               np.full(3, 1e-7), np.full(3, 1e-3)],
+                      gyro_arw=1e-6, accel_vrw=1e-4, gyro_bias_sigma=0.0, gyro_bias_tau=0.0,
+                      accel_bias_sigma=0.0, accel_bias_tau=0.0,
+                      r_sigma=np.array([5, 5, 5, 0.3, 0.3, 0.3]))
+    nav = Strapdown.from_euler(0.7, 2.0, 100.0, np.zeros(3), 0.0, 0.0, 0.0)
+    kf = NewtonRobustKf(config, nav)
+    r0 = np.diag(kf.R0)
+    # first epoch, a gross error on north position: nothing to extrapolate from, the
+    # component is left out of the update (and the others are used)
+    z = np.array([500.0, 1.0, -1.0, 0.1, 0.0, 0.0])
+    before = kf.nav.lat
+    kf.propagate(np.zeros(3), np.array([0, 0, -9.8]) * 0.01, 0.01)
+    kf.update(z)
+    assert kf.n_rejected == 1 and kf.rejected[0]
+    assert abs(kf.nav.lat - before) * 6.4e6 < 1.0     # the 500 m did not enter
+    assert kf.sample_variances[-1][0] == UNUSABLE_VARIANCE_FACTOR * r0[0]
+    # with 5 measured samples, a 4th-order replacement has 251 times the variance
+    kf.sample_variances.clear()
+    for _ in range(5):
+        kf.sample_variances.append(r0.copy())
+    np.testing.assert_allclose(kf._extrapolated_variance(), 251.0 * r0)
+
+
+def test_masked_update_equals_full_update_when_all_kept():
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((15, 15))
+    P = A @ A.T + 15 * np.eye(15)
+    R = np.diag([25.0, 25.0, 25.0, 0.09, 0.09, 0.09])
+    z = rng.standard_normal(6)
+    config = KfConfig(p0=np.ones(15), gyro_arw=0.0, accel_vrw=0.0, gyro_bias_sigma=0.0,
+                      gyro_bias_tau=0.0, accel_bias_sigma=0.0, accel_bias_tau=0.0,
+                      r_sigma=np.sqrt(np.diag(R)))
+    kf = ErrorStateKf(config, Strapdown.from_euler(0.7, 2.0, 0.0, np.zeros(3), 0, 0, 0))
+    dx, P_full, _, _, _ = kf.kalman_update(P, z, R)
+    dx_m, P_m = masked_update(P, z, R, np.ones(6, dtype=bool))
+    np.testing.assert_allclose(dx_m, dx, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(P_m, P_full, rtol=1e-12, atol=1e-12)
+    # dropping a component = updating with the other five
+    keep = np.array([True, False, True, True, True, True])
+    dx5, _ = masked_update(P, z, R, keep)
+    dx_big, _, _, _, _ = kf.kalman_update(P, z, R + np.diag([0, 1e14, 0, 0, 0, 0]))
+    np.testing.assert_allclose(dx5, dx_big, rtol=1e-6, atol=1e-9)
+
+
+# ------------------------------------------------------------------------------------------
+# state save / restore
+# ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("cls", [components.SageHusaFading, components.Iakf,
+                                 components.NewtonRobustKf, components.Igg3RobustKf,
+                                 components.InsOnly], ids=lambda c: c.model_name)
+def test_state_copy_continues_bit_identically(cls, outliers_120s):
+    split, stop = 3050, 5050                       # 30.5 s, then 20 s (two outlier epochs)
+    first = run_filter(outliers_120s, cls, stop_row=split)
+    comp = first.component
+    saved = copy.deepcopy(comp)
+    restored_from_state = cls()
+    restored_from_state.set_state(comp.get_state())
+    a = run_filter(outliers_120s, component=comp, start_row=split, stop_row=stop)
+    b = run_filter(outliers_120s, component=saved, start_row=split, stop_row=stop)
+    c = run_filter(outliers_120s, component=restored_from_state, start_row=split,
+                   stop_row=stop)
+    for name in a.outputs:
+        np.testing.assert_array_equal(a.outputs[name], b.outputs[name], err_msg=name)
+        np.testing.assert_array_equal(a.outputs[name], c.outputs[name], err_msg=name)
+
+
+def test_same_seed_same_result(outliers_120s):
+    a = run_filter(outliers_120s, components.Iakf, stop_row=2000)
+    b = run_filter(outliers_120s, components.Iakf, stop_row=2000)
+    for name in a.outputs:
+        np.testing.assert_array_equal(a.outputs[name], b.outputs[name])
+
+
+# ------------------------------------------------------------------------------------------
+# acceptance Monte Carlo (slow)
+# ------------------------------------------------------------------------------------------
+SEEDS = range(1, 21)
+
+
+def _campaign(scenario, classes, seeds=SEEDS):
+    """Per seed and filter: position and velocity RMS (N/E/D) over the whole run, plus the
+    NewtonRobustKf detection counts.  The truth/IMU/GNSS of a seed are shared by the filters."""
+    rows = {cls.model_name: [] for cls in classes}
+    detection = np.zeros(4)   # injected components, detected, clean components, false alarms
+    for seed in seeds:
+        sensors = simulate_sensors(MODELS / scenario,
+                                   overrides={"trajectory": {"seed": seed}, "gnss": {"seed": seed}})
+        for cls in classes:
+            run = run_filter(sensors, cls)
+            table = rms_table(run)
+            rows[cls.model_name].append(np.r_[table["position_ned_m"], table["velocity_ned_mps"]])
+            if cls is components.NewtonRobustKf:
+                injected = sensors.gnss_outlier[run.rows]
+                n_rej = run.outputs["n_rejected"]
+                m = run.outputs["nis_dof"][0]
+                detection += [m * injected.sum(), n_rej[injected].sum(),
+                              m * (~injected).sum(), n_rej[~injected].sum()]
+    # RMS over the campaign (root of the mean of the per-run mean squares)
+    summary = {k: np.sqrt(np.mean(np.square(v), axis=0)) for k, v in rows.items()}
+    return summary, rows, detection
+
+
+@pytest.mark.slow
+def test_paper001_ordering_monte_carlo():
+    """aircraft_500s, 20 seeds: Iakf < SageHusaFading < Kf on every position and velocity axis
+    (paper 001, Table 1)."""
+    summary, _, _ = _campaign("aircraft_500s", [components.Kf, components.SageHusaFading,
+                                                components.Iakf])
+    for k, v in summary.items():
+        print(k, np.round(v, 4))
+    kf, shf, iakf = summary["Kf"], summary["SageHusaFading"], summary["Iakf"]
+    assert np.all(iakf < shf), (iakf, shf)
+    assert np.all(shf < kf), (shf, kf)
+
+
+@pytest.mark.slow
+def test_paper004_newton_monte_carlo():
+    """aircraft_outliers, 20 seeds: NewtonRobustKf cuts the 3-D position and velocity RMS of
+    the Kf by >= 50 % each; detects >= 95 % of the injected outlier components; false alarms
+    on clean components within a factor 2 of alpha = 0.01."""
+    summary, _, det = _campaign("aircraft_outliers", [components.Kf, components.NewtonRobustKf])
+    kf, nk = summary["Kf"], summary["NewtonRobustKf"]
+    pos_cut = 1.0 - np.linalg.norm(nk[:3]) / np.linalg.norm(kf[:3])
+    vel_cut = 1.0 - np.linalg.norm(nk[3:]) / np.linalg.norm(kf[3:])
+    detection_rate = det[1] / det[0]
+    false_alarm_rate = det[3] / det[2]
+    print(f"Kf {np.round(kf, 4)} NewtonRobustKf {np.round(nk, 4)} position -{pos_cut:.1%} "
+          f"velocity -{vel_cut:.1%} detection {detection_rate:.4f} false alarm "
+          f"{false_alarm_rate:.4f}")
+    assert pos_cut >= 0.5 and vel_cut >= 0.5
+    assert detection_rate >= 0.95
+    assert 0.005 <= false_alarm_rate <= 0.02

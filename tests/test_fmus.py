@@ -1,0 +1,205 @@
+"""The built FMUs: fmpy validation, units, state save/restore, errors through the FMI logger."""
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.validation import validate_fmu
+
+from orchestrator import build as fmu_build
+
+FMU_NAMES = [s.stem for s in fmu_build.slave_scripts()]
+
+
+@pytest.fixture(scope="session")
+def dist():
+    fmu_build.build(log=None)
+    return fmu_build.DIST
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_fmu_passes_fmpy_validate(dist, name):
+    assert validate_fmu(str(dist / f"{name}.fmu")) == []
+
+
+@pytest.mark.parametrize("name", FMU_NAMES)
+def test_model_description_units_and_attributes(dist, name):
+    with zipfile.ZipFile(dist / f"{name}.fmu") as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    units = {u.get("name") for u in root.find("UnitDefinitions")}
+    cosim = root.find("CoSimulation")
+    assert cosim.get("canGetAndSetFMUstate") == "true"
+    assert cosim.get("canSerializeFMUstate") == "true"
+    assert root.find("DefaultExperiment") is not None
+    n_real = 0
+    for sv in root.find("ModelVariables"):
+        child = sv[0]
+        if child.tag == "Real":
+            n_real += 1
+            if sv.get("causality") in ("input", "output"):
+                # every signal on an interface carries an SI unit unless dimensionless
+                assert child.get("unit") in units | {None}
+        if child.tag in ("Integer", "Boolean") and sv.get("causality") != "parameter":
+            assert sv.get("variability") == "discrete"
+    assert n_real > 0
+    md = read_model_description(str(dist / f"{name}.fmu"))
+    lat = [v for v in md.modelVariables if v.name in ("truth_lat", "nav_lat", "gnss_lat")]
+    assert lat and all(v.unit == "rad" for v in lat)
+
+
+class _Fmu:
+    """A bare fmpy instance for FMI-level checks."""
+
+    def __init__(self, path, name, params=None, logs=None):
+        self.md = read_model_description(str(path))
+        self.dir = extract(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.type = {v.name: v.type for v in self.md.modelVariables}
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier,
+                             instanceName=name)
+        self.logs = logs if logs is not None else []
+        logs_ = self.logs
+
+        def logger(env, inst, status, category, message):
+            logs_.append(message.decode(errors="replace"))
+
+        from fmpy.fmi2 import fmi2CallbackLoggerTYPE
+
+        self._logger = fmi2CallbackLoggerTYPE(logger)
+        from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE, \
+            fmi2CallbackFreeMemoryTYPE, calloc, free
+        cb = fmi2CallbackFunctions()
+        cb.logger = self._logger
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._cb = cb
+        self.fmu.instantiate(loggingOn=True, callbacks=cb)
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        for k, v in (params or {}).items():
+            self.set(k, v)
+        self.fmu.exitInitializationMode()
+
+    def set(self, name, value):
+        t = self.type[name]
+        if t == "Real":
+            self.fmu.setReal([self.vr[name]], [value])
+        elif t == "Integer":
+            self.fmu.setInteger([self.vr[name]], [value])
+        elif t == "Boolean":
+            self.fmu.setBoolean([self.vr[name]], [value])
+        else:
+            self.fmu.setString([self.vr[name]], [value])
+
+    def reals(self, names):
+        return np.array(self.fmu.getReal([self.vr[n] for n in names]))
+
+    def close(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+TRAJ_PARAMS = {"profile": "aircraft_500s", "gyro_arw_dpsh": 0.05, "accel_vrw_ugpsHz": 50.0,
+               "gyro_bias_instability_dph": 1.0, "gyro_bias_tau_s": 100.0, "seed": 7}
+TRAJ_OUT = ["truth_lat", "truth_vn", "imu_dtheta_x", "imu_dvel_z", "imu_time"]
+
+
+def _steps(f, t0, n, h=0.01):
+    rows = []
+    for k in range(n):
+        f.fmu.doStep(t0 + k * h, h)
+        rows.append(f.reals(TRAJ_OUT))
+    return np.array(rows)
+
+
+def test_trajectory_state_save_restore_is_bit_identical(dist):
+    f = _Fmu(dist / "TrajectoryImu.fmu", "traj", TRAJ_PARAMS)
+    try:
+        _steps(f, 0.0, 50)
+        state = f.fmu.getFMUstate()
+        first = _steps(f, 0.5, 80)
+        f.fmu.setFMUstate(state)
+        again = _steps(f, 0.5, 80)
+        # serialize / deserialize too
+        f.fmu.setFMUstate(state)
+        blob = f.fmu.serializeFMUstate(state)
+        state2 = f.fmu.deSerializeFMUstate(blob)
+        f.fmu.setFMUstate(state2)
+        third = _steps(f, 0.5, 80)
+        f.fmu.freeFMUstate(state)
+        f.fmu.freeFMUstate(state2)
+    finally:
+        f.close()
+    assert np.array_equal(first, again)
+    assert np.array_equal(first, third)
+    assert np.all(np.diff(first[:, -1]) > 0)
+
+
+def test_filter_state_save_restore_is_bit_identical(dist):
+    """Kf driven by constant stationary increments and a fix every 10 steps."""
+    lat = math.radians(40.0)
+    g = 9.80
+    f = _Fmu(dist / "Kf.fmu", "kf", {"init_lat": lat, "init_h": 100.0})
+    out = ["nav_lat", "nav_vn", "nav_roll", "std_pn", "nis", "nav_ba_z"]
+
+    def run(k0, n):
+        rows = []
+        for k in range(k0, k0 + n):
+            t1 = (k + 1) * 0.01
+            f.set("imu_time", t1)
+            f.set("imu_dt", 0.01)
+            f.set("imu_dvel_z", -g * 0.01)
+            f.set("imu_dtheta_x", 1e-7 * math.sin(k))
+            if (k + 1) % 10 == 0:
+                f.set("gnss_time", t1)
+                f.set("gnss_lat", lat + 1e-7 * math.cos(k))
+                f.set("gnss_h", 100.0)
+                f.set("gnss_valid", True)
+                f.set("gnss_epoch", (k + 1) // 10)
+            f.fmu.doStep(k * 0.01, 0.01)
+            rows.append(f.reals(out))
+        return np.array(rows)
+
+    try:
+        run(0, 35)
+        state = f.fmu.getFMUstate()
+        first = run(35, 60)
+        f.fmu.setFMUstate(state)
+        again = run(35, 60)
+        f.fmu.freeFMUstate(state)
+    finally:
+        f.close()
+    assert np.array_equal(first, again)
+    assert np.isfinite(first).all()
+
+
+def test_nan_reaching_a_filter_input_is_a_clear_fmi_error(dist):
+    logs = []
+    f = _Fmu(dist / "Kf.fmu", "kf", {"init_lat": 0.7}, logs=logs)
+    try:
+        f.set("imu_time", 0.01)
+        f.set("imu_dt", 0.01)
+        f.set("imu_dvel_x", float("nan"))
+        with pytest.raises(FMICallException):
+            f.fmu.doStep(0.0, 0.01)
+    finally:
+        f.close()
+    assert any("imu_dvel_x" in m and "nan" in m.lower() for m in logs), logs
+
+
+def test_bad_parameter_is_reported_through_the_logger(dist):
+    logs = []
+    f = _Fmu(dist / "GnssReceiver.fmu", "gnss", {"pos_sigma_n": -1.0}, logs=logs)
+    try:
+        with pytest.raises(FMICallException):
+            f.fmu.doStep(0.0, 1.0)
+    finally:
+        f.close()
+    assert any("pos_sigma_n" in m for m in logs), logs
