@@ -78,6 +78,7 @@ def setup(slave, component_class):
     slave._component = None
     slave._start_time = 0.0
     slave._failed = None
+    slave._vr_names = {}
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
     for port in cls.inputs:
@@ -103,6 +104,7 @@ def _register(slave, port, causality, variability, initial):
         setter=lambda v: values.__setitem__(name, v),
     )
     slave.register_variable(var, nested=False)
+    slave._vr_names.setdefault(port.type, {})[var.value_reference] = name
 
 
 # -- life cycle (bound as methods of each slave class) ------------------------------------
@@ -144,6 +146,33 @@ def _fail(slave, message):
     slave.log(f"{slave.instance_name}: {message}", Fmi2Status.error)
 
 
+# -- batched value access ------------------------------------------------------------------
+# pythonfmu's own get_real/set_real look every variable up through its ScalarVariable object
+# and a getter closure (about 1 us per variable); these read and write the value dict
+# directly, which matters because the master calls them for every component every step.
+def _getter(type_name):
+    def get(slave, vrs):
+        names = slave._vr_names.get(type_name, {})
+        values = slave._values
+        try:
+            return [values[names[vr]] for vr in vrs]
+        except KeyError as exc:
+            raise TypeError(f"valueReference {exc.args[0]} is not a {type_name} variable") from None
+    return get
+
+
+def _setter(type_name):
+    def set_(slave, vrs, new_values):
+        names = slave._vr_names.get(type_name, {})
+        values = slave._values
+        try:
+            for vr, value in zip(vrs, new_values):
+                values[names[vr]] = value
+        except KeyError as exc:
+            raise TypeError(f"valueReference {exc.args[0]} is not a {type_name} variable") from None
+    return set_
+
+
 # -- FMU state: the registered values plus the whole component ----------------------------
 def get_fmu_state(slave):
     blob = pickle.dumps((slave._component, slave._failed, slave._start_time), protocol=4)
@@ -155,6 +184,20 @@ def set_fmu_state(slave, state):
     slave._values.update(state["values"])
     slave._component, slave._failed, slave._start_time = pickle.loads(
         base64.b64decode(state["component"]))
+
+
+def bind_methods(slave_class):
+    """Give an FMU script's slave class the FMI methods of this module (called right after
+    the class statement in every script)."""
+    slave_class.setup_experiment = setup_experiment
+    slave_class.exit_initialization_mode = exit_initialization_mode
+    slave_class._get_fmu_state = get_fmu_state
+    slave_class._set_fmu_state = set_fmu_state
+    slave_class.to_xml = to_xml
+    for type_name in ("Real", "Integer", "Boolean", "String"):
+        setattr(slave_class, f"get_{type_name.lower()}", _getter(type_name))
+        setattr(slave_class, f"set_{type_name.lower()}", _setter(type_name))
+    return slave_class
 
 
 # -- model description: units, legal attributes -------------------------------------------

@@ -389,7 +389,8 @@ class FmuInstance(Instance):
         for typ, buf in (("Real", self.real_in), ("Integer", self.int_in), ("Boolean", self.bool_in)):
             names = self.input_names[typ]
             if names:
-                sets.append((self._fn_set[typ], vr_array(names), len(names), ptr(buf), typ))
+                sets.append([self._fn_set[typ], vr_array(names), len(names), ptr(buf), typ, buf,
+                             None])
         gets = []
         for typ, buf in (("Real", self.real_out), ("Integer", self.int_out),
                          ("Boolean", self.bool_out)):
@@ -430,7 +431,15 @@ class FmuInstance(Instance):
         if real_values is not None or int_values is not None or bool_values is not None:
             self._copy_in(real_values, int_values, bool_values)
         c = self._c
-        for fn, vrs, n, p, typ in self._set_calls:
+        for call in self._set_calls:
+            fn, vrs, n, p, typ, buf, sent = call
+            if typ != "Real":
+                # discrete inputs (epoch counters, flags) rarely change: an FMU keeps an input's
+                # value until it is set again, so an unchanged one is not sent (saves a call)
+                current = buf.tobytes()
+                if current == sent:
+                    continue
+                call[6] = current
             status = fn(c, vrs, n, p)
             if status > 1:
                 raise self._fail(f"fmi2Set{typ} of the inputs", status, self.time)

@@ -190,19 +190,22 @@ def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots):
 @click.argument("scenario", type=click.Path(), default="models/aircraft_500s")
 @click.option("--stop", type=float, default=100.0, show_default=True,
               help="Simulated time of each of the two runs [s].")
+@click.option("--repeat", type=int, default=3, show_default=True,
+              help="Alternate the two paths this many times and keep each one's fastest run.")
 @click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
-def bench(scenario, stop, as_json):
+def bench(scenario, stop, repeat, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
     time ratio and the per-step cost of each component."""
     from . import scenarios
 
     model = scenarios.load_scenario(scenario)
-    out = scenarios.bench(model, stop_time=stop, progress_factory=_progress_bar,
+    out = scenarios.bench(model, stop_time=stop, repeat=repeat, progress_factory=_progress_bar,
                           log=lambda m: click.echo(m, err=True))
     if as_json:
         click.echo(json.dumps(out, indent=2))
         return
-    click.echo(f"{model.name}, {out['fmu']['steps']} steps of the base step, one process:")
+    click.echo(f"{model.name}, {out['fmu']['steps']} steps of the base step, one process, "
+               f"fastest of {out['repeat']} alternating runs per path:")
     click.echo(f"  wall time direct {out['direct']['wall_s']:.2f} s, co-simulation "
                f"{out['fmu']['wall_s']:.2f} s, ratio {out['ratio']:.3f}")
     click.echo(f"  identical results through both paths: {out['identical']}")

@@ -168,17 +168,19 @@ def rms_table(rows, reference=None):
     ``rows``: list of (label, metrics dict); ``reference``: list of (label, pos_enu, vel_enu)
     from a paper, printed under our rows.
     """
-    head = (f"{'RMS error':28s} {'pos E/lon':>10s} {'pos N/lat':>10s} {'pos U/h':>10s} "
+    labels = [label for label, _ in rows] + [label for label, _, _ in reference or ()]
+    w = max([len("RMS error")] + [len(x) for x in labels])
+    head = (f"{'RMS error':{w}s} {'pos E/lon':>10s} {'pos N/lat':>10s} {'pos U/h':>10s} "
             f"{'vel E':>8s} {'vel N':>8s} {'vel U':>8s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s}")
-    units = (f"{'':28s} {'[m]':>10s} {'[m]':>10s} {'[m]':>10s} {'[m/s]':>8s} {'[m/s]':>8s} "
+    units = (f"{'':{w}s} {'[m]':>10s} {'[m]':>10s} {'[m]':>10s} {'[m/s]':>8s} {'[m/s]':>8s} "
              f"{'[m/s]':>8s} {'[deg]':>7s} {'[deg]':>7s} {'[deg]':>7s}")
     lines = [head, units]
     for label, m in rows:
         p, v, a = m["position_rms_m"], m["velocity_rms_mps"], m["attitude_rms_deg"]
-        lines.append(f"{label:28s} {p['e']:10.4f} {p['n']:10.4f} {p['d']:10.4f} "
+        lines.append(f"{label:{w}s} {p['e']:10.4f} {p['n']:10.4f} {p['d']:10.4f} "
                      f"{v['e']:8.4f} {v['n']:8.4f} {v['d']:8.4f} "
                      f"{a['roll']:7.4f} {a['pitch']:7.4f} {a['yaw']:7.4f}")
     for label, pos, vel in reference or ():
-        lines.append(f"{label:28s} {pos[0]:10.4f} {pos[1]:10.4f} {pos[2]:10.4f} "
+        lines.append(f"{label:{w}s} {pos[0]:10.4f} {pos[1]:10.4f} {pos[2]:10.4f} "
                      f"{vel[0]:8.4f} {vel[1]:8.4f} {vel[2]:8.4f} {'-':>7s} {'-':>7s} {'-':>7s}")
     return "\n".join(lines)

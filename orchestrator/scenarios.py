@@ -176,28 +176,34 @@ def _jsonable(value):
     return str(value)
 
 
-def bench(model: SystemModel, stop_time: Optional[float] = None, progress_factory=None,
-          log=print) -> Dict[str, Any]:
-    """Run the same system through the FMUs and through the navcore objects directly, in one
-    process, one after the other; return wall times, their ratio and per-component costs."""
+def bench(model: SystemModel, stop_time: Optional[float] = None, repeat: int = 2,
+          progress_factory=None, log=print) -> Dict[str, Any]:
+    """Run the same system through the navcore objects directly and through the FMUs, in one
+    process, alternating ``repeat`` times; keep each path's fastest run (the machine is shared,
+    the minimum is the least disturbed) and return wall times, their ratio and the
+    per-component costs of those runs."""
     ensure_fmus(model, log=log)
     out: Dict[str, Any] = {}
-    results = {}
-    for backend in ("direct", "fmu"):
-        sim = Simulation(model, backend=backend,
-                         registry=registry() if backend == "direct" else None)
-        progress = progress_factory(backend) if progress_factory else None
-        t0 = time.perf_counter()
-        res = sim.run(stop_time=stop_time, progress=progress)
-        wall = time.perf_counter() - t0
-        results[backend] = res
+    best: Dict[str, Any] = {}
+    for _ in range(max(1, int(repeat))):
+        for backend in ("direct", "fmu"):
+            sim = Simulation(model, backend=backend,
+                             registry=registry() if backend == "direct" else None)
+            progress = progress_factory(backend) if progress_factory else None
+            t0 = time.perf_counter()
+            res = sim.run(stop_time=stop_time, progress=progress)
+            wall = time.perf_counter() - t0
+            if backend not in best or wall < best[backend][0]:
+                best[backend] = (wall, res)
+    for backend, (wall, res) in best.items():
         out[backend] = {"wall_s": wall, "steps": len(res.time) - 1,
                         "do_step_us": {c: 1e6 * v for c, v in res.step_time_s.items()},
                         "exchange_us": {c: 1e6 * v for c, v in res.exchange_step_time_s.items()},
                         "master_overhead_us": 1e6 * res.metadata.get("master_overhead_s_per_step",
                                                                      float("nan"))}
+    out["repeat"] = max(1, int(repeat))
     out["ratio"] = out["fmu"]["wall_s"] / out["direct"]["wall_s"]
-    a, b = results["fmu"], results["direct"]
+    a, b = best["fmu"][1], best["direct"][1]
     out["identical"] = all(
         a.columns[c] == b.columns[c] and (a.data[c] == b.data[c]).all() for c in a.components)
     return out

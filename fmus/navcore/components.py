@@ -534,3 +534,136 @@ class InsOnly(InsGnssFilter):
 
 REGISTRY.update({cls.model_name: cls for cls in (SageHusaFading, Iakf, NewtonRobustKf,
                                                  Igg3RobustKf, InsOnly)})
+
+
+# ---------------------------------------------------------------------------------------
+# Unscented filters of paper 000 (engines in navcore.ukf_filters).
+from .ukf_filters import (  # noqa: E402  (kept with the classes that use them)
+    DEFAULT_PREDICT_INTERVAL, CtfaUkfEngine, ImmUkfEngine, UkfEngine)
+
+#: most IMM models a component offers (outputs model_prob_1..3)
+_IMM_MAX_MODELS = 3
+
+
+class Ukf(InsGnssFilter):
+    """Paper 000's UKF: 15-state error-state UKF, nonlinear large-misalignment error model."""
+
+    model_name = "Ukf"
+    description = ("INS/GNSS 15-state error-state unscented Kalman filter (paper 000 eqs. 11-23) "
+                   "with a nonlinear rotation-vector large-misalignment error model, fixed Q and "
+                   "R, closed-loop feedback.")
+    engine_class = UkfEngine
+    extra_parameters = (
+        real("ukf_predict_interval", "s", "interval of the UKF time update (interval means of "
+             "the nominal navigation; 0 = every IMU step); always also before an update",
+             DEFAULT_PREDICT_INTERVAL),
+        real("ukf_alpha", "", "scaled unscented transform alpha (eq. 11, 0 < alpha <= 1)", 1.0),
+        real("ukf_beta", "", "scaled unscented transform beta (eq. 13; 2 = Gaussian)", 2.0),
+        real("ukf_kappa", "", "scaled unscented transform kappa (eq. 11)", 0.0),
+    )
+
+    def ukf_options(self):
+        p = self.params
+        self.require_nonnegative("ukf_predict_interval")
+        self.require_positive("ukf_alpha")
+        self.require_finite("ukf_beta", "ukf_kappa")
+        if p["ukf_alpha"] > 1.0:
+            raise ParameterError(f"{self.model_name}: parameter 'ukf_alpha' = {p['ukf_alpha']} "
+                                 "must be in (0, 1] (paper 000, eq. 11)")
+        if 15 + p["ukf_kappa"] <= 0.0:
+            raise ParameterError(f"{self.model_name}: parameter 'ukf_kappa' = {p['ukf_kappa']} "
+                                 "must be > -15 (n + kappa > 0 for the 15-state filter)")
+        return dict(predict_interval=p["ukf_predict_interval"], alpha=p["ukf_alpha"],
+                    beta=p["ukf_beta"], kappa=p["ukf_kappa"])
+
+    def make_engine(self, config, nav):
+        return self.engine_class(config, nav, **self.ukf_options())
+
+
+class CtfaUkf(Ukf):
+    """Paper 000's CTFA-UKF: UKF + chi-square fuzzy adaptive process noise (eqs. 24-25)."""
+
+    model_name = "CtfaUkf"
+    description = ("Fuzzy adaptive UKF with chi-square test (CTFA-UKF, paper 000): the UKF whose "
+                   "process noise Q moves between Qmin and Qmax as a piecewise-linear function "
+                   "of the innovation chi-square statistic (eqs. 24-25).")
+    engine_class = CtfaUkfEngine
+    extra_parameters = Ukf.extra_parameters + (
+        real("q_max_scale", "", "Qmax = q_max_scale * Qmin, Qmin = the configured Q (paper 000: "
+             "an integer multiple)", 10.0),
+        real("ctfa_t1", "", "lower chi-square threshold of eq. 25 (0 = 6.25 for a 3-dimensional "
+             "measurement, else the 90 % chi-square quantile)", 0.0),
+        real("ctfa_t2", "", "upper chi-square threshold of eq. 25 (0 = 11.35 for a 3-dimensional "
+             "measurement, else the 99 % chi-square quantile)", 0.0),
+    )
+    extra_outputs = (
+        real("chi2", "", "chi-square statistic of the latest update (eq. 24)"),
+    )
+
+    def make_engine(self, config, nav):
+        p = self.params
+        self.require_nonnegative("ctfa_t1", "ctfa_t2")
+        if not p["q_max_scale"] >= 1.0:
+            raise ParameterError(f"{self.model_name}: parameter 'q_max_scale' = "
+                                 f"{p['q_max_scale']} must be >= 1 (Qmax >= Qmin)")
+        engine = self.engine_class(config, nav, q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
+                                   t2=p["ctfa_t2"], **self.ukf_options())
+        if not engine.schedule.T2 > engine.schedule.T1:
+            raise ParameterError(f"{self.model_name}: parameters 'ctfa_t1' = "
+                                 f"{engine.schedule.T1} and 'ctfa_t2' = {engine.schedule.T2} "
+                                 "must satisfy t1 < t2")
+        return engine
+
+    def write_diagnostics(self, result):
+        self.out["chi2"] = self.engine.chi2
+
+
+class ImmUkf(Ukf):
+    """IMM-UKF (paper 000's comparison): 2 or 3 UKFs with different Q scales."""
+
+    model_name = "ImmUkf"
+    description = ("Interacting multiple model UKF (paper 000's IMM-UKF, its ref. [14]): 2 or 3 "
+                   "UKFs with different process-noise scales, Markov model switching, mixing "
+                   "once per GNSS interval, closed-loop feedback of the combined estimate.")
+    engine_class = ImmUkfEngine
+    extra_parameters = Ukf.extra_parameters + (
+        integer("imm_models", "number of models (2 or 3)", 2),
+        real("imm_q_scale_1", "", "Q scale of model 1 relative to the configured Q", 1.0),
+        real("imm_q_scale_2", "", "Q scale of model 2", 10.0),
+        real("imm_q_scale_3", "", "Q scale of model 3 (used when imm_models = 3)", 100.0),
+        real("imm_p_stay", "", "Markov probability of staying in a model per GNSS interval "
+             "(diagonal of the transition matrix; the rest spread evenly)", 0.95),
+    )
+    extra_outputs = tuple(
+        real(f"model_prob_{j}", "", f"IMM probability of model {j} after the latest update "
+             "(0 for an unused model)") for j in range(1, _IMM_MAX_MODELS + 1))
+
+    def make_engine(self, config, nav):
+        p = self.params
+        r = p["imm_models"]
+        if r not in (2, 3):
+            raise ParameterError(f"{self.model_name}: parameter 'imm_models' = {r} must be 2 or 3")
+        names = [f"imm_q_scale_{j}" for j in range(1, r + 1)]
+        self.require_positive(*names)
+        self.require_finite("imm_p_stay")
+        if not 0.0 < p["imm_p_stay"] < 1.0:
+            raise ParameterError(f"{self.model_name}: parameter 'imm_p_stay' = "
+                                 f"{p['imm_p_stay']} must be in (0, 1)")
+        return self.engine_class(config, nav, q_scales=[p[n] for n in names],
+                                 p_stay=p["imm_p_stay"], **self.ukf_options())
+
+    def initialize(self, start_time):
+        out = super().initialize(start_time)
+        self.write_diagnostics(None)
+        out.update({f"model_prob_{j}": self.out[f"model_prob_{j}"]
+                    for j in range(1, _IMM_MAX_MODELS + 1)})
+        out["q_scale"] = self.out["q_scale"] = self.engine.q_scale
+        return out
+
+    def write_diagnostics(self, result):
+        mu = self.engine.model_probabilities
+        for j in range(_IMM_MAX_MODELS):
+            self.out[f"model_prob_{j + 1}"] = float(mu[j]) if j < len(mu) else 0.0
+
+
+REGISTRY.update({cls.model_name: cls for cls in (Ukf, CtfaUkf, ImmUkf)})

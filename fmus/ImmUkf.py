@@ -1,0 +1,17 @@
+"""FMU slave 'ImmUkf': a thin FMI shell over navcore.components.ImmUkf (see fmushell.py)."""
+from pythonfmu import Fmi2Slave
+
+import fmushell
+from navcore import components
+
+
+class ImmUkf(Fmi2Slave):
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        fmushell.setup(self, components.ImmUkf)
+
+    def do_step(self, current_time, step_size):
+        return fmushell.do_step(self, current_time, step_size)
+
+
+fmushell.bind_methods(ImmUkf)
