@@ -24,7 +24,8 @@ from .ssp import SystemModel, load_ssd
 #: name of the component a ``--filter`` swap replaces
 FILTER_COMPONENT = "filter"
 #: adaptive diagnostics plotted when a filter has them
-ADAPTIVE_OUTPUTS = ("q_scale", "r_scale", "fading_factor", "outlier")
+ADAPTIVE_OUTPUTS = ("q_scale", "r_scale", "fading_factor", "outlier", "chi2", "model_prob_1",
+                    "model_prob_2", "model_prob_3")
 
 
 def registry():
@@ -99,15 +100,13 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
                       stop_time: Optional[float] = None, parameters=None, window=None,
                       progress=None, build=True, log=print) -> Run:
     """Run one scenario (optionally with the filter component swapped) and compute metrics."""
-    label = FILTER_COMPONENT
+    names = [c.name for c in model.components]
     if filter:
-        if FILTER_COMPONENT not in [c.name for c in model.components]:
+        if FILTER_COMPONENT not in names:
             raise NavfmuError(f"{model.path}: no component named '{FILTER_COMPONENT}' to swap")
         model = model.replace_source(FILTER_COMPONENT, resolve_filter(filter))
-        label = Path(filter).stem
-    else:
-        label = Path(model.component(FILTER_COMPONENT).source).stem \
-            if FILTER_COMPONENT in [c.name for c in model.components] else label
+    label = (Path(model.component(FILTER_COMPONENT).source).stem
+             if FILTER_COMPONENT in names else model.name)
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
