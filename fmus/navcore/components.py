@@ -590,7 +590,8 @@ class CtfaUkf(Ukf):
     engine_class = CtfaUkfEngine
     extra_parameters = Ukf.extra_parameters + (
         real("q_max_scale", "", "Qmax = q_max_scale * Qmin, Qmin = the configured Q (paper 000: "
-             "an integer multiple)", 10.0),
+             "an integer multiple; 100 = the noise variance of a 10 deg/s manoeuvre in "
+             "models/uav_maneuver)", 100.0),
         real("ctfa_t1", "", "lower chi-square threshold of eq. 25 (0 = 6.25 for a 3-dimensional "
              "measurement, else the 90 % chi-square quantile)", 0.0),
         real("ctfa_t2", "", "upper chi-square threshold of eq. 25 (0 = 11.35 for a 3-dimensional "
@@ -629,8 +630,9 @@ class ImmUkf(Ukf):
     extra_parameters = Ukf.extra_parameters + (
         integer("imm_models", "number of models (2 or 3)", 2),
         real("imm_q_scale_1", "", "Q scale of model 1 relative to the configured Q", 1.0),
-        real("imm_q_scale_2", "", "Q scale of model 2", 10.0),
-        real("imm_q_scale_3", "", "Q scale of model 3 (used when imm_models = 3)", 100.0),
+        real("imm_q_scale_2", "", "Q scale of model 2 (default: CtfaUkf's Qmax)", 100.0),
+        real("imm_q_scale_3", "", "Q scale of model 3 (used when imm_models = 3; default "
+             "between models 1 and 2)", 10.0),
         real("imm_p_stay", "", "Markov probability of staying in a model per GNSS interval "
              "(diagonal of the transition matrix; the rest spread evenly)", 0.95),
     )
