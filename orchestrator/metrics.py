@@ -26,22 +26,12 @@ import math
 import numpy as np
 from scipy import stats
 
+from navcore.earth import radii as _radii
+from navcore.rotations import wrap_angle as _wrap
+
 from .errors import NavfmuError
 
-# WGS-84 (the same constants as navcore.earth; kept here so the master does not import navcore)
-_A = 6378137.0
-_E2 = (1.0 / 298.257223563) * (2.0 - 1.0 / 298.257223563)
-
 AXES = ("n", "e", "d")
-
-
-def _radii(lat):
-    w = 1.0 - _E2 * np.sin(lat) ** 2
-    return _A * (1.0 - _E2) / w**1.5, _A / np.sqrt(w)
-
-
-def _wrap(a):
-    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
 def _dcm(roll, pitch, yaw):

@@ -247,8 +247,12 @@ class InsGnssFilter(Component):
             r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
             measurement=p["measurement"])
 
+    def engine_options(self):
+        """Validated keyword arguments of the engine beyond (config, nav); subclasses extend."""
+        return {}
+
     def make_engine(self, config, nav):
-        return self.engine_class(config, nav)
+        return self.engine_class(config, nav, **self.engine_options())
 
     # -- life cycle --------------------------------------------------------------------
     def initialize(self, start_time):
@@ -262,6 +266,7 @@ class InsGnssFilter(Component):
         self.last_epoch = 0
         self.out = {q.name: q.default() for q in self.outputs}
         self._write_solution()
+        self.write_diagnostics(None)  # extra outputs start from the engine's initial state
         return dict(self.out)
 
     def step(self, t, h, inputs):
@@ -312,7 +317,8 @@ class InsGnssFilter(Component):
         self.write_diagnostics(result)
 
     def write_diagnostics(self, result):
-        """Subclasses write their extra outputs from the update result here."""
+        """Subclasses write their extra outputs here: after every update (``result``) and
+        once at initialization (``result`` None)."""
 
     def _write_solution(self):
         engine = self.engine
@@ -397,15 +403,6 @@ class SageHusaFading(InsGnssFilter):
         return dict(forgetting_factor=p["forgetting_factor"], reserve_gamma=p["reserve_gamma"],
                     r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None)
 
-    def make_engine(self, config, nav):
-        return self.engine_class(config, nav, **self.engine_options())
-
-    def initialize(self, start_time):
-        out = super().initialize(start_time)
-        self.write_diagnostics(None)  # r_est_* start at the initial R (the scenario's R0)
-        out.update({name: self.out[name] for name in _R_EST_NAMES})
-        return out
-
     def write_diagnostics(self, result):
         sigma = self.engine.r_sigma_estimate()
         for i, value in enumerate(sigma):
@@ -464,7 +461,7 @@ class NewtonRobustKf(InsGnssFilter):
         integer("n_rejected", "observation components replaced at the latest update"),
     )
 
-    def make_engine(self, config, nav):
+    def engine_options(self):
         p = self.params
         self.require_positive("chi2_threshold")
         if p["newton_order"] < 0:
@@ -474,9 +471,8 @@ class NewtonRobustKf(InsGnssFilter):
             raise ParameterError(f"{self.model_name}: parameter 'replacement_variance' = "
                                  f"{p['replacement_variance']!r}; expected one of "
                                  f"{list(REPLACEMENT_VARIANCES)}")
-        return self.engine_class(config, nav, chi2_threshold=p["chi2_threshold"],
-                                 newton_order=p["newton_order"],
-                                 replacement_variance=p["replacement_variance"])
+        return dict(chi2_threshold=p["chi2_threshold"], newton_order=p["newton_order"],
+                    replacement_variance=p["replacement_variance"])
 
     def write_diagnostics(self, result):
         self.out["chi2_max"] = self.engine.chi2_max
@@ -502,13 +498,13 @@ class Igg3RobustKf(InsGnssFilter):
         integer("n_rejected", "observation components rejected (weight 0) at the latest update"),
     )
 
-    def make_engine(self, config, nav):
+    def engine_options(self):
         p = self.params
         self.require_positive("igg_k0", "igg_k1")
         if not p["igg_k1"] > p["igg_k0"]:
             raise ParameterError(f"{self.model_name}: parameter 'igg_k1' = {p['igg_k1']} must "
                                  f"be > igg_k0 = {p['igg_k0']}")
-        return self.engine_class(config, nav, igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
+        return dict(igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
 
     def write_diagnostics(self, result):
         self.out["min_weight"] = float(self.engine.weights.min())
@@ -562,7 +558,7 @@ class Ukf(InsGnssFilter):
         real("ukf_kappa", "", "scaled unscented transform kappa (eq. 11)", 0.0),
     )
 
-    def ukf_options(self):
+    def engine_options(self):
         p = self.params
         self.require_nonnegative("ukf_predict_interval")
         self.require_positive("ukf_alpha")
@@ -575,9 +571,6 @@ class Ukf(InsGnssFilter):
                                  "must be > -15 (n + kappa > 0 for the 15-state filter)")
         return dict(predict_interval=p["ukf_predict_interval"], alpha=p["ukf_alpha"],
                     beta=p["ukf_beta"], kappa=p["ukf_kappa"])
-
-    def make_engine(self, config, nav):
-        return self.engine_class(config, nav, **self.ukf_options())
 
 
 class CtfaUkf(Ukf):
@@ -601,14 +594,17 @@ class CtfaUkf(Ukf):
         real("chi2", "", "chi-square statistic of the latest update (eq. 24)"),
     )
 
-    def make_engine(self, config, nav):
+    def engine_options(self):
         p = self.params
         self.require_nonnegative("ctfa_t1", "ctfa_t2")
         if not p["q_max_scale"] >= 1.0:
             raise ParameterError(f"{self.model_name}: parameter 'q_max_scale' = "
                                  f"{p['q_max_scale']} must be >= 1 (Qmax >= Qmin)")
-        engine = self.engine_class(config, nav, q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
-                                   t2=p["ctfa_t2"], **self.ukf_options())
+        return dict(super().engine_options(), q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
+                    t2=p["ctfa_t2"])
+
+    def make_engine(self, config, nav):
+        engine = super().make_engine(config, nav)
         if not engine.schedule.T2 > engine.schedule.T1:
             raise ParameterError(f"{self.model_name}: parameters 'ctfa_t1' = "
                                  f"{engine.schedule.T1} and 'ctfa_t2' = {engine.schedule.T2} "
@@ -640,7 +636,7 @@ class ImmUkf(Ukf):
         real(f"model_prob_{j}", "", f"IMM probability of model {j} after the latest update "
              "(0 for an unused model)") for j in range(1, _IMM_MAX_MODELS + 1))
 
-    def make_engine(self, config, nav):
+    def engine_options(self):
         p = self.params
         r = p["imm_models"]
         if r not in (2, 3):
@@ -651,18 +647,11 @@ class ImmUkf(Ukf):
         if not 0.0 < p["imm_p_stay"] < 1.0:
             raise ParameterError(f"{self.model_name}: parameter 'imm_p_stay' = "
                                  f"{p['imm_p_stay']} must be in (0, 1)")
-        return self.engine_class(config, nav, q_scales=[p[n] for n in names],
-                                 p_stay=p["imm_p_stay"], **self.ukf_options())
-
-    def initialize(self, start_time):
-        out = super().initialize(start_time)
-        self.write_diagnostics(None)
-        out.update({f"model_prob_{j}": self.out[f"model_prob_{j}"]
-                    for j in range(1, _IMM_MAX_MODELS + 1)})
-        out["q_scale"] = self.out["q_scale"] = self.engine.q_scale
-        return out
+        return dict(super().engine_options(), q_scales=[p[n] for n in names],
+                    p_stay=p["imm_p_stay"])
 
     def write_diagnostics(self, result):
+        self.out["q_scale"] = self.engine.q_scale
         mu = self.engine.model_probabilities
         for j in range(_IMM_MAX_MODELS):
             self.out[f"model_prob_{j + 1}"] = float(mu[j]) if j < len(mu) else 0.0
