@@ -1,8 +1,8 @@
 """Build the FMUs of ``fmus/`` into ``fmus/dist/`` with pythonfmu, only when stale.
 
-An FMU is stale when it is missing or when the hash of its inputs (its slave script,
-``fmushell.py`` and every file of ``navcore``) differs from the one recorded beside it in
-``fmus/dist/<Model>.fmu.sha256``.  Each FMU is written to a temporary name and renamed, so an
+An FMU is stale when it is missing, has no platform binaries, or when the hash of its inputs
+(its slave script, ``fmushell.py`` and every file of ``navcore``) differs from the one
+recorded beside it in ``fmus/dist/<Model>.fmu.sha256``.  Each FMU is written to a temporary name and renamed, so an
 interrupted build never leaves a broken ``.fmu`` behind.
 """
 from __future__ import annotations
@@ -10,7 +10,10 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import subprocess
+import sys
 import tempfile
+import zipfile
 from pathlib import Path
 
 from .errors import NavfmuError
@@ -48,7 +51,19 @@ def is_stale(script: Path, dist: Path = DIST) -> bool:
     stamp = fmu.with_suffix(".fmu.sha256")
     if not fmu.exists() or not stamp.exists():
         return True
-    return stamp.read_text().strip() != source_hash(script)
+    if stamp.read_text().strip() != source_hash(script):
+        return True
+    return not has_binaries(fmu)
+
+
+def has_binaries(fmu: Path) -> bool:
+    """True if the FMU archive holds at least one platform binary (an FMU built by a
+    pythonfmu without them is unusable; see :func:`builder_usable`)."""
+    try:
+        with zipfile.ZipFile(fmu) as z:
+            return any(n.startswith("binaries/") and not n.endswith("/") for n in z.namelist())
+    except (OSError, zipfile.BadZipFile):
+        return False
 
 
 def build_one(script: Path, dist: Path = DIST) -> Path:
@@ -66,6 +81,9 @@ def build_one(script: Path, dist: Path = DIST) -> Path:
         if built.stem != script.stem:
             raise NavfmuError(f"{script}: the FMU's model name '{built.stem}' differs from the "
                               f"script name '{script.stem}'")
+        if not has_binaries(built):
+            raise NavfmuError(f"{script}: pythonfmu built {built.name} without binaries "
+                                  "(its installation lacks the FMI wrapper libraries)")
         fd, partial = tempfile.mkstemp(dir=dist, prefix=f".{script.stem}.", suffix=".part")
         os.close(fd)
         shutil.copyfile(built, partial)
@@ -83,10 +101,41 @@ def build(names=None, force=False, dist: Path = DIST, log=print):
         if unknown:
             raise NavfmuError(f"unknown FMU {', '.join(unknown)}; known: {', '.join(known)}")
         scripts = [known[n] for n in names]
+    todo = [s for s in scripts if force or is_stale(s, dist)]
+    if todo and not builder_usable():
+        return _build_in_subprocess(todo, dist, log)
     built = []
-    for script in scripts:
-        if force or is_stale(script, dist):
-            if log:
-                log(f"building {script.stem}.fmu")
-            built.append(build_one(script, dist))
+    for script in todo:
+        if log:
+            log(f"building {script.stem}.fmu")
+        built.append(build_one(script, dist))
     return built
+
+
+def builder_usable() -> bool:
+    """True if the pythonfmu this process imports is the installed one, with its FMI binaries.
+
+    Once an FMU built by pythonfmu has run in this process, ``import pythonfmu`` may resolve
+    to the copy in that FMU's resources, which has no binaries: building with it gives FMUs
+    without binaries.  Checked before every in-process build."""
+    try:
+        from pythonfmu import builder
+    except ImportError:
+        return True  # build_one reports the missing package
+    binaries = Path(builder.__file__).parent / "resources" / "binaries"
+    return any(f.is_file() for f in binaries.rglob("*"))
+
+
+def _build_in_subprocess(scripts, dist: Path, log):
+    """Build ``scripts`` with a fresh interpreter (see :func:`builder_usable`)."""
+    if log:
+        for script in scripts:
+            log(f"building {script.stem}.fmu (in a separate process)")
+    code = ("import sys; from pathlib import Path; from orchestrator import build; "
+            "build.build(sys.argv[2:], force=True, dist=Path(sys.argv[1]), log=None)")
+    proc = subprocess.run([sys.executable, "-c", code, str(dist), *[s.stem for s in scripts]],
+                          capture_output=True, text=True, cwd=str(ROOT))
+    if proc.returncode != 0:
+        detail = (proc.stderr.strip().splitlines() or ["no message"])[-1]
+        raise NavfmuError(f"building {', '.join(s.stem for s in scripts)} failed: {detail}")
+    return [fmu_path(s.stem, dist) for s in scripts]

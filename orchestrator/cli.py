@@ -134,6 +134,13 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
     window = _parse_window(window)
     parameters = _parse_sets(sets)
     out = Path(out) if out else DEFAULT_OUT / model.name
+    if backend == "fmu":  # build every FMU before the first run loads one
+        swappable = scenarios.FILTER_COMPONENT in [c.name for c in model.components]
+        for f in filters:
+            scenarios.ensure_fmus(model.replace_source(scenarios.FILTER_COMPONENT,
+                                                       scenarios.resolve_filter(f))
+                                  if f and swappable else model,
+                                  log=lambda m: click.echo(m, err=True))
     runs = []
     for f in filters:
         label = f or "scenario"
@@ -157,7 +164,17 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
             if "time_per_step_ms" in m:
                 extra.append(f"{m['time_per_step_ms'] * 1e3:.0f} us per filter step")
             click.echo(f"  {run.label}: " + "; ".join(extra))
-    written = scenarios.write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title)
+    names = [f for f in filters if f]
+    if len(names) < 2:  # a single run: suggest timing the paper's filters against each other
+        names = list((reference or {}).get("time_per_cycle_ms") or {}) or names
+    text = scenarios.format_comparison(
+        scenarios.paper_comparison(runs, reference),
+        bench_command=(f"`navfmu bench {scenario} --filters {','.join(names)}`" if names else ""),
+        show_missing=len(filters) > 1)
+    if text:
+        click.echo(text)
+    written = scenarios.write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
+                                      reference=reference)
     click.echo(f"\nwrote {len(written)} files to {out}/: "
                + ", ".join(p.name for p in written))
 
@@ -189,16 +206,32 @@ def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots):
 @cli.command()
 @click.argument("scenario", type=click.Path(), default="models/aircraft_500s")
 @click.option("--stop", type=float, default=100.0, show_default=True,
-              help="Simulated time of each of the two runs [s].")
+              help="Simulated time of each run [s].")
 @click.option("--repeat", type=int, default=3, show_default=True,
-              help="Alternate the two paths this many times and keep each one's fastest run.")
+              help="Alternate the runs this many times and keep each one's fastest.")
+@click.option("--filters", help="Comma-separated filter FMUs (e.g. Ukf,CtfaUkf,ImmUkf): time "
+              "each one swapped into the scenario, through the FMUs, instead of comparing the "
+              "FMU and direct paths.")
 @click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
-def bench(scenario, stop, repeat, as_json):
+def bench(scenario, stop, repeat, filters, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
-    time ratio and the per-step cost of each component."""
+    time ratio and the per-step cost of each component.  With --filters: run it through the
+    FMUs once per filter instead and print each filter's time per cycle and the ratios to the
+    first filter (next to the paper's, from paper.json)."""
     from . import scenarios
 
     model = scenarios.load_scenario(scenario)
+    if filters is not None:
+        names = [f.strip() for f in filters.split(",") if f.strip()]
+        out = scenarios.bench_filters(model, names, stop_time=stop, repeat=repeat,
+                                      progress_factory=_progress_bar,
+                                      reference=scenarios.paper_reference(model),
+                                      log=lambda m: click.echo(m, err=True))
+        if as_json:
+            click.echo(json.dumps(scenarios._jsonable(out), indent=2))
+            return
+        _print_filter_bench(out)
+        return
     out = scenarios.bench(model, stop_time=stop, repeat=repeat, progress_factory=_progress_bar,
                           log=lambda m: click.echo(m, err=True))
     if as_json:
@@ -216,6 +249,26 @@ def bench(scenario, stop, repeat, as_json):
                    f"{out['fmu']['do_step_us'][c]:10.1f} {out['fmu']['exchange_us'][c]:17.1f}")
     click.echo(f"  master overhead per base step: direct {out['direct']['master_overhead_us']:.1f}"
                f" us, FMU {out['fmu']['master_overhead_us']:.1f} us")
+
+
+def _print_filter_bench(out):
+    rows = out["filters"]
+    first = rows[out["baseline"]]
+    click.echo(f"{out['model']}: {out['stop_time']:g} s through the FMUs per filter "
+               f"({first['base_steps']} base steps), one process, fastest of {out['repeat']} "
+               "alternating runs per filter:")
+    click.echo(f"  {'filter':14s} {'ms per cycle':>12s} {'ratio':>7s} {'paper [ms]':>11s} "
+               f"{'paper ratio':>12s} {'wall [s]':>9s}")
+
+    def num(value, fmt):
+        return format(value, fmt) if value is not None else f"{'-':>{len(format(0.0, fmt))}s}"
+
+    for name, r in rows.items():
+        click.echo(f"  {name:14s} {r['time_per_cycle_ms']:12.4f} {r['ratio']:7.2f} "
+                   f"{num(r['paper_time_per_cycle_ms'], '11.3f')} "
+                   f"{num(r['paper_ratio'], '12.2f')} {r['wall_s']:9.2f}")
+    click.echo(f"  one cycle = one do_step of the filter FMU ({first['cycle_s']:g} s); ratios to "
+               f"{out['baseline']}, the first filter")
 
 
 def main(argv=None):

@@ -18,6 +18,19 @@ Definitions (errors are estimate - truth):
   mean over the window of sum_i (e_i / sigma_i)^2, to compare with the group's dimension 3.
 * NIS: mean of ``nis`` over the update epochs, with the two-sided 95 % band of the mean of
   N chi-square(dof) samples: chi2.ppf(0.025, N dof)/N .. chi2.ppf(0.975, N dof)/N.
+* 3-D RMS of a group: root of the sum of the per-axis mean squares; improvement of a filter
+  over a baseline in percent: 100 (1 - RMS_filter / RMS_baseline); RMS ratio: RMS_baseline /
+  RMS_filter (paper 001's "6 times").
+* Outlier detection of a filter with an ``n_rejected`` output, at its update epochs (rows with
+  ``updated``), against the ``gnss_outlier`` flag of the receiver (the component recording
+  it) on the same rows: detection rate = injected epochs with n_rejected > 0 / injected
+  epochs; false-alarm rate = clean epochs with n_rejected > 0 / clean epochs, and per
+  observation = sum of n_rejected / sum of nis_dof over the clean epochs.
+* Chi-square gates drawn with the statistics: ``chi2_threshold`` of a filter with
+  ``chi2_max`` (default 6.635 = chi2(1) 99 %), ``ctfa_t1``/``ctfa_t2`` of a filter with
+  ``chi2`` (0 or unset: 6.25/11.35 for a 3-dimensional measurement, else the 90 %/99 %
+  chi-square quantiles of nis_dof), read from the run's parameter values
+  (``results.metadata["parameters"]``); the defaults apply when the parameter is absent.
 """
 from __future__ import annotations
 
@@ -32,6 +45,13 @@ from navcore.rotations import wrap_angle as _wrap
 from .errors import NavfmuError
 
 AXES = ("n", "e", "d")
+#: paper order of the tables: east, north, up (up error RMS = down error RMS)
+ENU = ("e", "n", "d")
+ATTITUDE = ("roll", "pitch", "yaw")
+#: per-observation chi-square gate of paper 004 when the run does not set chi2_threshold
+CHI2_GATE_DEFAULT = 6.635
+#: paper 000's thresholds of eq. 25 for a 3-dimensional measurement (ctfa_t1/t2 = 0 or unset)
+CTFA_THRESHOLDS_DOF3 = (6.25, 11.35)
 
 
 def _dcm(roll, pitch, yaw):
@@ -149,28 +169,207 @@ def filter_metrics(results, filter_name, window=None, truth_name=None):
                                      float(stats.chi2.ppf(0.975, n * dof) / n)]}
     if filter_name in getattr(results, "step_time_s", {}):
         out["time_per_step_ms"] = 1e3 * float(results.step_time_s[filter_name])
+    detection = outlier_detection(results, filter_name, window=window)
+    if detection is not None:
+        out["outlier_detection"] = detection
     return out
 
 
-def rms_table(rows, reference=None):
-    """Text table in the shape of paper 001's Table 1, plus attitude RMS.
+def reference_metrics(position_enu=None, velocity_enu=None, attitude_deg=None):
+    """A paper's row (lists in the tables' order: E/N/U, roll/pitch/yaw; None where the paper
+    gives no number) in the shape of :func:`filter_metrics`' RMS groups, for
+    :func:`rms_table`."""
+    def group(values, keys):
+        if values is None:
+            return None
+        return {k: (None if v is None else float(v)) for k, v in zip(keys, values)}
 
-    ``rows``: list of (label, metrics dict); ``reference``: list of (label, pos_enu, vel_enu)
-    from a paper, printed under our rows.
+    return {"position_rms_m": group(position_enu, ENU),
+            "velocity_rms_mps": group(velocity_enu, ENU),
+            "attitude_rms_deg": group(attitude_deg, ATTITUDE)}
+
+
+def _cell(group, key, width, decimals):
+    value = (group or {}).get(key)
+    if value is None or not math.isfinite(value):
+        return f"{'-':>{width}s}"
+    return f"{value:{width}.{decimals}f}"
+
+
+def rms_table(rows, reference=None):
+    """Text table in the shape of paper 001's Table 1 (position and velocity RMS east, north,
+    up) plus attitude RMS (paper 000's Table 4).
+
+    ``rows``: list of (label, metrics dict) in the given order, metrics from
+    :func:`filter_metrics` or :func:`reference_metrics` (a missing group or None value prints
+    '-'); ``reference``: list of (label, pos_enu, vel_enu[, att_deg]) from a paper, printed
+    under the rows.
     """
-    labels = [label for label, _ in rows] + [label for label, _, _ in reference or ()]
-    w = max([len("RMS error")] + [len(x) for x in labels])
+    rows = list(rows)
+    for ref in reference or ():
+        label, pos, vel = ref[:3]
+        rows.append((label, reference_metrics(pos, vel, ref[3] if len(ref) > 3 else None)))
+    w = max([len("RMS error")] + [len(label) for label, _ in rows])
     head = (f"{'RMS error':{w}s} {'pos E/lon':>10s} {'pos N/lat':>10s} {'pos U/h':>10s} "
             f"{'vel E':>8s} {'vel N':>8s} {'vel U':>8s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s}")
     units = (f"{'':{w}s} {'[m]':>10s} {'[m]':>10s} {'[m]':>10s} {'[m/s]':>8s} {'[m/s]':>8s} "
              f"{'[m/s]':>8s} {'[deg]':>7s} {'[deg]':>7s} {'[deg]':>7s}")
     lines = [head, units]
     for label, m in rows:
-        p, v, a = m["position_rms_m"], m["velocity_rms_mps"], m["attitude_rms_deg"]
-        lines.append(f"{label:{w}s} {p['e']:10.4f} {p['n']:10.4f} {p['d']:10.4f} "
-                     f"{v['e']:8.4f} {v['n']:8.4f} {v['d']:8.4f} "
-                     f"{a['roll']:7.4f} {a['pitch']:7.4f} {a['yaw']:7.4f}")
-    for label, pos, vel in reference or ():
-        lines.append(f"{label:{w}s} {pos[0]:10.4f} {pos[1]:10.4f} {pos[2]:10.4f} "
-                     f"{vel[0]:8.4f} {vel[1]:8.4f} {vel[2]:8.4f} {'-':>7s} {'-':>7s} {'-':>7s}")
+        p, v, a = (m.get("position_rms_m"), m.get("velocity_rms_mps"),
+                   m.get("attitude_rms_deg"))
+        lines.append(" ".join([f"{label:{w}s}"] + [_cell(p, k, 10, 4) for k in ENU]
+                              + [_cell(v, k, 8, 4) for k in ENU]
+                              + [_cell(a, k, 7, 4) for k in ATTITUDE]))
     return "\n".join(lines)
+
+
+# -- comparisons of two filters ------------------------------------------------------------
+_GROUP_KEYS = {"position": "position_rms_m", "velocity": "velocity_rms_mps",
+               "attitude": "attitude_rms_deg"}
+
+
+def rms_3d(metrics, group):
+    """3-D RMS of ``group`` (position/velocity/attitude): the root of the sum of the per-axis
+    mean squares."""
+    values = metrics[_GROUP_KEYS[group]].values()
+    return float(math.sqrt(sum(v * v for v in values)))
+
+
+def improvement_percent(baseline, value):
+    """Reduction of ``value`` against ``baseline`` in percent of the baseline (nan if the
+    baseline is 0)."""
+    baseline, value = float(baseline), float(value)
+    return 100.0 * (1.0 - value / baseline) if baseline != 0.0 else float("nan")
+
+
+def rms_ratio(baseline, value):
+    """baseline / value (nan if value is 0): "improved n times"."""
+    baseline, value = float(baseline), float(value)
+    return baseline / value if value != 0.0 else float("nan")
+
+
+def per_axis_enu(metrics, group):
+    """RMS of ``group`` in the papers' order E, N, U (position, velocity) or roll, pitch, yaw."""
+    keys = ATTITUDE if group == "attitude" else ENU
+    return [float(metrics[_GROUP_KEYS[group]][k]) for k in keys]
+
+
+# -- outlier detection ---------------------------------------------------------------------
+def find_receiver(results):
+    """Name of the component recording ``gnss_outlier`` (the receiver), or None."""
+    for comp in results.components:
+        if "gnss_outlier" in results.columns[comp]:
+            return comp
+    return None
+
+
+def update_epochs(results, filter_name, window=None, receiver_name=None):
+    """The rows where ``filter_name`` updated (``updated`` output), within ``window`` of its
+    nav_time: dict of arrays ``time``, ``dof`` (nis_dof) and, when recorded, ``chi2_max``,
+    ``chi2``, ``nis``, ``n_rejected`` of the filter and ``injected`` (the receiver's
+    gnss_outlier on the same rows, i.e. of the fix the update used).  None if the filter
+    has no ``updated`` output."""
+    names = results.columns.get(filter_name, ())
+    if "updated" not in names:
+        return None
+    col = results.column
+    rows = col(filter_name, "updated") > 0.5
+    t = col(filter_name, "nav_time")
+    if window is not None:
+        rows &= (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
+    out = {"time": t[rows]}
+    out["dof"] = (col(filter_name, "nis_dof")[rows] if "nis_dof" in names
+                  else np.full(int(rows.sum()), np.nan))
+    for var in ("chi2_max", "chi2", "nis", "n_rejected"):
+        if var in names:
+            out[var] = col(filter_name, var)[rows]
+    receiver_name = receiver_name or find_receiver(results)
+    if receiver_name is not None:
+        out["injected"] = col(receiver_name, "gnss_outlier")[rows] > 0.5
+    return out
+
+
+def rejection_statistics(injected, n_rejected, n_observations):
+    """Detection and false-alarm rates from per-update-epoch arrays: ``injected`` (bool),
+    ``n_rejected`` (observations rejected/replaced), ``n_observations`` (the update's
+    dimension).  Rates are nan when their denominator is 0."""
+    injected = np.asarray(injected, dtype=bool)
+    n_rejected = np.asarray(n_rejected, dtype=float)
+    n_observations = np.asarray(n_observations, dtype=float)
+    if not (injected.shape == n_rejected.shape == n_observations.shape):
+        raise NavfmuError("rejection_statistics: injected, n_rejected and n_observations must "
+                          f"have one value per epoch (shapes {injected.shape}, "
+                          f"{n_rejected.shape}, {n_observations.shape})")
+    detected = n_rejected > 0
+    clean = ~injected
+    n_inj, n_clean = int(injected.sum()), int(clean.sum())
+    hits, alarms = int((detected & injected).sum()), int((detected & clean).sum())
+    obs_clean = float(n_observations[clean].sum())
+    rejected_clean = float(n_rejected[clean].sum())
+    ratio = lambda a, b: float(a / b) if b > 0 else float("nan")  # noqa: E731
+    return {"epochs": int(injected.size), "injected_epochs": n_inj, "detected_epochs": hits,
+            "detection_rate": ratio(hits, n_inj),
+            "clean_epochs": n_clean, "false_alarm_epochs": alarms,
+            "false_alarm_rate": ratio(alarms, n_clean),
+            "clean_observations": int(obs_clean),
+            "false_alarm_observations": int(rejected_clean),
+            "false_alarm_rate_per_observation": ratio(rejected_clean, obs_clean)}
+
+
+def outlier_detection(results, filter_name, window=None, receiver_name=None):
+    """:func:`rejection_statistics` of a filter with an ``n_rejected`` output against the
+    receiver's injected outliers (see the module docstring), plus the gate it used and the
+    per-observation false-alarm probability that gate gives for a chi2(1) statistic; None if
+    the filter has no ``n_rejected`` output or no component records ``gnss_outlier``."""
+    epochs = update_epochs(results, filter_name, window, receiver_name)
+    if epochs is None or "n_rejected" not in epochs or "injected" not in epochs:
+        return None
+    out = rejection_statistics(epochs["injected"], epochs["n_rejected"], epochs["dof"])
+    out["receiver"] = receiver_name or find_receiver(results)
+    gates = [g for g in chi2_thresholds(results, filter_name) if g["name"] == "chi2_threshold"]
+    if gates:
+        out["chi2_threshold"] = gates[0]
+        out["expected_false_alarm_rate_chi2_1"] = float(stats.chi2.sf(gates[0]["value"], 1))
+    return out
+
+
+def _parameter(results, component, name):
+    params = (getattr(results, "metadata", None) or {}).get("parameters") or {}
+    value = (params.get(component) or {}).get(name)
+    try:
+        return None if value is None else float(value)
+    except (TypeError, ValueError):
+        return None
+
+
+def chi2_thresholds(results, filter_name):
+    """Chi-square gates of a filter's statistics: list of dicts ``name``, ``value``,
+    ``statistic`` (the output they apply to) and ``source`` ('parameter' if the run set the
+    value, else the documented default)."""
+    names = results.columns.get(filter_name, ())
+    gates = []
+    if "chi2_max" in names:
+        value = _parameter(results, filter_name, "chi2_threshold")
+        gates.append({"name": "chi2_threshold", "statistic": "chi2_max",
+                      "value": value if value is not None else CHI2_GATE_DEFAULT,
+                      "source": "parameter" if value is not None else "default"})
+    if "chi2" in names:
+        dof = None
+        if "nis_dof" in names and "updated" in names:
+            upd = results.column(filter_name, "updated") > 0.5
+            if upd.any():
+                dof = int(round(float(np.median(results.column(filter_name, "nis_dof")[upd]))))
+        for i, (name, p) in enumerate((("ctfa_t1", 0.90), ("ctfa_t2", 0.99))):
+            value = _parameter(results, filter_name, name)
+            if value is not None and value > 0:
+                gates.append({"name": name, "statistic": "chi2", "value": value,
+                              "source": "parameter"})
+            elif dof is None or dof == 3:
+                gates.append({"name": name, "statistic": "chi2",
+                              "value": CTFA_THRESHOLDS_DOF3[i], "source": "default for dof 3"})
+            else:
+                gates.append({"name": name, "statistic": "chi2",
+                              "value": float(stats.chi2.ppf(p, dof)),
+                              "source": f"default: chi2({dof}) {100 * p:.0f} %"})
+    return gates

@@ -1,8 +1,10 @@
-"""Matplotlib PNG plots of a run: errors with +-3 sigma, NIS, adaptive factors.
+"""Matplotlib PNG plots of a run: errors with +-3 sigma, NIS, adaptive factors, estimated R,
+chi-square statistics with their gates, outlier detection, the truth trajectory.
 
 The comparison plots take ``entries``: a list of ``(label, results, component, errors)`` with
 ``errors`` from ``metrics.navigation_errors`` (one entry per filter, each possibly from its own
-run).  Every function writes one PNG atomically (temp file + rename) and returns its path.
+run).  Every function writes one PNG atomically (temp file + rename) and returns its path; the
+optional plots return None when no entry has the outputs they draw.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
+from . import metrics as nav_metrics  # noqa: E402
 from .results import atomic_write  # noqa: E402
 
 _GROUPS = (
@@ -88,15 +91,33 @@ def plot_nis(entries, path, title=""):
     return _save(fig, path)
 
 
+def _constant(values):
+    values = np.asarray(values, dtype=float)
+    return values.size == 0 or bool(np.all(values == values[0]))
+
+
 def plot_series(entries, variables, path, title=""):
     """Diagnostic outputs (adaptive scales, fading factor, model probabilities...) over time:
-    one panel per variable, one line per filter that has it.  Returns None if none has any."""
+    one panel per variable, one line per filter that has it.  A variable that stays at one
+    value in every filter that has it gets no panel but a line in the footnote (unless no
+    variable changes at all: then every one gets its panel).  Returns None if no filter has
+    any of ``variables``."""
     present = [v for v in variables if any(r.has(c, v) for _, r, c, _ in entries)]
     if not present:
         return None
-    fig, axes = plt.subplots(len(present), 1, figsize=(12, 2.4 * len(present)), sharex=True,
-                             squeeze=False)
-    for ax, var in zip(axes[:, 0], present):
+    constant = {}
+    for var in present:
+        values = [r.column(c, var) for _, r, c, _ in entries if r.has(c, var)]
+        first = [float(v[0]) for v in values if v.size]
+        if all(_constant(v) for v in values) and len(set(first)) <= 1:
+            holders = [label for label, r, c, _ in entries if r.has(c, var)]
+            constant[var] = (first[0] if first else float("nan"), holders)
+    panels = [v for v in present if v not in constant] or present
+    if len(panels) == len(present):
+        constant = {}
+    fig, axes = plt.subplots(len(panels), 1, figsize=(12, 2.4 * len(panels) + 0.4),
+                             sharex=True, squeeze=False)
+    for ax, var in zip(axes[:, 0], panels):
         for f_i, (label, results, name, _) in enumerate(entries):
             if results.has(name, var):
                 ax.plot(results.time, results.column(name, var), color=f"C{f_i}", lw=0.8,
@@ -106,31 +127,165 @@ def plot_series(entries, variables, path, title=""):
     axes[0, 0].legend(fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title)
+    if constant:
+        note = "constant over the run: " + "; ".join(
+            f"{var} = {value:g} ({', '.join(holders)})"
+            for var, (value, holders) in constant.items())
+        fig.text(0.01, 0.005, note, fontsize=8, va="bottom", wrap=True)
+        fig.tight_layout(rect=(0, 0.03, 1, 1))
+    else:
+        fig.tight_layout()
+    return _save(fig, path)
+
+
+_R_AXES = (("n", "-"), ("e", "--"), ("d", ":"))
+
+
+def plot_r_estimate(entries, path, title=""):
+    """The measurement noise the adaptive filters estimate (``r_est_p*`` [m], ``r_est_v*``
+    [m/s], 1 sigma): a position and a velocity panel, one colour per filter, line style per
+    NED axis.  Returns None if no entry has these outputs."""
+    groups = (("position", "r_est_p", "m"), ("velocity", "r_est_v", "m/s"))
+    have = [(f_i, e) for f_i, e in enumerate(entries)
+            if any(e[1].has(e[2], prefix + a) for _, prefix, _ in groups for a, _ in _R_AXES)]
+    if not have:
+        return None
+    fig, axes = plt.subplots(2, 1, figsize=(12, 6.5), sharex=True)
+    for ax, (group, prefix, unit) in zip(axes, groups):
+        for f_i, (label, results, name, _) in have:
+            for a, style in _R_AXES:
+                if results.has(name, prefix + a):
+                    ax.plot(results.time, results.column(name, prefix + a), color=f"C{f_i}",
+                            ls=style, lw=0.9, label=f"{label} {a.upper()}")
+        ax.set_ylabel(f"{group} R [{unit}, 1 sigma]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, ncol=3, loc="best")
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(title or "estimated GNSS measurement noise (diagonal of R, as 1 sigma)")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def _gate_label(gate):
+    return f"{gate['name']} = {gate['value']:g} ({gate['source']})"
+
+
+def plot_chi2(entries, path, title=""):
+    """Chi-square statistic of every update: ``chi2`` of a filter that outputs it (CTFA-UKF,
+    eq. 24), ``nis`` of the others (the same statistic of a plain filter), log scale, with
+    the chi-square gates of the filters that output ``chi2`` (ctfa_t1/t2, value from the
+    run's parameters or the default, as the legend says).  Returns None unless an entry has a
+    ``chi2`` output."""
+    if not any(r.has(c, "chi2") for _, r, c, _ in entries):
+        return None
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    gates = {}
+    for f_i, (label, results, name, _) in enumerate(entries):
+        ep = nav_metrics.update_epochs(results, name)
+        if ep is None or not ep["time"].size:
+            continue
+        var = "chi2" if "chi2" in ep else "nis" if "nis" in ep else None
+        if var is None:
+            continue
+        ax.semilogy(ep["time"], np.maximum(ep[var], 1e-3), ".-", ms=3, lw=0.5,
+                    color=f"C{f_i}", label=f"{label}: {var}")
+        for g in nav_metrics.chi2_thresholds(results, name):
+            if g["statistic"] == "chi2":
+                gates.setdefault((g["name"], g["value"]), g)
+    for i, g in enumerate(sorted(gates.values(), key=lambda g: g["value"])):
+        ax.axhline(g["value"], color="k", lw=0.9, ls=("--", ":", "-.")[i % 3],
+                   label=_gate_label(g))
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("chi-square statistic")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title(title or "chi-square statistic of the innovations")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_outliers(entries, path, title=""):
+    """Outlier gate of the robust filters (those with ``chi2_max``): top, the largest
+    per-observation chi-square statistic of every update (log scale) with the gate
+    ``chi2_threshold`` (from the run's parameters or the default, as the legend says), the
+    epochs of injected outliers circled; bottom, one row of markers for the epochs where the
+    receiver injected an outlier (``gnss_outlier`` at the filter's update epochs) and one per
+    filter for the epochs where it rejected observations (``n_rejected`` > 0).  Returns None
+    unless an entry has ``chi2_max``."""
+    robust = [(f_i, e) for f_i, e in enumerate(entries) if e[1].has(e[2], "chi2_max")]
+    if not robust:
+        return None
+    fig, (ax, ax_ev) = plt.subplots(2, 1, figsize=(12, 6.5), sharex=True,
+                                    gridspec_kw={"height_ratios": [3, 1.4]})
+    gates = {}
+    rows = []
+    injected_drawn = False
+    for f_i, (label, results, name, _) in robust:
+        ep = nav_metrics.update_epochs(results, name)
+        if ep is None or not ep["time"].size:
+            continue
+        t = ep["time"]
+        ax.semilogy(t, np.maximum(ep["chi2_max"], 1e-3), ".", ms=3, color=f"C{f_i}",
+                    label=f"{label}: chi2_max")
+        if "injected" in ep and ep["injected"].any():
+            inj = ep["injected"]
+            ax.semilogy(t[inj], np.maximum(ep["chi2_max"][inj], 1e-3), "o", mfc="none",
+                        ms=7, color="r", label=None if injected_drawn else "injected outlier")
+            if not injected_drawn:
+                rows.append(("injected (receiver)", t[inj], "r", "x"))
+                injected_drawn = True
+        for g in nav_metrics.chi2_thresholds(results, name):
+            if g["statistic"] == "chi2_max":
+                gates.setdefault((g["name"], g["value"]), g)
+        if "n_rejected" in ep:
+            rows.append((f"detected: {label}", t[ep["n_rejected"] > 0], f"C{f_i}", "|"))
+    for i, g in enumerate(sorted(gates.values(), key=lambda g: g["value"])):
+        ax.axhline(g["value"], color="k", lw=0.9, ls=("--", ":", "-.")[i % 3],
+                   label=_gate_label(g))
+    ax.set_ylabel("largest v_i^2 / S_ii")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    for y, (name, times, colour, marker) in enumerate(rows):
+        ax_ev.plot(times, np.full(times.shape, -y), marker, color=colour, ms=8, mew=1.5)
+    ax_ev.set_yticks([-y for y in range(len(rows))])
+    ax_ev.set_yticklabels([r[0] for r in rows], fontsize=8)
+    ax_ev.set_ylim(-len(rows) + 0.5, 0.5)
+    ax_ev.grid(True, axis="x", alpha=0.3)
+    ax_ev.set_xlabel("time [s]")
+    ax.set_title(title or "per-observation chi-square test and outlier epochs")
     fig.tight_layout()
     return _save(fig, path)
 
 
 def plot_trajectory(results, truth_name, path, title=""):
-    """Ground track, height, speed and attitude of the truth."""
+    """The truth: ground track, height, velocity east/north/up, speed, roll and pitch, yaw."""
     col = results.column
     t = col(truth_name, "truth_time")
     lat, lon, h = col(truth_name, "truth_lat"), col(truth_name, "truth_lon"), col(truth_name, "truth_h")
     north = (lat - lat[0]) * 6378137.0
     east = (lon - lon[0]) * 6378137.0 * np.cos(lat[0])
-    fig, axes = plt.subplots(2, 2, figsize=(12, 8))
+    fig, axes = plt.subplots(3, 2, figsize=(12, 11))
     axes[0, 0].plot(east / 1e3, north / 1e3)
+    axes[0, 0].plot(east[:1] / 1e3, north[:1] / 1e3, "o", color="C2", label="start")
     axes[0, 0].set_xlabel("east [km]")
     axes[0, 0].set_ylabel("north [km]")
     axes[0, 0].set_aspect("equal", adjustable="datalim")
+    axes[0, 0].legend(fontsize=8)
     axes[0, 1].plot(t, h)
     axes[0, 1].set_ylabel("height [m]")
-    speed = np.sqrt(sum(col(truth_name, f"truth_v{a}") ** 2 for a in "ned"))
-    axes[1, 0].plot(t, speed)
-    axes[1, 0].set_ylabel("speed [m/s]")
-    for a in ("roll", "pitch", "yaw"):
-        axes[1, 1].plot(t, np.degrees(col(truth_name, "truth_" + a)), label=a, lw=0.8)
-    axes[1, 1].set_ylabel("attitude [deg]")
-    axes[1, 1].legend(fontsize=8)
+    v = {a: col(truth_name, f"truth_v{a}") for a in "ned"}
+    for name, values in (("east", v["e"]), ("north", v["n"]), ("up", -v["d"])):
+        axes[1, 0].plot(t, values, lw=0.8, label=name)
+    axes[1, 0].set_ylabel("velocity [m/s]")
+    axes[1, 0].legend(fontsize=8)
+    axes[1, 1].plot(t, np.sqrt(sum(x ** 2 for x in v.values())))
+    axes[1, 1].set_ylabel("speed [m/s]")
+    for a in ("roll", "pitch"):
+        axes[2, 0].plot(t, np.degrees(col(truth_name, "truth_" + a)), label=a, lw=0.8)
+    axes[2, 0].set_ylabel("attitude [deg]")
+    axes[2, 0].legend(fontsize=8)
+    axes[2, 1].plot(t, np.degrees(col(truth_name, "truth_yaw")), lw=0.8, color="C2")
+    axes[2, 1].set_ylabel("yaw [deg]")
     for ax in axes.flat[1:]:
         ax.set_xlabel("time [s]")
         ax.grid(True, alpha=0.3)

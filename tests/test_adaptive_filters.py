@@ -115,7 +115,7 @@ def test_sage_husa_fading_diagnostics(clean_then_noisy):
     run = run_filter(clean_then_noisy, components.SageHusaFading)
     t = clean_then_noisy.time[run.rows]
     lam = run.outputs["fading_factor"]
-    # eq. 11 holds on the clean stretch (gamma = 5): the fading factor is exactly 1
+    # eq. 11 holds on the clean stretch (gamma = 10): the fading factor is exactly 1
     assert np.all(lam[t < 50.0] == 1.0)
     assert np.all(lam >= 1.0)
     # eq. 9 follows the velocity noise step (0.3 -> 1.5 m/s at 50-100 s) ...
@@ -130,6 +130,26 @@ def test_sage_husa_fading_diagnostics(clean_then_noisy):
     # r_scale is trace(R used)/trace(R0): 1 at the first update, then > 1 with the noise step
     assert run.outputs["r_scale"][0] == 1.0
     assert run.outputs["r_scale"][np.argmin(abs(t - 100.0))] > 1.0
+
+
+def test_fading_factor_rescues_sage_husa_from_a_model_error(clean_then_noisy):
+    """A 200 m error of the initial latitude (P0 says 5 m): the divergence test of eq. 11
+    fails at the first fix even with gamma = 10, eq. 12 inflates P once and the next fixes
+    pull the position in.  Without fading (gamma = 1e9), eq. 9 takes the 200 m innovations
+    for measurement noise, R_hat grows and the error is still ~100 m after 12 s."""
+    lat0 = clean_then_noisy.scenario.parameters["filter"]["init_lat"]
+    shifted = {"init_lat": lat0 + 200.0 / 6.36e6}
+    faded = run_filter(clean_then_noisy, components.SageHusaFading, shifted, stop_row=4000)
+    unfaded = run_filter(clean_then_noisy, components.SageHusaFading,
+                         {**shifted, "reserve_gamma": 1e9}, stop_row=4000)
+    lam = faded.outputs["fading_factor"]
+    assert lam[0] > 100.0 and np.all(lam[1:] == 1.0)
+    assert np.all(unfaded.outputs["fading_factor"] == 1.0)
+    err_faded = np.abs(faded.position_error_ned()[2:12, 0])
+    err_unfaded = np.abs(unfaded.position_error_ned()[2:12, 0])
+    assert err_faded.max() < 10.0
+    assert err_unfaded.min() > 90.0
+    assert unfaded.outputs["r_est_pn"][11] > 5.0 * faded.outputs["r_est_pn"][11]
 
 
 def test_iakf_compresses_the_outlier_patch(early_patch):
@@ -314,30 +334,13 @@ def _paper001_summary():
 
 
 @pytest.mark.slow
-def test_paper001_iakf_best_on_every_axis_monte_carlo():
-    """aircraft_500s, 20 seeds: Iakf < SageHusaFading and Iakf < Kf on every position and
-    velocity axis (paper 001, Table 1)."""
+def test_paper001_ordering_monte_carlo():
+    """aircraft_500s, 20 seeds: Iakf < SageHusaFading < Kf in RMS on every position and
+    every velocity axis (paper 001, Table 1)."""
     summary = _paper001_summary()
     kf, shf, iakf = summary["Kf"], summary["SageHusaFading"], summary["Iakf"]
+    assert np.all(shf < kf), (shf, kf)
     assert np.all(iakf < shf), (iakf, shf)
-    assert np.all(iakf < kf), (iakf, kf)
-
-
-@pytest.mark.slow
-def test_paper001_sage_husa_fading_beats_kf_in_position_monte_carlo():
-    summary = _paper001_summary()
-    assert np.all(summary["SageHusaFading"][:3] < summary["Kf"][:3])
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason=(
-    "paper 001's SHF < KF in velocity is not reproduced: the fading factor of eq. 12 fires "
-    "on the 350-360 s outlier patch and lets the 15 m/s outliers in (the divergence paper "
-    "001 itself shows in Fig. 4), while our Kf, unlike the paper's, is well tuned and "
-    "barely moved by the noise steps; see the report"))
-def test_paper001_sage_husa_fading_beats_kf_in_velocity_monte_carlo():
-    summary = _paper001_summary()
-    assert np.all(summary["SageHusaFading"][3:] < summary["Kf"][3:])
 
 
 @pytest.mark.slow

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -142,11 +144,17 @@ def test_trajectory_state_save_restore_is_bit_identical(dist):
     assert np.all(np.diff(first[:, -1]) > 0)
 
 
-def test_filter_state_save_restore_is_bit_identical(dist):
-    """Kf driven by constant stationary increments and a fix every 10 steps."""
+FILTER_FMUS = [n for n in FMU_NAMES if n not in ("TrajectoryImu", "GnssReceiver")]
+
+
+@pytest.mark.parametrize("name", FILTER_FMUS)
+def test_filter_state_save_restore_is_bit_identical(dist, name):
+    """Every filter FMU driven by constant stationary increments and a fix every 10 steps:
+    fmi2GetFMUstate / fmi2SetFMUstate continue bit-identically (the adaptive filters' R
+    estimate, Newton history, sigma points and model probabilities are in the state)."""
     lat = math.radians(40.0)
     g = 9.80
-    f = _Fmu(dist / "Kf.fmu", "kf", {"init_lat": lat, "init_h": 100.0})
+    f = _Fmu(dist / f"{name}.fmu", name.lower(), {"init_lat": lat, "init_h": 100.0})
     out = ["nav_lat", "nav_vn", "nav_roll", "std_pn", "nis", "nav_ba_z"]
 
     def run(k0, n):
@@ -159,7 +167,9 @@ def test_filter_state_save_restore_is_bit_identical(dist):
             f.set("imu_dtheta_x", 1e-7 * math.sin(k))
             if (k + 1) % 10 == 0:
                 f.set("gnss_time", t1)
-                f.set("gnss_lat", lat + 1e-7 * math.cos(k))
+                # every 7th fix 30 m off: the robust and adaptive branches run too
+                jump = 30.0 / 6.4e6 if (k + 1) % 70 == 0 else 0.0
+                f.set("gnss_lat", lat + 1e-7 * math.cos(k) + jump)
                 f.set("gnss_h", 100.0)
                 f.set("gnss_valid", True)
                 f.set("gnss_epoch", (k + 1) // 10)
@@ -168,11 +178,11 @@ def test_filter_state_save_restore_is_bit_identical(dist):
         return np.array(rows)
 
     try:
-        run(0, 35)
+        run(0, 135)
         state = f.fmu.getFMUstate()
-        first = run(35, 60)
+        first = run(135, 160)
         f.fmu.setFMUstate(state)
-        again = run(35, 60)
+        again = run(135, 160)
         f.fmu.freeFMUstate(state)
     finally:
         f.close()
@@ -203,3 +213,26 @@ def test_bad_parameter_is_reported_through_the_logger(dist):
     finally:
         f.close()
     assert any("pos_sigma_n" in m for m in logs), logs
+
+
+def test_build_after_an_fmu_ran_in_the_process(dist, tmp_path):
+    """An FMU run in a process leaves ``import pythonfmu`` pointing at the copy in the FMU's
+    resources (no FMI binaries); a later build in that process must still produce a complete
+    FMU.  A fresh interpreter, so that pythonfmu is first imported by the FMU."""
+    script = f"""
+import sys
+from pathlib import Path
+from fmpy import simulate_fmu
+from orchestrator import build
+simulate_fmu({str(dist / "InsOnly.fmu")!r}, stop_time=0.05, step_size=0.01)
+print("usable", build.builder_usable())
+build.build(["InsOnly"], force=True, dist=Path({str(tmp_path)!r}), log=None)
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    built = tmp_path / "InsOnly.fmu"
+    with zipfile.ZipFile(built) as z:
+        assert any(n.startswith("binaries/") and n.endswith((".so", ".dll", ".dylib"))
+                   for n in z.namelist())
+    assert validate_fmu(str(built)) == []

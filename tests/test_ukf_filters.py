@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import copy
 import os
-import time
 
 import numpy as np
 import pytest
@@ -124,29 +123,8 @@ def test_state_copy_continues_bit_identically(short_runs, model):
         np.testing.assert_array_equal(a.outputs[name], b.outputs[name], err_msg=name)
 
 
-def _time_per_step(models, sensors, rows=1500, repeats=5):
-    """Best-of-``repeats`` mean wall time of component.step per model; the models are
-    interleaved within each repeat so a change of machine load hits them alike."""
-    h = sensors.h
-    inputs = [sensors.inputs_at(k) for k in range(rows)]
-    best = {m: np.inf for m in models}
-    for _ in range(repeats):
-        for m in models:
-            comp = components.REGISTRY[m](**sensors.scenario.parameters["filter"])
-            comp.initialize(0.0)
-            t0 = time.perf_counter()
-            for k in range(rows):
-                comp.step(k * h, h, inputs[k])
-            best[m] = min(best[m], (time.perf_counter() - t0) / rows)
-    return best
-
-
-def test_time_per_cycle_ratios(short_runs):
-    """Paper Table 5: CTFA-UKF costs about the UKF (0.892/0.646 ms), IMM-UKF more (1.523)."""
-    sensors, _ = short_runs
-    t = _time_per_step(FILTERS, sensors)
-    assert t["CtfaUkf"] / t["Ukf"] <= 1.15, t
-    assert t["ImmUkf"] / t["Ukf"] < 2.36, t
+# Table 5 (time per filter cycle) is measured by `navfmu bench models/uav_maneuver
+# --filters Ukf,CtfaUkf,ImmUkf` (one process, filters alternated), not by a timed test.
 
 
 def test_parameter_errors():

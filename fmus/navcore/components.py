@@ -357,7 +357,8 @@ REGISTRY = {cls.model_name: cls for cls in (TrajectoryImu, GnssReceiver, Kf)}
 # ---------------------------------------------------------------------------------------
 # Adaptive / robust filters of papers 001 and 004 (engines in navcore.adaptive_filters).
 from .adaptive_filters import (  # noqa: E402  (kept with the classes that use them)
-    DEFAULT_FORGETTING_FACTOR, DEFAULT_RESERVE_GAMMA, REPLACEMENT_VARIANCES, IakfKf,
+    DEFAULT_FORGETTING_FACTOR, DEFAULT_OUTLIER_ALPHA, DEFAULT_RESERVE_GAMMA,
+    REPLACEMENT_VARIANCES, IakfKf,
     Igg3RobustKf as _Igg3Engine, InsOnlyKf, NewtonRobustKf as _NewtonEngine, SageHusaFadingKf)
 from .adaptive_laws import CHI2_THRESHOLD_PAPER_004, DEFAULT_R_FLOOR_FRACTION  # noqa: E402
 
@@ -419,7 +420,7 @@ class Iakf(SageHusaFading):
     engine_class = IakfKf
     extra_parameters = SageHusaFading.extra_parameters + (
         real("outlier_alpha", "", "significance alpha of the chi2(m) outlier gate of eq. 14 "
-             "(paper 001: 0.05 or 0.02)", 0.05),
+             "(paper 001: 0.05 or 0.02)", DEFAULT_OUTLIER_ALPHA),
     )
     extra_outputs = SageHusaFading.extra_outputs + (
         real("compression", "", "outlier compression factor Y of the latest update (eq. 14; "

@@ -118,6 +118,13 @@ class ErrorStateKf:
         p_prop, q_acc = self.predicted_parts()
         return p_prop + q_acc
 
+    def predicted_innovation(self, R=None):
+        """(P_{k,k-1}, S): the unfaded prediction (eq. 6) and the innovation covariance
+        ``S = H P_{k,k-1} H' + R`` (``R`` defaults to the fixed R0).  H selects the first m
+        states, so H P H' is the leading m x m block."""
+        P_pred = self.covariance()
+        return P_pred, P_pred[:self.m, :self.m] + (self.R0 if R is None else R)
+
     # -- measurement -------------------------------------------------------------------
     def measurement(self, fix_lat, fix_lon, fix_h, fix_v_ned, age):
         """z = INS - GNSS in NED metres (and m/s); the INS position is taken back to the fix
