@@ -134,13 +134,6 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
     window = _parse_window(window)
     parameters = _parse_sets(sets)
     out = Path(out) if out else DEFAULT_OUT / model.name
-    if backend == "fmu":  # build every FMU before the first run loads one
-        swappable = scenarios.FILTER_COMPONENT in [c.name for c in model.components]
-        for f in filters:
-            scenarios.ensure_fmus(model.replace_source(scenarios.FILTER_COMPONENT,
-                                                       scenarios.resolve_filter(f))
-                                  if f and swappable else model,
-                                  log=lambda m: click.echo(m, err=True))
     runs = []
     for f in filters:
         label = f or "scenario"

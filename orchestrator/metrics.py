@@ -258,10 +258,10 @@ def per_axis_enu(metrics, group):
 # -- outlier detection ---------------------------------------------------------------------
 def find_receiver(results):
     """Name of the component recording ``gnss_outlier`` (the receiver), or None."""
-    for comp in results.components:
-        if "gnss_outlier" in results.columns[comp]:
-            return comp
-    return None
+    try:
+        return find_component(results, "gnss_", ("outlier",))
+    except NavfmuError:
+        return None
 
 
 def update_epochs(results, filter_name, window=None, receiver_name=None):

@@ -67,6 +67,13 @@ def resolve_filter(name_or_path: str) -> Path:
     return fmu_build.fmu_path(name_or_path)
 
 
+def swap_filter(model: SystemModel, filter: str) -> SystemModel:
+    """``model`` with its ``filter`` component's FMU replaced (see :func:`resolve_filter`)."""
+    if FILTER_COMPONENT not in [c.name for c in model.components]:
+        raise NavfmuError(f"{model.path}: no component named '{FILTER_COMPONENT}' to swap")
+    return model.replace_source(FILTER_COMPONENT, resolve_filter(filter))
+
+
 def load_scenario(path) -> SystemModel:
     path = Path(path)
     return load_ssd(path)
@@ -102,9 +109,7 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     """Run one scenario (optionally with the filter component swapped) and compute metrics."""
     names = [c.name for c in model.components]
     if filter:
-        if FILTER_COMPONENT not in names:
-            raise NavfmuError(f"{model.path}: no component named '{FILTER_COMPONENT}' to swap")
-        model = model.replace_source(FILTER_COMPONENT, resolve_filter(filter))
+        model = swap_filter(model, filter)
     label = (Path(model.component(FILTER_COMPONENT).source).stem
              if FILTER_COMPONENT in names else model.name)
     if backend == "fmu" and build:
@@ -407,9 +412,7 @@ def bench_filters(model: SystemModel, filters: Sequence[str], stop_time: Optiona
         raise NavfmuError("--filters: give at least one filter")
     if len(set(filters)) != len(filters):
         raise NavfmuError(f"--filters: a filter is listed twice: {', '.join(filters)}")
-    if FILTER_COMPONENT not in [c.name for c in model.components]:
-        raise NavfmuError(f"{model.path}: no component named '{FILTER_COMPONENT}' to swap")
-    models = {f: model.replace_source(FILTER_COMPONENT, resolve_filter(f)) for f in filters}
+    models = {f: swap_filter(model, f) for f in filters}
     for m in models.values():
         ensure_fmus(m, log=log)
     repeat = max(1, int(repeat))

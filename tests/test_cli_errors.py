@@ -54,16 +54,26 @@ def _edit(path, old, new):
     path.write_text(text.replace(old, new, 1))
 
 
-def test_malformed_ssd_xml(capsys, scenario, tmp_path):
-    _edit(scenario / "SystemStructure.ssd", "</ssd:Elements>", "</ssd:Elementz>")
-    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario),
-                          expect=["SystemStructure.ssd"])
+# one edit of the scenario's SSD -> one clean error naming what is wrong
+SSD_EDITS = {
+    "malformed_xml": ("</ssd:Elements>", "</ssd:Elementz>", ["SystemStructure.ssd"]),
+    "connection_to_unknown_component": ('endElement="filter" endConnector="gnss_epoch"',
+                                        'endElement="filtre" endConnector="gnss_epoch"',
+                                        ["filtre"]),
+    "missing_fmu_file": (f"{fmu_build.DIST}/Kf.fmu", "/nonexistent/Kf.fmu",
+                         ["/nonexistent/Kf.fmu"]),
+    "zero_base_step": ('baseStepSize="0.01"', 'baseStepSize="0"', ["baseStepSize"]),
+    "negative_base_step": ('baseStepSize="0.01"', 'baseStepSize="-0.01"', ["baseStepSize"]),
+    "step_hint_not_a_multiple_of_the_base_step": ('<osp:StepSizeHint value="1.0"/>',
+                                                  '<osp:StepSizeHint value="0.015"/>',
+                                                  ["0.015", "gnss"]),
+}
 
 
-def test_connection_to_unknown_component(capsys, scenario, tmp_path):
-    _edit(scenario / "SystemStructure.ssd", 'endElement="filter" endConnector="gnss_epoch"',
-          'endElement="filtre" endConnector="gnss_epoch"')
-    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario), expect=["filtre"])
+@pytest.mark.parametrize("old, new, expect", SSD_EDITS.values(), ids=SSD_EDITS.keys())
+def test_broken_ssd(capsys, scenario, tmp_path, old, new, expect):
+    _edit(scenario / "SystemStructure.ssd", old, new)
+    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario), expect=expect)
 
 
 def test_connection_to_unknown_variable(capsys, scenario, tmp_path):
@@ -72,12 +82,6 @@ def test_connection_to_unknown_variable(capsys, scenario, tmp_path):
     _edit(ssd, '<ssd:Connector name="gnss_epoch" kind="input">',
           '<ssd:Connector name="gnss_epoc" kind="input">')
     _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario), expect=["gnss_epoc"])
-
-
-def test_missing_fmu_file(capsys, scenario, tmp_path):
-    _edit(scenario / "SystemStructure.ssd", f"{fmu_build.DIST}/Kf.fmu", "/nonexistent/Kf.fmu")
-    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario),
-                          expect=["/nonexistent/Kf.fmu"])
 
 
 def test_swap_to_fmu_lacking_a_connected_variable(capsys, scenario, tmp_path):
@@ -99,25 +103,6 @@ def test_unknown_motion_segment_type(capsys, scenario, tmp_path):
                      {"type": "barrel_roll", "duration": 5.0}]}))
     _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario), "--stop", "2",
                           "--set", f"trajectory.profile={profile}", expect=["barrel_roll"])
-
-
-def test_zero_base_step(capsys, scenario, tmp_path):
-    _edit(scenario / "SystemStructure.ssd", 'baseStepSize="0.01"', 'baseStepSize="0"')
-    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario),
-                          expect=["baseStepSize"])
-
-
-def test_negative_base_step(capsys, scenario, tmp_path):
-    _edit(scenario / "SystemStructure.ssd", 'baseStepSize="0.01"', 'baseStepSize="-0.01"')
-    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario),
-                          expect=["baseStepSize"])
-
-
-def test_step_hint_not_a_multiple_of_the_base_step(capsys, scenario, tmp_path):
-    _edit(scenario / "SystemStructure.ssd", '<osp:StepSizeHint value="1.0"/>',
-          '<osp:StepSizeHint value="0.015"/>')
-    _assert_clean_failure(capsys, tmp_path / "out", "run", str(scenario),
-                          expect=["0.015", "gnss"])
 
 
 def test_nan_parameter_reaching_the_filter(capsys, scenario, tmp_path):

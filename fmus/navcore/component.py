@@ -127,6 +127,13 @@ class Component(ABC):
         raise ParameterError(f"{cls.model_name}: unknown parameter '{name}'")
 
     # helpers for validation in initialize()
+    def require(self, name: str, ok: bool, requirement: str) -> None:
+        """Raise a :class:`ParameterError` naming parameter ``name``, its value and the
+        ``requirement`` it breaks (e.g. "must be in (0, 1)") unless ``ok``."""
+        if not ok:
+            raise ParameterError(f"{self.model_name}: parameter '{name}' = "
+                                 f"{self.params[name]!r} {requirement}")
+
     def require_finite(self, *names: str) -> None:
         for n in names:
             v = self.params[n]

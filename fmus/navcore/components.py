@@ -227,12 +227,10 @@ class InsGnssFilter(Component):
         self.require_positive("r_pos_n", "r_pos_e", "r_pos_d", "r_vel_n", "r_vel_e", "r_vel_d")
         self.require_finite("init_lat", "init_lon", "init_h", "init_vn", "init_ve", "init_vd",
                             "init_roll", "init_pitch", "init_yaw")
-        if abs(p["init_lat"]) >= math.pi / 2:
-            raise ParameterError(f"{self.model_name}: parameter 'init_lat' = {p['init_lat']} rad "
-                                 "is not a latitude (|lat| < pi/2)")
-        if p["measurement"] not in MEASUREMENTS:
-            raise ParameterError(f"{self.model_name}: parameter 'measurement' = "
-                                 f"{p['measurement']!r}; expected one of {sorted(MEASUREMENTS)}")
+        self.require("init_lat", abs(p["init_lat"]) < math.pi / 2,
+                     "rad is not a latitude (|lat| < pi/2)")
+        self.require("measurement", p["measurement"] in MEASUREMENTS,
+                     f"is not one of {sorted(MEASUREMENTS)}")
         p0 = np.concatenate([
             np.full(3, p["p0_pos"]), np.full(3, p["p0_vel"]),
             [p["p0_att_level"], p["p0_att_level"], p["p0_att_yaw"]],
@@ -394,13 +392,9 @@ class SageHusaFading(InsGnssFilter):
         p = self.params
         self.require_positive("forgetting_factor", "reserve_gamma", "r_floor_fraction")
         self.require_nonnegative("max_fading_factor")
-        if p["forgetting_factor"] > 1.0:
-            raise ParameterError(f"{self.model_name}: parameter 'forgetting_factor' = "
-                                 f"{p['forgetting_factor']} must be in (0, 1]")
+        self.require("forgetting_factor", p["forgetting_factor"] <= 1.0, "must be in (0, 1]")
         cap = p["max_fading_factor"]
-        if 0.0 < cap < 1.0:
-            raise ParameterError(f"{self.model_name}: parameter 'max_fading_factor' = {cap} "
-                                 "must be 0 (no cap) or >= 1")
+        self.require("max_fading_factor", not 0.0 < cap < 1.0, "must be 0 (no cap) or >= 1")
         return dict(forgetting_factor=p["forgetting_factor"], reserve_gamma=p["reserve_gamma"],
                     r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None)
 
@@ -430,9 +424,7 @@ class Iakf(SageHusaFading):
     def engine_options(self):
         options = super().engine_options()
         alpha = self.params["outlier_alpha"]
-        if not 0.0 < alpha < 1.0:
-            raise ParameterError(f"{self.model_name}: parameter 'outlier_alpha' = {alpha} "
-                                 "must be in (0, 1)")
+        self.require("outlier_alpha", 0.0 < alpha < 1.0, "must be in (0, 1)")
         options["outlier_alpha"] = alpha
         return options
 
@@ -465,13 +457,9 @@ class NewtonRobustKf(InsGnssFilter):
     def engine_options(self):
         p = self.params
         self.require_positive("chi2_threshold")
-        if p["newton_order"] < 0:
-            raise ParameterError(f"{self.model_name}: parameter 'newton_order' = "
-                                 f"{p['newton_order']} must be >= 0")
-        if p["replacement_variance"] not in REPLACEMENT_VARIANCES:
-            raise ParameterError(f"{self.model_name}: parameter 'replacement_variance' = "
-                                 f"{p['replacement_variance']!r}; expected one of "
-                                 f"{list(REPLACEMENT_VARIANCES)}")
+        self.require("newton_order", p["newton_order"] >= 0, "must be >= 0")
+        self.require("replacement_variance", p["replacement_variance"] in REPLACEMENT_VARIANCES,
+                     f"is not one of {list(REPLACEMENT_VARIANCES)}")
         return dict(chi2_threshold=p["chi2_threshold"], newton_order=p["newton_order"],
                     replacement_variance=p["replacement_variance"])
 
@@ -502,9 +490,7 @@ class Igg3RobustKf(InsGnssFilter):
     def engine_options(self):
         p = self.params
         self.require_positive("igg_k0", "igg_k1")
-        if not p["igg_k1"] > p["igg_k0"]:
-            raise ParameterError(f"{self.model_name}: parameter 'igg_k1' = {p['igg_k1']} must "
-                                 f"be > igg_k0 = {p['igg_k0']}")
+        self.require("igg_k1", p["igg_k1"] > p["igg_k0"], f"must be > igg_k0 = {p['igg_k0']}")
         return dict(igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
 
     def write_diagnostics(self, result):
@@ -564,12 +550,9 @@ class Ukf(InsGnssFilter):
         self.require_nonnegative("ukf_predict_interval")
         self.require_positive("ukf_alpha")
         self.require_finite("ukf_beta", "ukf_kappa")
-        if p["ukf_alpha"] > 1.0:
-            raise ParameterError(f"{self.model_name}: parameter 'ukf_alpha' = {p['ukf_alpha']} "
-                                 "must be in (0, 1] (paper 000, eq. 11)")
-        if 15 + p["ukf_kappa"] <= 0.0:
-            raise ParameterError(f"{self.model_name}: parameter 'ukf_kappa' = {p['ukf_kappa']} "
-                                 "must be > -15 (n + kappa > 0 for the 15-state filter)")
+        self.require("ukf_alpha", p["ukf_alpha"] <= 1.0, "must be in (0, 1] (paper 000, eq. 11)")
+        self.require("ukf_kappa", 15 + p["ukf_kappa"] > 0.0,
+                     "must be > -15 (n + kappa > 0 for the 15-state filter)")
         return dict(predict_interval=p["ukf_predict_interval"], alpha=p["ukf_alpha"],
                     beta=p["ukf_beta"], kappa=p["ukf_kappa"])
 
@@ -598,9 +581,7 @@ class CtfaUkf(Ukf):
     def engine_options(self):
         p = self.params
         self.require_nonnegative("ctfa_t1", "ctfa_t2")
-        if not p["q_max_scale"] >= 1.0:
-            raise ParameterError(f"{self.model_name}: parameter 'q_max_scale' = "
-                                 f"{p['q_max_scale']} must be >= 1 (Qmax >= Qmin)")
+        self.require("q_max_scale", p["q_max_scale"] >= 1.0, "must be >= 1 (Qmax >= Qmin)")
         return dict(super().engine_options(), q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
                     t2=p["ctfa_t2"])
 
@@ -640,14 +621,11 @@ class ImmUkf(Ukf):
     def engine_options(self):
         p = self.params
         r = p["imm_models"]
-        if r not in (2, 3):
-            raise ParameterError(f"{self.model_name}: parameter 'imm_models' = {r} must be 2 or 3")
+        self.require("imm_models", r in (2, 3), "must be 2 or 3")
         names = [f"imm_q_scale_{j}" for j in range(1, r + 1)]
         self.require_positive(*names)
         self.require_finite("imm_p_stay")
-        if not 0.0 < p["imm_p_stay"] < 1.0:
-            raise ParameterError(f"{self.model_name}: parameter 'imm_p_stay' = "
-                                 f"{p['imm_p_stay']} must be in (0, 1)")
+        self.require("imm_p_stay", 0.0 < p["imm_p_stay"] < 1.0, "must be in (0, 1)")
         return dict(super().engine_options(), q_scales=[p[n] for n in names],
                     p_stay=p["imm_p_stay"])
 
