@@ -12,24 +12,29 @@ does the FMI side once for all of them:
   initial (Integer/Boolean ``discrete``; parameters ``fixed`` with ``initial="exact"``;
   outputs ``calculated`` and listed as InitialUnknowns);
 * writes SI units and their UnitDefinitions into the model description (pythonfmu does not);
-* saves the full internal state (the component object, not only the registered variables)
-  behind ``canGetAndSetFMUstate`` / ``canSerializeFMUstate``;
+* saves the full internal state (the registered values and the component's declared state,
+  :mod:`navcore.state`) behind ``canGetAndSetFMUstate`` / ``canSerializeFMUstate``, and
+  serializes it in the checked plain-data format of :mod:`navcore.state_format`: a blob is
+  never code, and one that is refused leaves the instance as it was (see the state section);
 * never lets a Python exception escape an FMI call: a user error (bad parameter, NaN input)
   is logged through the FMI logger and reported as fmi2Discard from ``do_step`` (the master
   stops with that message); after such an error every further ``do_step`` is refused too.
 """
 from __future__ import annotations
 
-import base64
-import pickle
+import sys
 import traceback
+from pathlib import Path
 from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
+from navcore import state_format
 from navcore.component import NavcoreError
+from navcore.state import StateError, capture_value, check_kind
+from navcore.state_format import StateFormatError
 
 _DEG = 0.017453292519943295
 _G0 = 9.80665
@@ -78,6 +83,7 @@ def setup(slave, component_class):
     slave._component = None
     slave._start_time = 0.0
     slave._failed = None
+    slave._refused_state = None
     slave._vr_names = {}
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
@@ -116,7 +122,7 @@ def exit_initialization_mode(slave):
     params = {p.name: slave._values[p.name] for p in slave.component_class.parameters}
     try:
         slave._component = slave.component_class(**params)
-        slave._values.update(slave._component.initialize(slave._start_time))
+        slave._values.update(slave._component.start(slave._start_time))
     except NavcoreError as exc:
         _fail(slave, str(exc))
     except Exception as exc:  # a bug, not a user error: still never crash the host
@@ -124,6 +130,12 @@ def exit_initialization_mode(slave):
 
 
 def do_step(slave, current_time, step_size):
+    if slave._refused_state is not None:
+        slave.log(f"{slave.instance_name}: step not taken: the last fmi2SetFMUstate was refused "
+                  f"({slave._refused_state}); the instance kept its previous state and steps "
+                  "from it at the next call", Fmi2Status.error)
+        slave._refused_state = None
+        return False
     if slave._failed is not None:
         slave.log(f"{slave.instance_name}: refusing to step after an earlier error: "
                   f"{slave._failed}", Fmi2Status.error)
@@ -173,17 +185,134 @@ def _setter(type_name):
     return set_
 
 
-# -- FMU state: the registered values plus the whole component ----------------------------
+# -- FMU state: declared data only, never code ---------------------------------------------
+# pythonfmu 0.7.0 (PySlaveInstance.cpp) turns a Python exception in any of these calls into
+# fmi2Fatal after releasing the instance's Python objects, and has no way to return fmi2Error
+# from fmi2SetFMUstate / fmi2DeSerializeFMUstate.  So nothing here raises: a blob that is
+# refused deserializes into a RefusedState carrying the reason, and fmi2SetFMUstate with it
+# (or with a state that fails the checks) logs the reason at status fmi2Error, keeps the
+# previous state, and makes the next fmi2DoStep return fmi2Discard without stepping, so a
+# host that ignores the log still learns that the state was not restored; the steps after
+# that continue from the previous state.
+class FmuState:
+    """What fmi2GetFMUstate hands out: the state tree of an instance and its FMU identity."""
+
+    __slots__ = ("identity", "tree", "_blob")
+
+    def __init__(self, identity, tree):
+        self.identity, self.tree, self._blob = identity, tree, None
+
+    def to_bytes(self):
+        if self._blob is None:
+            self._blob = state_format.encode(self.tree, self.identity)
+        return self._blob
+
+
+class RefusedState:
+    """A blob fmi2DeSerializeFMUstate refused (or a state that could not be taken)."""
+
+    __slots__ = ("reason",)
+
+    def __init__(self, reason):
+        self.reason = reason
+
+
+_IDENTITIES = {}
+
+
+def _identity(slave_class):
+    """(model name, hash of the FMU's Python sources): which FMU wrote a state."""
+    identity = _IDENTITIES.get(slave_class)
+    if identity is None:
+        script = sys.modules[slave_class.__module__].__file__
+        identity = (slave_class.__name__, state_format.build_hash(Path(script)))
+        _IDENTITIES[slave_class] = identity
+    return identity
+
+
 def get_fmu_state(slave):
-    blob = pickle.dumps((slave._component, slave._failed, slave._start_time), protocol=4)
-    return {"values": dict(slave._values), "component": base64.b64encode(blob).decode("ascii")}
+    try:
+        component = slave._component
+        tree = {"values": capture_value(slave._values, "values"), "failed": slave._failed,
+                "start_time": slave._start_time,
+                "component": (None if component is None or slave._failed is not None
+                              else component.get_state())}
+        return FmuState(_identity(type(slave)), tree)
+    except Exception as exc:  # a bug (an undeclared attribute): report, never crash the host
+        reason = f"the state could not be taken: {exc}"
+        slave.log(f"{slave.instance_name}: fmi2GetFMUstate: {reason}", Fmi2Status.error)
+        return RefusedState(reason)
 
 
 def set_fmu_state(slave, state):
-    slave._values.clear()
-    slave._values.update(state["values"])
-    slave._component, slave._failed, slave._start_time = pickle.loads(
-        base64.b64decode(state["component"]))
+    try:
+        restored = _restored(slave, state)
+    except (NavcoreError, StateError, StateFormatError) as exc:
+        reason = str(exc)
+    except Exception as exc:
+        reason = f"internal error: {exc!r}"
+    else:
+        slave._values.clear()
+        slave._values.update(restored["values"])
+        slave._failed, slave._start_time, slave._component = (
+            restored["failed"], restored["start_time"], restored["component"])
+        slave._refused_state = None
+        return
+    slave._refused_state = reason
+    slave.log(f"{slave.instance_name}: fmi2SetFMUstate refused the state, the instance keeps "
+              f"its previous state: {reason}", Fmi2Status.error)
+
+
+def _restored(slave, state):
+    """The checked contents of ``state`` with a component rebuilt from it (raises)."""
+    if isinstance(state, RefusedState):
+        raise StateFormatError(state.reason)
+    if not isinstance(state, FmuState):
+        raise StateFormatError(f"not a state of this FMU ({type(state).__name__})")
+    if state.identity != _identity(type(slave)):
+        raise StateFormatError(f"the state belongs to FMU '{state.identity[0]}' (another "
+                               f"build or model than '{type(slave).__name__}')")
+    tree = state.tree
+    if not (isinstance(tree, dict)
+            and set(tree) == {"values", "failed", "start_time", "component"}):
+        raise StateError("the state must have the keys values, failed, start_time, component")
+    values = tree["values"]
+    ports = {p.name: p for group in (slave.component_class.parameters,
+                                     slave.component_class.inputs,
+                                     slave.component_class.outputs) for p in group}
+    if not isinstance(values, dict) or set(values) != set(ports):
+        raise StateError("the state's variables are not those of this FMU")
+    for name, port in ports.items():
+        check_kind(port.default(), values[name], f"variable '{name}'")
+    failed, start_time, component = tree["failed"], tree["start_time"], tree["component"]
+    if not (failed is None or isinstance(failed, str)):
+        raise StateError("the state's error message is not a string")
+    if type(start_time) is not float:
+        raise StateError("the state's start time is not a float")
+    if component is not None:
+        component = slave.component_class.from_state(component)
+        for port in slave.component_class.parameters:
+            if values[port.name] != component.params[port.name]:
+                raise StateError(f"variable '{port.name}' differs from the parameter the "
+                                 "state's component was built with")
+    return {"values": dict(values), "failed": failed, "start_time": start_time,
+            "component": component}
+
+
+def _fmu_state_to_bytes(state):
+    try:
+        return state.to_bytes()
+    except Exception:  # a RefusedState or a foreign object: nothing to write
+        return b""
+
+
+def _fmu_state_from_bytes(slave_class, blob):
+    try:
+        return FmuState(_identity(slave_class), state_format.decode(blob, _identity(slave_class)))
+    except StateFormatError as exc:
+        return RefusedState(str(exc))
+    except Exception as exc:
+        return RefusedState(f"the blob could not be read: {exc!r}")
 
 
 def bind_methods(slave_class):
@@ -193,6 +322,8 @@ def bind_methods(slave_class):
     slave_class.exit_initialization_mode = exit_initialization_mode
     slave_class._get_fmu_state = get_fmu_state
     slave_class._set_fmu_state = set_fmu_state
+    slave_class._fmu_state_to_bytes = staticmethod(_fmu_state_to_bytes)
+    slave_class._fmu_state_from_bytes = classmethod(_fmu_state_from_bytes)
     slave_class.to_xml = to_xml
     for type_name in ("Real", "Integer", "Boolean", "String"):
         setattr(slave_class, f"get_{type_name.lower()}", _getter(type_name))

@@ -532,8 +532,9 @@ def _output_writer(buf: np.ndarray, names: Sequence[str]):
 class DirectInstance(Instance):
     """A Python object following the ``navcore.component.Component`` contract, stepped
     directly (no FMI): class attributes ``parameters``/``inputs``/``outputs`` (tuples of
-    ``Port``), ``set_parameter(name, value)``, ``initialize(start_time) -> outputs``,
-    ``step(t, h, inputs) -> outputs``, ``get_state()``/``set_state()``.
+    ``Port``), ``set_parameter(name, value)``, ``start(start_time) -> outputs`` (or
+    ``initialize``), ``step(t, h, inputs) -> outputs``, ``get_state()``/``set_state()`` (the
+    component's declared state as plain data, :mod:`navcore.state`).
 
     Unconnected inputs keep their declared start values.  A ``ParameterError``/``InputError``
     raised by the component becomes :class:`SimulationError` naming the component and time.
@@ -602,7 +603,8 @@ class DirectInstance(Instance):
     def enter_initialization(self, start_time: float, stop_time: Optional[float]) -> None:
         self.time = start_time
         try:
-            outputs = self.component.initialize(start_time)
+            begin = getattr(self.component, "start", None) or self.component.initialize
+            outputs = begin(start_time)
         except self._errors as exc:
             raise self._error("initialization", exc, start_time) from None
         self._store_outputs(outputs, "initialize")
@@ -649,6 +651,8 @@ class DirectInstance(Instance):
         self._outputs = outputs
 
     def get_state(self):
+        """(component state, inputs, outputs, time): plain data, the component's part being
+        its declared state (the same an FMU of it saves)."""
         return (self.component.get_state(), dict(self._inputs), dict(self._outputs), self.time)
 
     def set_state(self, state) -> None:

@@ -7,7 +7,6 @@ interrupted build never leaves a broken ``.fmu`` behind.
 """
 from __future__ import annotations
 
-import hashlib
 import os
 import shutil
 import subprocess
@@ -15,6 +14,8 @@ import sys
 import tempfile
 import zipfile
 from pathlib import Path
+
+from navcore.state_format import build_hash
 
 from .errors import NavfmuError
 
@@ -33,13 +34,8 @@ def slave_scripts(src: Path = FMU_SOURCES):
 
 
 def source_hash(script: Path) -> str:
-    h = hashlib.sha256()
-    files = [script, script.parent / SHELL]
-    files += sorted((script.parent / LIBRARY).rglob("*.py"))
-    for f in files:
-        h.update(f.relative_to(script.parent).as_posix().encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
+    """The FMU's build identity, also carried by its serialized states (navcore.state_format)."""
+    return build_hash(script, SHELL, LIBRARY)
 
 
 def fmu_path(name: str, dist: Path = DIST) -> Path:

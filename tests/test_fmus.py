@@ -67,10 +67,13 @@ class _Fmu:
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName=name)
         self.logs = logs if logs is not None else []
-        logs_ = self.logs
+        #: (FMI status, message) of every log call
+        self.records = []
+        logs_, records = self.logs, self.records
 
         def logger(env, inst, status, category, message):
             logs_.append(message.decode(errors="replace"))
+            records.append((status, logs_[-1]))
 
         from fmpy.fmi2 import fmi2CallbackLoggerTYPE
 

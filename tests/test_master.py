@@ -62,6 +62,7 @@ class Accumulator(Component):
     model_name = "Accumulator"
     inputs = (real("u", "m"), integer("count_in"))
     outputs = (real("s", "m.s"), real("t0", "s"), real("h", "s"), integer("last_count"))
+    state_fields = ("s",)
 
     def initialize(self, start_time):
         self.s = 0.0

@@ -114,6 +114,9 @@ class SageHusaFadingKf(ErrorStateKf):
     max_fading_factor : optional cap on lambda (None = the paper's uncapped eq. 12).
     """
 
+    state_fields = ("R", "sage_husa_index")
+    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor", "r_min")
+
     def __init__(self, config, nav, forgetting_factor=DEFAULT_FORGETTING_FACTOR,
                  reserve_gamma=DEFAULT_RESERVE_GAMMA,
                  r_floor_fraction=laws.DEFAULT_R_FLOOR_FRACTION, max_fading_factor=None):
@@ -204,6 +207,9 @@ class IakfKf(SageHusaFadingKf):
     After an update, ``compression`` holds Y and ``tau`` the statistic.
     """
 
+    state_fields = ("compression", "tau")
+    derived_fields = ("outlier_gate", "outlier_alpha")
+
     def __init__(self, config, nav, outlier_alpha=DEFAULT_OUTLIER_ALPHA, **kwargs):
         super().__init__(config, nav, **kwargs)
         self.outlier_gate = laws.chi2_threshold(outlier_alpha, self.m)  # validates alpha
@@ -284,6 +290,11 @@ class NewtonRobustKf(ErrorStateKf):
     After an update: ``chi2_values`` (m,), ``chi2_max``, ``rejected`` (bool mask),
     ``n_rejected``.
     """
+
+    state_fields = ("history", "sample_variances", "time", "last_update_time",
+                    "update_interval", "history_epoch", "chi2_values", "chi2_max", "rejected",
+                    "n_rejected")
+    derived_fields = ("chi2_threshold", "newton_order", "replacement_variance")
 
     def __init__(self, config, nav, chi2_threshold=laws.CHI2_THRESHOLD_PAPER_004,
                  newton_order=4, replacement_variance="propagated"):
@@ -400,6 +411,9 @@ class Igg3RobustKf(ErrorStateKf):
 
     After an update: ``weights`` (m,), ``n_rejected`` (components with w = 0).
     """
+
+    state_fields = ("weights", "n_rejected")
+    derived_fields = ("igg_k0", "igg_k1")
 
     def __init__(self, config, nav, igg_k0=1.5, igg_k1=3.0):
         super().__init__(config, nav)

@@ -542,6 +542,9 @@ class ObservationHistory:
     independent history, as FMU state save/restore needs.
     """
 
+    state_fields = ("_values", "last_epoch")
+    derived_fields = ("maxlen",)
+
     def __init__(self, maxlen: int = 5):
         if int(maxlen) != maxlen or maxlen < 1:
             raise ParameterError(f"maxlen (observation history length) must be an integer >= 1, got {maxlen}")

@@ -18,16 +18,52 @@ Contract of a component
   name -> value, values as set by the connections at this communication point) and returns
   the outputs valid at ``t + h`` (a dict name -> value).  Bad input raises
   :class:`InputError` naming the variable.
-* ``get_state()`` / ``set_state(state)`` return and restore the full internal state as a
-  picklable object (default: the instance ``__dict__``, deep-copied).
+* ``start(start_time)`` is how the FMU shell and the master begin a run: it records the start
+  time (part of the state) and calls ``initialize``.
+* ``get_state()`` returns the full internal state as plain data (the parameters, the start
+  time and the declared fields, see below); ``set_state(state)`` and the class method
+  ``from_state(state)`` restore it into a component built from those parameters.
+
+State
+-----
+Simulators save FMU states and load them back, also from files written elsewhere, so a state
+is data, never code: each class *declares* which of its instance attributes define its state,
+and nothing else is saved (:mod:`navcore.state`; the byte format is
+:mod:`navcore.state_format`).  Two class attributes, each listing only the attributes the
+class itself adds (the lists of the base classes add up)::
+
+    state_fields = ("engine", "nav_time", "last_epoch", "out")    # change while stepping
+    derived_fields = ("dt",)       # rebuilt from the parameters by __init__ / initialize
+
+A state field may hold plain values (None, bool, int, float, str), numpy arrays of float64,
+int64 or bool, lists, tuples, str-keyed dicts and deques of these, a
+``numpy.random.Generator``, or an object of a class that declares its own fields the same
+way (a strapdown, a Kalman filter engine, an error model: captured recursively).  To restore,
+``from_state`` builds a fresh component from the saved parameters, calls ``start`` with the
+saved start time (so every derived attribute is rebuilt exactly as in the original run) and
+then writes each declared field, after checking that the saved value has the kind, dtype and
+shape of the fresh one.  Consequences for whoever adds an attribute (a history buffer, a new
+model inside a component):
+
+* add it to ``state_fields`` if stepping changes it, to ``derived_fields`` if it is a pure
+  function of the parameters; ``get_state`` refuses an object with an undeclared attribute
+  (:class:`~navcore.state.StateError` naming it), and ``tests/test_state_format.py`` walks
+  every component of ``components.REGISTRY`` after stepping it;
+* a derived attribute must come out bit-identical from ``__init__`` + ``start`` (the same
+  test compares every attribute of a restored component with the original);
+* a buffer of past values is a deque or list of arrays/floats, a sub-object declares its
+  fields; an attribute that is None in a fresh component, and the items of a buffer that
+  is empty in a fresh component, accept only None, numbers and arrays (give the attribute a
+  start value of the right kind if it will hold anything else).
 """
 from __future__ import annotations
 
-import copy
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, Tuple
+
+from . import state as _state
 
 
 class NavcoreError(ValueError):
@@ -171,12 +207,52 @@ class Component(ABC):
     def step(self, t: float, h: float, inputs: Dict[str, Any]) -> Dict[str, Any]:
         """Advance from ``t`` to ``t + h``; return the outputs valid at ``t + h``."""
 
-    def get_state(self) -> Any:
-        return copy.deepcopy(self.__dict__)
+    def start(self, start_time: float) -> Dict[str, Any]:
+        """Begin a run at ``start_time``: record it (it is part of the state) and
+        :meth:`initialize`."""
+        self.initial_time = float(start_time)
+        return self.initialize(self.initial_time)
+
+    # -- state (module docstring) ----------------------------------------------------------
+    #: instance attributes that change while stepping (restored by set_state)
+    state_fields: ClassVar[Tuple[str, ...]] = ()
+    #: instance attributes rebuilt from the parameters by __init__ and initialize
+    derived_fields: ClassVar[Tuple[str, ...]] = ("params", "initial_time")
+    #: start time of a component initialized without :meth:`start`
+    initial_time: float = 0.0
+
+    def get_state(self) -> Dict[str, Any]:
+        """The state as plain data: ``{"params", "initial_time", "fields"}``."""
+        return {"params": dict(self.params), "initial_time": float(self.initial_time),
+                "fields": _state.capture(self, self.model_name or type(self).__name__)}
+
+    @classmethod
+    def from_state(cls, state: Any) -> "Component":
+        """A component built from the saved parameters and started at the saved time, with
+        the saved fields written into it.  Raises :class:`~navcore.state.StateError` (or
+        :class:`ParameterError` for unusable parameters) and builds nothing on any mismatch."""
+        where = cls.model_name or cls.__name__
+        if not (isinstance(state, dict) and set(state) == {"params", "initial_time", "fields"}):
+            raise _state.StateError(f"{where}: a component state has the keys params, "
+                                    "initial_time and fields")
+        params, start_time = state["params"], state["initial_time"]
+        names = [p.name for p in cls.parameters]
+        if not isinstance(params, dict) or sorted(params) != sorted(names):
+            raise _state.StateError(f"{where}: the state's parameters are not those of {where}")
+        for port in cls.parameters:
+            _state.check_kind(port.default(), params[port.name], f"{where}.{port.name}")
+        if type(start_time) is not float or not math.isfinite(start_time):
+            raise _state.StateError(f"{where}: the state's start time is not a finite float")
+        component = cls(**params)
+        component.start(start_time)
+        _state.restore(component, state["fields"], where)
+        return component
 
     def set_state(self, state: Any) -> None:
+        """Become the component of ``state`` (see :meth:`from_state`); unchanged on error."""
+        restored = self.from_state(state)
         self.__dict__.clear()
-        self.__dict__.update(copy.deepcopy(state))
+        self.__dict__.update(restored.__dict__)
 
     # -- helpers ----------------------------------------------------------------------
     @classmethod

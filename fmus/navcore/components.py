@@ -66,6 +66,8 @@ class TrajectoryImu(Component):
     inputs = ()
     outputs = signals.TRUTH + signals.IMU
     default_experiment = (0.0, 500.0, 0.01)
+    state_fields = ("generator", "errors", "start_time", "n")
+    derived_fields = ("dt",)
 
     def initialize(self, start_time):
         self.require_positive("imu_period")
@@ -120,6 +122,8 @@ class GnssReceiver(Component):
     inputs = signals.TRUTH[:7]
     outputs = signals.GNSS + signals.GNSS_INJECTED
     default_experiment = (0.0, 500.0, 1.0)
+    state_fields = ("model", "next_fix", "n_fix", "start_time", "out")
+    derived_fields = ("interval",)
 
     def initialize(self, start_time):
         self.require_positive("fix_interval")
@@ -210,6 +214,7 @@ class InsGnssFilter(Component):
     extra_outputs = ()
     inputs = signals.FILTER_INPUTS
     default_experiment = (0.0, 500.0, 0.01)
+    state_fields = ("engine", "nav_time", "last_epoch", "out")
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -140,6 +140,9 @@ class CtfaQSchedule:
     ``Qmax - Qmin`` positive semi-definite (so every scheduled Q lies between them).
     """
 
+    state_fields = ("weight", "Q")
+    derived_fields = ("Qmin", "Qmax", "T1", "T2", "_span")
+
     def __init__(self, Qmin: np.ndarray, Qmax: np.ndarray, T1: float = PAPER_T1,
                  T2: float = PAPER_T2):
         _check_thresholds(T1, T2, "CtfaQSchedule")

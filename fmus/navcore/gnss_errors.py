@@ -195,6 +195,11 @@ class GnssErrorModel:
     generator included) so ``copy.deepcopy`` saves and restores it bit for bit.
     """
 
+    state_fields = ("rng", "last_pos_error_ned", "last_vel_error_ned")
+    derived_fields = ("pos_sigma", "vel_sigma", "noise_steps", "outlier_patches",
+                      "outlier_period", "outlier_offset", "outlier_multiple", "fix_interval",
+                      "outages", "seed")
+
     #: name -> (default, unit, description) of every parameter, for components declaring them
     PARAMETERS: Dict[str, Tuple[Any, str, str]] = {
         "pos_sigma_n": (0.0, "m", "1-sigma white position error, north"),

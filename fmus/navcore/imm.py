@@ -195,6 +195,9 @@ class ImmBank:
     deep-copyable (provided the filters are).
     """
 
+    state_fields = ("filters", "mu", "needs_mixing", "x", "P")
+    derived_fields = ("Pi", "floor")
+
     def __init__(self, filters: Sequence[Any], Pi: np.ndarray, mu0: Optional[np.ndarray] = None,
                  floor: float = DEFAULT_PROBABILITY_FLOOR):
         self.filters = list(filters)

@@ -132,6 +132,13 @@ class ImuErrorModel:
     model saves it and a deep copy continues bit for bit identically.
     """
 
+    state_fields = ("rng", "gm_bias", "_cached_dt", "_gm_phi", "_gm_drive", "_white_sigma_dt",
+                    "_vibration_sigma_dt")
+    derived_fields = ("noise_intensity_gain", "noise_level_windows", "seed", "constant_bias",
+                      "g_sensitivity", "gyro_matrix", "accel_matrix", "_increment_matrix",
+                      "_gm_sigma", "_gm_tau", "_white_density", "_vibration_sigma",
+                      "_vibration_on")
+
     #: name -> (default, unit, description) of every parameter, for components declaring them
     PARAMETERS: Dict[str, Tuple[Any, str, str]] = {
         "gyro_bias_dph": (0.0, "deg/h", "1-sigma constant gyro bias, drawn per axis"),

@@ -63,6 +63,10 @@ class UpdateResult:
 class ErrorStateKf:
     """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
 
+    state_fields = ("nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates",
+                    "last")
+    derived_fields = ("config", "q_density", "R0", "m", "H")
+
     def __init__(self, config: KfConfig, nav: Strapdown):
         self.config = config
         self.nav = nav

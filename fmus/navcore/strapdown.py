@@ -142,6 +142,9 @@ class Strapdown:
     attributes between updates is allowed (they are read at the start of every update).
     """
 
+    state_fields = ("lat", "lon", "h", "v_ned", "C_bn", "_v_prev", "_dtheta_prev",
+                    "_dvel_prev")
+
     def __init__(self, lat, lon, h, v_ned, C_bn):
         self.lat = float(lat)
         self.lon = float(lon)

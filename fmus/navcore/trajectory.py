@@ -347,6 +347,10 @@ class TrajectoryGenerator:
     rest), the manoeuvre-intensity measures used by the IMU error model.
     """
 
+    state_fields = ("_seg", "_k", "time", "lat", "lon", "h", "_v", "_euler", "_ins",
+                    "last_rate_norm", "last_accel_norm")
+    derived_fields = ("profile", "dt", "_segments", "_duration")
+
     def __init__(self, profile, dt):
         if not isinstance(profile, dict):
             profile = load_profile(profile)

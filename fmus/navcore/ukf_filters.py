@@ -221,6 +221,10 @@ class UkfEngine(ErrorStateKf):
     adaptive subclasses change it between predictions).
     """
 
+    state_fields = ("ukf", "q_scale", "_q_cache", "_T", "_sum_lat", "_sum_h", "_sum_v",
+                    "_sum_C", "_sum_dv")
+    derived_fields = ("predict_interval", "alpha", "beta", "kappa")
+
     def __init__(self, config, nav, predict_interval=DEFAULT_PREDICT_INTERVAL, alpha=1.0,
                  beta=2.0, kappa=0.0):
         super().__init__(config, nav)
@@ -337,6 +341,9 @@ class CtfaUkfEngine(UkfEngine):
     ``q_scale`` is the current Q relative to Qmin, ``chi2`` the latest statistic.
     """
 
+    state_fields = ("schedule", "chi2")
+    derived_fields = ("q_max_scale",)
+
     def __init__(self, config, nav, q_max_scale=10.0, t1=0.0, t2=0.0, **kwargs):
         super().__init__(config, nav, **kwargs)
         if not (math.isfinite(q_max_scale) and q_max_scale >= 1.0):
@@ -372,6 +379,9 @@ class ImmUkfEngine(UkfEngine):
     (closed loop).  ``q_scale`` = probability-weighted scale; ``model_probabilities``;
     the NIS is that of the combined prediction.
     """
+
+    state_fields = ("bank",)
+    derived_fields = ("q_scales",)
 
     def __init__(self, config, nav, q_scales=(1.0, 10.0), p_stay=0.95, **kwargs):
         super().__init__(config, nav, **kwargs)

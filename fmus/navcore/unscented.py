@@ -226,6 +226,9 @@ class UnscentedKalmanFilter:
     x0, P0 : initial state and covariance (default zeros and identity).
     """
 
+    state_fields = ("x", "P", "last_nis", "last_log_likelihood", "sqrt_fallbacks")
+    derived_fields = ("Wm", "Wc", "lambda_", "n", "alpha", "beta", "kappa", "_spread")
+
     def __init__(self, n: int, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0,
                  x0: Optional[np.ndarray] = None, P0: Optional[np.ndarray] = None):
         self.Wm, self.Wc, self.lambda_ = sigma_weights(n, alpha, beta, kappa)
