@@ -21,7 +21,9 @@ files next to it).  The subset:
   inside the ``ssd:Component``.
 
 Anything outside the subset, or inconsistent, raises :class:`~orchestrator.errors.SspError`
-naming the file and the element/attribute.
+naming the file and the element/attribute.  Files are read as data only: with defusedxml,
+refusing any DTD (so no entity expansion and no external reference), and up to
+:data:`MAX_FILE_BYTES`.
 """
 from __future__ import annotations
 
@@ -31,6 +33,9 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple
+
+import defusedxml.ElementTree as DefusedET
+from defusedxml import DefusedXmlException
 
 from .errors import SspError
 
@@ -48,6 +53,8 @@ TYPES = ("Real", "Integer", "Boolean", "String")
 KINDS = ("input", "output", "parameter", "calculatedParameter")
 #: relative tolerance for "step hint is an integer multiple of the base step"
 MULTIPLE_TOLERANCE = 1e-9
+#: largest .ssd / .ssv file read (ours are a few kilobytes)
+MAX_FILE_BYTES = 16 * 1024 * 1024
 
 
 def _tag(ns: str, local: str) -> str:
@@ -140,13 +147,19 @@ class SystemModel:
 # XML helpers
 # ----------------------------------------------------------------------------------------
 def _parse(path: Path) -> ET.Element:
-    """Parse ``path``; check that the namespaces use the literal prefixes libcosim expects."""
+    """Parse ``path`` as data (no DTD, no entities, at most :data:`MAX_FILE_BYTES`); check
+    that the namespaces use the literal prefixes libcosim expects."""
     if not path.is_file():
         raise SspError(f"{path}: file not found")
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise SspError(f"{path}: {size} bytes, more than the {MAX_FILE_BYTES} an SSP file "
+                       "may have here")
     declared: List[Tuple[str, str]] = []
     try:
         root = None
-        for event, item in ET.iterparse(str(path), events=("start-ns", "start")):
+        for event, item in DefusedET.iterparse(str(path), events=("start-ns", "start"),
+                                               forbid_dtd=True):
             if event == "start-ns":
                 declared.append(item)
             elif root is None:
@@ -155,6 +168,8 @@ def _parse(path: Path) -> ET.Element:
     except ET.ParseError as exc:
         # str(exc) already ends with "line L, column C"
         raise SspError(f"{path}: malformed XML: {exc}") from None
+    except DefusedXmlException as exc:
+        raise SspError(f"{path}: {exc}: a DTD or entity is not allowed in an SSP file") from None
     for prefix, uri in declared:
         want = REQUIRED_PREFIX.get(uri)
         if want is not None and prefix != want:

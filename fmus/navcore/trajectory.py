@@ -558,6 +558,8 @@ _BUILTIN = {
 
 #: names accepted by builtin_profile
 BUILTIN_PROFILES = tuple(_BUILTIN)
+#: largest motion-profile file read (a profile of 10 000 segments is about 1 MB)
+MAX_PROFILE_BYTES = 4 * 1024 * 1024
 
 
 def builtin_profile(name):
@@ -571,21 +573,26 @@ def builtin_profile(name):
 
 
 def load_profile(path_or_name):
-    """A built-in profile by name, or a profile read from a JSON file; the profile is
-    checked (as :class:`TrajectoryGenerator` would) before it is returned."""
+    """A built-in profile by name, or a profile read from a JSON file (as data, at most
+    :data:`MAX_PROFILE_BYTES`); the profile is checked (as :class:`TrajectoryGenerator`
+    would) before it is returned."""
     if isinstance(path_or_name, str) and path_or_name in _BUILTIN:
         return builtin_profile(path_or_name)
     path = str(path_or_name)
     try:
-        with open(path, encoding="utf-8") as f:
-            profile = json.load(f)
+        with open(path, "rb") as f:
+            data = f.read(MAX_PROFILE_BYTES + 1)
+        if len(data) > MAX_PROFILE_BYTES:
+            raise ParameterError(f"profile file '{path}' is larger than the {MAX_PROFILE_BYTES} "
+                                 "bytes a motion profile may have")
+        profile = json.loads(data.decode("utf-8"))
     except FileNotFoundError:
         raise ParameterError(
             f"profile '{path}' is neither a built-in profile ({', '.join(BUILTIN_PROFILES)}) "
             "nor an existing file") from None
     except (OSError, UnicodeDecodeError) as e:
         raise ParameterError(f"profile file '{path}' cannot be read: {e}") from None
-    except json.JSONDecodeError as e:
+    except (json.JSONDecodeError, RecursionError) as e:
         raise ParameterError(f"profile file '{path}' is not valid JSON: {e}") from None
     try:
         _compile(profile)
