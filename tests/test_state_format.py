@@ -255,6 +255,32 @@ def test_an_undeclared_attribute_fails_get_state():
         component.get_state()
 
 
+class _HistoryKf(components.Kf):
+    """A filter with a buffer of past solutions, declared as other filters will have."""
+
+    state_fields = ("solutions",)
+
+    def initialize(self, start_time):
+        self.solutions = collections.deque(maxlen=4)
+        return super().initialize(start_time)
+
+    def step(self, t, h, inputs):
+        out = super().step(t, h, inputs)
+        self.solutions.append((self.nav_time, self.engine.nav.v_ned.copy(), {"h": out["nav_h"]}))
+        return out
+
+
+def test_a_declared_buffer_of_tuples_round_trips():
+    component, _ = stepped(_HistoryKf, 30)
+    tree = state_format.decode(state_format.encode(component.get_state(), IDENTITY), IDENTITY)
+    restored = _HistoryKf.from_state(tree)
+    assert_same(component, restored)
+    assert_same(run(component, 30, 20), run(restored, 30, 20))
+    tree["fields"]["solutions"][0] = (0.1, "payload", {"h": 1.0})
+    with pytest.raises(StateError, match="numeric data"):
+        _HistoryKf.from_state(tree)
+
+
 def test_restore_checks_kinds_dtypes_and_shapes():
     component, _ = stepped(components.Kf, 20)
     good = component.get_state()
@@ -264,7 +290,7 @@ def test_restore_checks_kinds_dtypes_and_shapes():
             (lambda t: t["fields"]["out"].pop("nis"), "keys differ"),
             (lambda t: t["params"].__setitem__("r_pos_n", "5"), "expected float"),
             (lambda t: t["fields"]["engine"].__setitem__("extra", 1), "unknown: extra"),
-            (lambda t: t["fields"]["engine"].__setitem__("last", "x"), "number or an array")):
+            (lambda t: t["fields"]["engine"].__setitem__("last", ("x",)), "numeric data")):
         tree = state.copy_value(good)
         mutate(tree)
         with pytest.raises(StateError, match=message):

@@ -51,10 +51,11 @@ model inside a component):
   every component of ``components.REGISTRY`` after stepping it;
 * a derived attribute must come out bit-identical from ``__init__`` + ``start`` (the same
   test compares every attribute of a restored component with the original);
-* a buffer of past values is a deque or list of arrays/floats, a sub-object declares its
-  fields; an attribute that is None in a fresh component, and the items of a buffer that
-  is empty in a fresh component, accept only None, numbers and arrays (give the attribute a
-  start value of the right kind if it will hold anything else).
+* a buffer of past values is a deque or list (of arrays, numbers, or tuples/dicts of
+  them); a sub-object declares its fields.  An attribute that is None in a fresh component,
+  and the items of a buffer that is empty in a fresh component, accept only numeric data
+  (None, numbers, arrays and containers of them; give the attribute a start value of the
+  right kind if it will hold text).
 """
 from __future__ import annotations
 

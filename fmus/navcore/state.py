@@ -28,7 +28,8 @@ in place (so its derived attributes stay those of the fresh build), a Generator 
 bit-generator state, anything else is replaced by a copy of the tree's value after a kind
 check (same kind, same dtype and shape for arrays, same keys for dicts; where the fresh
 object has no value to compare with -- a field that is None, the items of a list or deque of
-another length -- only None, numbers and arrays are accepted).  The tree never names a class: nothing in it is
+another length -- only numeric data is accepted: None, numbers, arrays and containers of
+them, no text).  The tree never names a class: nothing in it is
 called, imported or instantiated, so a tree from an untrusted source is only data.
 """
 from __future__ import annotations
@@ -173,7 +174,7 @@ def restore_value(current: Any, node: Any, where: str) -> Any:
 def check_kind(current: Any, value: Any, where: str) -> None:
     """Raise :class:`StateError` unless ``value`` may replace ``current`` (module docstring)."""
     if current is None:
-        _check_number_or_array(value, where)
+        _check_numeric_data(value, where)
         return
     if isinstance(current, np.ndarray):
         if not (isinstance(value, np.ndarray) and value.dtype == current.dtype
@@ -202,12 +203,20 @@ def check_kind(current: Any, value: Any, where: str) -> None:
                 check_kind(c, v, f"{where}[{i}]")
         else:
             for i, v in enumerate(value):
-                _check_number_or_array(v, f"{where}[{i}]")
+                _check_numeric_data(v, f"{where}[{i}]")
 
 
-def _check_number_or_array(value: Any, where: str) -> None:
-    if not (value is None or _kind(value) in ("bool", "int", "float", "array")):
-        raise StateError(f"{where}: expected a number or an array, got {_kind_name(value)}")
+def _check_numeric_data(value: Any, where: str) -> None:
+    """Accept None, numbers, arrays and lists/tuples/deques/dicts of these (no text)."""
+    kind = _kind(value)
+    if kind in ("list", "tuple", "deque"):
+        for i, v in enumerate(value):
+            _check_numeric_data(v, f"{where}[{i}]")
+    elif kind == "dict":
+        for k, v in value.items():
+            _check_numeric_data(v, f"{where}.{k}")
+    elif kind not in ("None", "bool", "int", "float", "array"):
+        raise StateError(f"{where}: expected numeric data, got {_kind_name(value)}")
 
 
 def _kind(value: Any) -> str:
