@@ -75,8 +75,9 @@ def swap_filter(model: SystemModel, filter: str) -> SystemModel:
 
 
 def load_scenario(path) -> SystemModel:
-    path = Path(path)
-    return load_ssd(path)
+    from .replay import resolve_log_parameters
+
+    return resolve_log_parameters(load_ssd(Path(path)))
 
 
 def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
@@ -93,6 +94,10 @@ def filters_in(results: Results) -> List[str]:
     return [c for c in results.components if results.has(c, "nav_time")]
 
 
+def has_truth(results: Results) -> bool:
+    return any(results.has(c, "truth_time") for c in results.components)
+
+
 @dataclass
 class Run:
     """One co-simulation and its metrics."""
@@ -105,19 +110,31 @@ class Run:
 
 def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend: str = "fmu",
                       stop_time: Optional[float] = None, parameters=None, window=None,
-                      progress=None, build=True, log=print) -> Run:
-    """Run one scenario (optionally with the filter component swapped) and compute metrics."""
+                      progress=None, build=True, log=print, replay=None) -> Run:
+    """Run one scenario (optionally with the filter component swapped, and with its sensor
+    components replaced by a replay of the sensor log in folder ``replay``, see
+    :func:`orchestrator.replay.replay_model`) and compute metrics (not without a truth)."""
     names = [c.name for c in model.components]
     if filter:
         model = swap_filter(model, filter)
+    record = None
+    if replay is not None:
+        from . import replay as log_replay
+
+        model, notes = log_replay.replay_model(model, replay, stop_time=stop_time)
+        stop_time = None
+        parameters = {**log_replay.parameter_overrides(model, notes), **(parameters or {})}
+        record = log_replay.recorded_signals(model, notes)
     label = (Path(model.component(FILTER_COMPONENT).source).stem
              if FILTER_COMPONENT in names else model.name)
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
-                     parameters=parameters)
+                     parameters=parameters, record=record)
     results = sim.run(stop_time=stop_time, progress=progress)
     run = Run(label, model, results)
+    if not has_truth(results):
+        return run
     for f in filters_in(results):
         run.metrics[f] = nav_metrics.filter_metrics(results, f, window=window)
     return run
@@ -331,7 +348,7 @@ def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, titl
     if comparison:
         written.append(atomic_write(out / "report.json", lambda f: f.write(
             json.dumps(_jsonable(comparison), indent=2, sort_keys=True))))
-    if plots_on:
+    if plots_on and all(has_truth(run.results) for run in runs):
         entries = []
         for run in runs:
             for f in filters_in(run.results):

@@ -642,3 +642,10 @@ class ImmUkf(Ukf):
 
 
 REGISTRY.update({cls.model_name: cls for cls in (Ukf, CtfaUkf, ImmUkf)})
+
+
+# ---------------------------------------------------------------------------------------
+# Replay of recorded sensor logs (navcore.replay).
+from .replay import ImuGnssReplay  # noqa: E402  (registered with the other components)
+
+REGISTRY[ImuGnssReplay.model_name] = ImuGnssReplay

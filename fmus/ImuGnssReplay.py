@@ -1,0 +1,17 @@
+"""FMU slave 'ImuGnssReplay': a thin FMI shell over navcore.replay.ImuGnssReplay (see fmushell.py)."""
+from pythonfmu import Fmi2Slave
+
+import fmushell
+from navcore import components
+
+
+class ImuGnssReplay(Fmi2Slave):
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        fmushell.setup(self, components.ImuGnssReplay)
+
+    def do_step(self, current_time, step_size):
+        return fmushell.do_step(self, current_time, step_size)
+
+
+fmushell.bind_methods(ImuGnssReplay)

@@ -1,0 +1,139 @@
+"""ImuGnssReplay: a recorded sensor log played through the outputs of TrajectoryImu and
+GnssReceiver, so every filter runs on real or foreign data unchanged.
+
+Stepping rule (time tags decide, never call order): a step ``(t, t + h]`` outputs
+
+* the IMU interval of the log that ends in ``(t, t + h]`` (``imu_time``, ``imu_dt`` and the
+  increments exactly as logged; ``imu_gyro_*``/``imu_accel_*`` = increment / dt); the
+  component must be stepped at the log's IMU period, so each step holds exactly one
+  interval, and a step past the end of the log is an error;
+* the latest GNSS line with ``time <= t + h``: its values, ``gnss_valid`` from the log's
+  ``valid``, and ``gnss_epoch`` = the number of GNSS lines reached so far (a filter updates
+  when it changes); a log without velocity columns outputs velocity 0 (run such a log with
+  a filter's ``measurement`` = ``position``);
+* the latest truth line with ``time <= t + h`` (``truth_*``), when the log has a truth file;
+  without one the truth outputs stay 0 and ``truth_time`` stays at the start time.
+
+Times are compared with the tolerance ``TIME_TOLERANCE * max(1, |t|)`` of the other
+components.  At initialization the outputs are the log's state at the start time (no IMU
+interval yet, ``imu_dt`` = 0).  Everything the component needs comes from its ``log``
+parameter (a folder in the format of :mod:`navcore.sensorlog`), read once at initialization.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from . import signals
+from .component import Component, InputError, ParameterError, string
+from .sensorlog import read_log
+
+#: tolerance on times, relative to max(1, |t|) (the components' TIME_TOLERANCE)
+TIME_TOLERANCE = 1e-9
+
+_TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
+_GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
+
+
+class ImuGnssReplay(Component):
+    """Plays a sensor log through the IMU, GNSS and truth outputs (module docstring)."""
+
+    model_name = "ImuGnssReplay"
+    description = ("Replays a recorded sensor log (IMU increments, GNSS fixes, optional truth; "
+                   "the navfmu sensor-log format) through the outputs of TrajectoryImu and "
+                   "GnssReceiver, so any INS/GNSS filter runs on recorded or foreign data.")
+    parameters = (
+        string("log", "folder of the sensor log (imu.csv, gnss.csv, optional truth.csv)", ""),
+    )
+    inputs = ()
+    outputs = signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
+    default_experiment = (0.0, 10.0, 0.01)
+
+    def initialize(self, start_time):
+        folder = self.params["log"]
+        if not folder:
+            raise ParameterError(f"{self.model_name}: parameter 'log' is empty (give the folder "
+                                 "of a sensor log)")
+        self.log_folder = str(Path(folder).resolve())
+        log = read_log(self.log_folder)
+        self.imu = np.column_stack([log.imu[k] for k in
+                                    ("time", "dt", "dtheta_x", "dtheta_y", "dtheta_z",
+                                     "dvel_x", "dvel_y", "dvel_z")])
+        g = log.gnss
+        zeros = np.zeros_like(g["time"])
+        self.gnss = np.column_stack([g["time"]] + [g.get(k, zeros) for k in _GNSS_VALUES]
+                                    + [g["valid"], g.get("outlier", zeros)])
+        self.truth = (None if log.truth is None else
+                      np.column_stack([log.truth["time"]] + [log.truth[k] for k in _TRUTH_NAMES]))
+        self.start_time = float(start_time)
+        self.period = float(self.imu[0, 1])
+        # first IMU interval ending after the start
+        self.next_imu = int(np.searchsorted(self.imu[:, 0], self._limit(self.start_time),
+                                            side="right"))
+        self.n_gnss = 0
+        self.n_truth = 0
+        self.out = {p.name: p.default() for p in self.outputs}
+        self.out["imu_time"] = self.start_time
+        self.out["gnss_time"] = self.start_time
+        self.out["truth_time"] = self.start_time
+        self._advance(self.start_time)
+        return dict(self.out)
+
+    @staticmethod
+    def _limit(t):
+        return t + TIME_TOLERANCE * max(1.0, abs(t))
+
+    def _advance(self, t_end):
+        """GNSS and truth lines up to t_end."""
+        limit = self._limit(t_end)
+        out = self.out
+        n = int(np.searchsorted(self.gnss[:, 0], limit, side="right"))
+        if n != self.n_gnss:
+            self.n_gnss = n
+            row = self.gnss[n - 1].tolist()
+            out["gnss_time"] = row[0]
+            for name, value in zip(_GNSS_VALUES, row[1:7]):
+                out["gnss_" + name] = value
+            out["gnss_valid"] = row[7] == 1.0
+            out["gnss_outlier"] = row[8] == 1.0
+            out["gnss_epoch"] = n
+        if self.truth is not None:
+            n = int(np.searchsorted(self.truth[:, 0], limit, side="right"))
+            if n != self.n_truth and n > 0:
+                self.n_truth = n
+                row = self.truth[n - 1].tolist()
+                out["truth_time"] = row[0]
+                for name, value in zip(_TRUTH_NAMES, row[1:]):
+                    out["truth_" + name] = value
+
+    def step(self, t, h, inputs):
+        if not h > 0:
+            raise InputError(f"{self.model_name}: step size {h} s must be > 0")
+        t_end = t + h
+        if abs(h - self.period) > 1e-6 * self.period:
+            raise ParameterError(
+                f"{self.model_name}: the log {self.log_folder} has IMU intervals of "
+                f"{self.period} s but the component is stepped with {h} s; step it at the "
+                "log's IMU period")
+        k = self.next_imu
+        if k >= len(self.imu):
+            raise InputError(f"{self.model_name}: the log {self.log_folder} ends at "
+                             f"{self.imu[-1, 0]!r} s; no IMU interval in ({t!r}, {t_end!r}] s")
+        row = self.imu[k].tolist()
+        if abs(row[0] - t_end) > 1e-6 * h + TIME_TOLERANCE * max(1.0, abs(t_end)):
+            raise InputError(f"{self.model_name}: the log's IMU interval ending at {row[0]!r} s "
+                             f"does not fall in the step ({t!r}, {t_end!r}] s; the simulation "
+                             "time must follow the log's IMU intervals")
+        self.next_imu = k + 1
+        out = self.out
+        dt = row[1]
+        out["imu_time"] = row[0]
+        out["imu_dt"] = dt
+        for i, a in enumerate(signals.AXES_BODY):
+            out[f"imu_dtheta_{a}"] = row[2 + i]
+            out[f"imu_dvel_{a}"] = row[5 + i]
+            out[f"imu_gyro_{a}"] = row[2 + i] / dt
+            out[f"imu_accel_{a}"] = row[5 + i] / dt
+        self._advance(t_end)
+        return out
