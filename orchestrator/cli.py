@@ -1,4 +1,4 @@
-"""The ``navfmu`` command line: build, validate, run, compare, bench.
+"""The ``navfmu`` command line: build, validate, run, compare, bench, convert.
 
 User errors (:class:`~orchestrator.errors.NavfmuError`) print one line ``navfmu: error: ...``
 and exit with status 2; no traceback.  ``--debug`` shows tracebacks of internal errors.
@@ -124,10 +124,14 @@ def _common_run_options(f):
     f = click.option("--format", "fmt", type=click.Choice(["csv", "npz"]), default="csv",
                      show_default=True, help="Result file format.")(f)
     f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
+    f = click.option("--replay", "replay", type=click.Path(),
+                     help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
+                     "receiver) by ImuGnssReplay playing this sensor-log folder.")(f)
     return f
 
 
-def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title):
+def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
+             replay=None, log_sensors=None):
     from . import scenarios
 
     model = scenarios.load_scenario(scenario)
@@ -140,7 +144,17 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
         runs.append(scenarios.simulate_scenario(
             model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
             window=window, progress=_progress_bar(label),
-            log=lambda m: click.echo(m, err=True)))
+            log=lambda m: click.echo(m, err=True), replay=replay))
+    if log_sensors:
+        from .replay import write_sensor_log
+
+        click.echo(f"sensor log written to {write_sensor_log(runs[0].results, log_sensors)}/")
+    if not runs[0].metrics:
+        click.echo(f"\n{model.name}: no truth in the run (a sensor log without truth.csv): no "
+                   "metrics")
+        written = scenarios.write_outputs(runs, out, fmt=fmt, plots_on=False, title=title)
+        click.echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
+        return
     reference = scenarios.paper_reference(model)
     click.echo(f"\n{model.name}: RMS errors over "
                f"{runs[0].metrics and next(iter(runs[0].metrics.values()))['window_s']} s")
@@ -176,24 +190,62 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
 @click.argument("scenario", type=click.Path())
 @click.option("--filter", "filter_", help="Swap the 'filter' component: an FMU name (Kf, "
               "SageHusaFading, ...) or the path of an .fmu file.")
+@click.option("--log-sensors", "log_sensors", type=click.Path(file_okay=False),
+              help="Also write the run's IMU, GNSS and truth signals as a sensor log to this "
+              "folder (replay it with --replay).")
 @_common_run_options
-def run(scenario, filter_, out, stop, backend, window, sets, fmt, no_plots):
+def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, no_plots,
+        replay):
     """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
     _execute(scenario, [filter_], out, stop, backend, window, sets, fmt, no_plots,
-             title=f"{Path(scenario).name}")
+             title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors)
 
 
 @cli.command()
 @click.argument("scenario", type=click.Path())
 @click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
 @_common_run_options
-def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots):
+def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, replay):
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
     names = [f.strip() for f in filters.split(",") if f.strip()]
     if not names:
         raise NavfmuError("--filters: give at least one filter")
     _execute(scenario, names, out, stop, backend, window, sets, fmt, no_plots,
-             title=f"{Path(scenario).name}: {', '.join(names)}")
+             title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
+
+
+@cli.group()
+def convert():
+    """Convert other tools' sensor data into a navfmu sensor log (imu.csv, gnss.csv,
+    truth.csv), replayable with --replay."""
+
+
+@convert.command("gnss-ins-sim")
+@click.argument("src_dir", type=click.Path())
+@click.argument("dst", type=click.Path(file_okay=False))
+@click.option("--run", "run_index", type=int, default=0, show_default=True,
+              help="Which simulation run (the R of gyro-R.csv).")
+def convert_gnss_ins_sim(src_dir, dst, run_index):
+    """A gnss-ins-sim output folder SRC_DIR (rates at the sample instants; increments by the
+    trapezoid rule) into the sensor-log folder DST."""
+    from . import convert as conv
+
+    click.echo(conv.describe(conv.convert_gnss_ins_sim(src_dir, dst, run=run_index), dst))
+
+
+@convert.command("kf-gins")
+@click.argument("imu_file", type=click.Path())
+@click.argument("gnss_file", type=click.Path())
+@click.argument("rest", nargs=-1, type=click.Path())
+def convert_kf_gins(imu_file, gnss_file, rest):
+    """KF-GINS IMU_FILE and GNSS_FILE text (and optionally a .nav TRUTH_FILE) into the
+    sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
+    from . import convert as conv
+
+    if len(rest) not in (1, 2):
+        raise NavfmuError("convert kf-gins: expected IMU_FILE GNSS_FILE [TRUTH_FILE] DST")
+    truth, dst = (rest[0], rest[1]) if len(rest) == 2 else (None, rest[0])
+    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst), dst))
 
 
 @cli.command()

@@ -16,8 +16,9 @@ roll/pitch/yaw [deg]``.
 
 Rates to increments (gnss-ins-sim): the samples are the rates at the instants ``t_k``; the
 increment over ``[t_{k-1}, t_k]`` is the trapezoid ``(t_k - t_{k-1}) (w_{k-1} + w_k) / 2``.
-Its error over one interval is ``-dt^3 w''/12`` (third order in the step; second order over a
-fixed time span), exact for rates linear in time.  KF-GINS's first IMU line only marks the
+Its error over one interval (trapezoid minus exact integral) is ``dt^3 w''/12`` plus higher
+orders (third order in the step; second order over a fixed time span), exact for rates
+linear in time.  KF-GINS's first IMU line only marks the
 start (its interval is unknown): the log starts with the second line, ``dt`` is the
 difference of consecutive times.
 """

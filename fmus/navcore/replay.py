@@ -119,11 +119,11 @@ class ImuGnssReplay(Component):
         k = self.next_imu
         if k >= len(self.imu):
             raise InputError(f"{self.model_name}: the log {self.log_folder} ends at "
-                             f"{self.imu[-1, 0]!r} s; no IMU interval in ({t!r}, {t_end!r}] s")
+                             f"{float(self.imu[-1, 0])!r} s; no IMU interval in ({float(t)!r}, {float(t_end)!r}] s")
         row = self.imu[k].tolist()
         if abs(row[0] - t_end) > 1e-6 * h + TIME_TOLERANCE * max(1.0, abs(t_end)):
-            raise InputError(f"{self.model_name}: the log's IMU interval ending at {row[0]!r} s "
-                             f"does not fall in the step ({t!r}, {t_end!r}] s; the simulation "
+            raise InputError(f"{self.model_name}: the log's IMU interval ending at {float(row[0])!r} s "
+                             f"does not fall in the step ({float(t)!r}, {float(t_end)!r}] s; the simulation "
                              "time must follow the log's IMU intervals")
         self.next_imu = k + 1
         out = self.out

@@ -206,8 +206,8 @@ def _check_times(path, data) -> None:
     if bad.size:
         k = int(bad[0]) + 1
         what = "duplicated" if step[k - 1] == 0 else "non-monotonic"
-        raise LogError(f"{path}, line {_line(data, k)}: {what} time {t[k]!r} s (line "
-                       f"{_line(data, k - 1)} has {t[k - 1]!r} s; times must increase)")
+        raise LogError(f"{path}, line {_line(data, k)}: {what} time {float(t[k])!r} s (line "
+                       f"{_line(data, k - 1)} has {float(t[k - 1])!r} s; times must increase)")
 
 
 def check_imu(path, imu) -> None:
@@ -216,12 +216,12 @@ def check_imu(path, imu) -> None:
     bad = np.flatnonzero(~(dt > 0))
     if bad.size:
         k = int(bad[0])
-        raise LogError(f"{path}, line {_line(imu, k)}: dt = {dt[k]!r} s must be > 0")
+        raise LogError(f"{path}, line {_line(imu, k)}: dt = {float(dt[k])!r} s must be > 0")
     bad = np.flatnonzero(np.abs(dt - dt[0]) > RATE_TOLERANCE * dt[0])
     if bad.size:
         k = int(bad[0])
-        raise LogError(f"{path}, line {_line(imu, k)}: dt = {dt[k]!r} s differs from the "
-                       f"first interval's {dt[0]!r} s (the IMU rate must be constant within "
+        raise LogError(f"{path}, line {_line(imu, k)}: dt = {float(dt[k])!r} s differs from the "
+                       f"first interval's {float(dt[0])!r} s (the IMU rate must be constant within "
                        f"{RATE_TOLERANCE:g} relative)")
     t = imu["time"]
     gap = t[1:] - dt[1:] - t[:-1]
@@ -230,7 +230,7 @@ def check_imu(path, imu) -> None:
         k = int(bad[0]) + 1
         kind = "gap" if gap[k - 1] > 0 else "overlap"
         raise LogError(f"{path}, line {_line(imu, k)}: {kind} of {abs(gap[k - 1]):.6g} s "
-                       f"between the interval ending at {t[k - 1]!r} s (line "
+                       f"between the interval ending at {float(t[k - 1])!r} s (line "
                        f"{_line(imu, k - 1)}) and this one, more than the bound "
                        f"{IMU_GAP_TOLERANCE:g} dt (the intervals must tile time)")
 
@@ -243,11 +243,11 @@ def check_gnss(path, gnss) -> None:
             if bad.size:
                 k = int(bad[0])
                 raise LogError(f"{path}, line {_line(gnss, k)}: column '{flag}' is "
-                               f"{gnss[flag][k]!r}, must be 0 or 1")
+                               f"{float(gnss[flag][k])!r}, must be 0 or 1")
     bad = np.flatnonzero(~(np.abs(gnss["lat"]) < 0.5 * math.pi))
     if bad.size:
         k = int(bad[0])
-        raise LogError(f"{path}, line {_line(gnss, k)}: lat = {gnss['lat'][k]!r} rad is not "
+        raise LogError(f"{path}, line {_line(gnss, k)}: lat = {float(gnss['lat'][k])!r} rad is not "
                        "a latitude (|lat| < pi/2; the unit is rad)")
     if not (gnss["valid"] == 1).any():
         raise LogError(f"{path}: no valid fix (every line has valid = 0)")
@@ -329,9 +329,10 @@ def write_log(folder, log: SensorLog) -> Path:
     folder = Path(folder)
     check_log(log, where=str(folder))
     parent = folder.parent if str(folder.parent) else Path(".")
-    if not parent.is_dir():
-        raise LogError(f"cannot write the sensor log {folder}: the folder {parent} does not "
-                       "exist")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise LogError(f"cannot write the sensor log {folder}: {exc}") from None
     if folder.exists() and not folder.is_dir():
         raise LogError(f"cannot write the sensor log {folder}: it exists and is not a folder")
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))

@@ -1,0 +1,255 @@
+"""The sensor-log format and the converters: round trips, the rate-to-increment rule against
+the analytic integral, KF-GINS files written by their documented layout, the gnss-ins-sim copy
+against the scenario's log, and every kind of bad log giving one error naming file and line
+with nothing written."""
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from navcore import sensorlog
+from navcore.log_converters import read_gnss_ins_sim, read_kf_gins, trapezoid_increments
+from navcore.sensorlog import LogError, SensorLog, read_log, write_log
+from orchestrator.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+GNSS_INS_SIM = ROOT / "tests" / "data" / "gnss-ins-sim" / "motion_def-3d_mid_100Hz"
+SCENARIO_LOG = ROOT / "models" / "replay_gnss_ins_sim" / "log"
+
+
+def _log(n=50, dt=0.01, t0=0.0, truth=True, seed=3):
+    rng = np.random.default_rng(seed)
+    t = t0 + dt * np.arange(1, n + 1)
+    imu = {"time": t, "dt": np.full(n, dt)}
+    for a in "xyz":
+        imu[f"dtheta_{a}"] = 1e-4 * rng.standard_normal(n)
+        imu[f"dvel_{a}"] = 1e-2 * rng.standard_normal(n)
+    tg = t0 + np.arange(0.1, n * dt, 0.1)
+    m = len(tg)
+    gnss = {"time": tg, "lat": 0.7 + 1e-7 * rng.standard_normal(m),
+            "lon": 2.0 + 1e-7 * rng.standard_normal(m), "h": 100 + rng.standard_normal(m),
+            "vn": rng.standard_normal(m), "ve": rng.standard_normal(m),
+            "vd": rng.standard_normal(m), "valid": (np.arange(m) % 3 != 1).astype(float)}
+    tr = None
+    if truth:
+        tt = t0 + dt * np.arange(n + 1)
+        tr = {k: rng.standard_normal(n + 1) * 0.1 for k in sensorlog.TRUTH_COLUMNS}
+        tr["time"] = tt
+    return SensorLog(imu, gnss, tr)
+
+
+def test_write_read_round_trip_is_exact(tmp_path):
+    """%.17g text keeps every float64 bit; optional columns survive; no truth -> None."""
+    log = _log()
+    write_log(tmp_path / "a", log)
+    back = read_log(tmp_path / "a")
+    for part in ("imu", "gnss", "truth"):
+        a, b = getattr(log, part), getattr(back, part)
+        assert set(a) == set(b)
+        for k in a:
+            assert np.array_equal(a[k], b[k]), (part, k)
+    header = (tmp_path / "a" / "imu.csv").read_text().splitlines()[0]
+    assert header == ("time [s],dt [s],dtheta_x [rad],dtheta_y [rad],dtheta_z [rad],"
+                      "dvel_x [m/s],dvel_y [m/s],dvel_z [m/s]")
+    # rewriting the folder with a log without truth removes the old truth.csv
+    write_log(tmp_path / "a", _log(truth=False))
+    assert read_log(tmp_path / "a").truth is None
+    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["gnss.csv", "imu.csv"]
+    assert [p.name for p in tmp_path.iterdir()] == ["a"]  # no temporary folder left
+
+
+def _edit(path, line, new):
+    lines = path.read_text().splitlines()
+    if new is None:
+        del lines[line - 1]
+    else:
+        lines[line - 1] = new(lines[line - 1]) if callable(new) else new
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _replace_field(column):
+    def edit(text):
+        fields = text.split(",")
+        fields[column] = "nan"
+        return ",".join(fields)
+    return edit
+
+
+BAD_LOGS = [
+    ("imu.csv", 1, lambda s: s.replace(",dvel_z [m/s]", ""), 1, "missing column 'dvel_z [m/s]'"),
+    ("imu.csv", 1, lambda s: s.replace("dtheta_x [rad]", "dtheta_x [deg]"), 1,
+     "unit header 'dtheta_x [deg]', expected 'dtheta_x [rad]'"),
+    ("gnss.csv", 1, lambda s: s.replace(",vd [m/s]", ""), 1, "missing 'vd'"),
+    ("imu.csv", 6, _replace_field(3), 6, "column 'dtheta_y' is nan"),
+    ("imu.csv", 6, None, 6, "gap of 0.01 s"),
+    ("truth.csv", 5, lambda s: "0.02" + s[s.index(","):], 5, "duplicated time 0.02"),
+    ("gnss.csv", 3, lambda s: "0.05" + s[s.index(","):], 3, "non-monotonic time 0.05"),
+    ("imu.csv", 9, lambda s: s + ",1", 9, "9 values, but 8 column titles"),
+    ("imu.csv", 4, lambda s: s.replace(s.split(",")[2], "1e-4+x", 1), 4, "is not a number"),
+]
+
+
+@pytest.mark.parametrize("file,line,edit,expect_line,message", BAD_LOGS,
+                         ids=["missing-column", "unit", "partial-group", "nan", "gap",
+                              "duplicate", "non-monotonic", "extra-value", "expression"])
+def test_bad_log_names_file_and_line(tmp_path, file, line, edit, expect_line, message):
+    write_log(tmp_path / "log", _log())
+    path = tmp_path / "log" / file
+    _edit(path, line, edit)
+    with pytest.raises(LogError) as exc:
+        read_log(tmp_path / "log")
+    text = str(exc.value)
+    assert text.startswith(f"{path}, line {expect_line}: "), text
+    assert message in text, text
+
+
+def test_gnss_file_without_a_fix_and_bad_flags(tmp_path):
+    log = _log()
+    log.gnss["valid"][:] = 0.0
+    with pytest.raises(LogError, match=r"gnss.csv: no valid fix"):
+        write_log(tmp_path / "log", log)
+    assert not (tmp_path / "log").exists()  # checked before anything is written
+    log = _log()
+    log.gnss["valid"][2] = 0.5
+    with pytest.raises(LogError, match=r"gnss.csv, line 4: column 'valid' is 0.5"):
+        write_log(tmp_path / "log", log)
+
+
+def test_imu_rate_change_and_truth_gap_are_errors(tmp_path):
+    log = _log()
+    log.imu["dt"][10] = 0.011
+    with pytest.raises(LogError, match=r"imu.csv, line 12: dt = 0.011 s differs"):
+        write_log(tmp_path / "log", log)
+    log = _log()
+    log.truth["time"][20:] += 1.5
+    with pytest.raises(LogError, match=r"truth.csv, line 22: gap of 1.51 s .* bound 1 s"):
+        write_log(tmp_path / "log", log)
+
+
+def test_oversized_file_is_refused_before_parsing(tmp_path, monkeypatch):
+    write_log(tmp_path / "log", _log())
+    monkeypatch.setattr(sensorlog, "MAX_FILE_BYTES", 1000)
+    with pytest.raises(LogError, match=r"imu.csv: \d+ bytes, more than the limit of 1000"):
+        read_log(tmp_path / "log")
+
+
+# -- rates to increments -------------------------------------------------------------------
+def test_trapezoid_increments_against_the_analytic_integral():
+    """w(t) = sin(a t): exact increment (cos(a t0) - cos(a t1)) / a.  The per-interval error
+    of the trapezoid (trapezoid - exact) is dt^3 w''/12 + O(dt^5) (third order: halving dt divides it by 8), and
+    a rate linear in time is integrated exactly."""
+    a = 3.0
+    errors = []
+    for dt in (0.02, 0.01, 0.005):
+        t = np.arange(0.0, 2.0 + dt / 2, dt)
+        inc = trapezoid_increments(t, np.sin(a * t)[:, None])[:, 0]
+        exact = (np.cos(a * t[:-1]) - np.cos(a * t[1:])) / a
+        predicted = -dt**3 * a**2 * np.sin(a * (t[:-1] + dt / 2)) / 12  # dt^3 w''/12
+        err = inc - exact
+        assert np.max(np.abs(err - predicted)) < 0.02 * np.max(np.abs(predicted))
+        errors.append(np.max(np.abs(err)))
+    assert errors[0] / errors[1] == pytest.approx(8.0, rel=0.02)
+    assert errors[1] / errors[2] == pytest.approx(8.0, rel=0.02)
+    t = np.linspace(0.0, 1.0, 11)
+    inc = trapezoid_increments(t, (2.0 + 5.0 * t)[:, None])[:, 0]
+    assert np.allclose(inc, 2.0 * 0.1 + 2.5 * (t[1:] ** 2 - t[:-1] ** 2), rtol=1e-14, atol=0)
+
+
+# -- KF-GINS -------------------------------------------------------------------------------
+def _write_kf_gins(folder, log, week=2200):
+    """A log in KF-GINS's text layout (as their documentation states it), written here
+    independently of the converter: degrees, whitespace separated, no titles."""
+    imu, gnss, truth = log.imu, log.gnss, log.truth
+    first = np.concatenate([[imu["time"][0] - imu["dt"][0]], np.zeros(6)])
+    rows = np.column_stack([imu["time"]] + [imu[k] for k in
+                                            ("dtheta_x", "dtheta_y", "dtheta_z",
+                                             "dvel_x", "dvel_y", "dvel_z")])
+    np.savetxt(folder / "imu.txt", np.vstack([first, rows]), fmt="%.17g")
+    d = 180.0 / math.pi
+    np.savetxt(folder / "gnss.txt", np.column_stack(
+        [gnss["time"], gnss["lat"] * d, gnss["lon"] * d, gnss["h"], gnss["std_n"],
+         gnss["std_e"], gnss["std_d"]]), fmt="%.17g", delimiter="  ")
+    np.savetxt(folder / "truth.nav", np.column_stack(
+        [np.full(len(truth["time"]), week), truth["time"], truth["lat"] * d, truth["lon"] * d,
+         truth["h"], truth["vn"], truth["ve"], truth["vd"], truth["roll"] * d,
+         truth["pitch"] * d, truth["yaw"] * d]), fmt="%.17g")
+
+
+def test_kf_gins_files_round_trip_through_the_converter(tmp_path, capsys):
+    log = _log(n=400, dt=0.005, t0=456300.0)
+    for k in ("vn", "ve", "vd"):
+        del log.gnss[k]
+    log.gnss["valid"][:] = 1.0
+    for k, s in (("std_n", 1.5), ("std_e", 1.2), ("std_d", 3.0)):
+        log.gnss[k] = np.full(len(log.gnss["time"]), s)
+    log.truth["yaw"] = np.clip(log.truth["yaw"], -3.0, 3.0)
+    _write_kf_gins(tmp_path, log)
+    with pytest.raises(SystemExit) as exc:
+        main(["convert", "kf-gins", str(tmp_path / "imu.txt"), str(tmp_path / "gnss.txt"),
+              str(tmp_path / "truth.nav"), str(tmp_path / "log")])
+    assert exc.value.code == 0
+    assert "400 IMU intervals of 0.005 s" in capsys.readouterr().out
+    back = read_log(tmp_path / "log")
+    assert not back.has_gnss_velocity
+    for part in ("imu", "gnss", "truth"):
+        a, b = getattr(log, part), getattr(back, part)
+        assert set(a) == set(b), part
+        for k in a:
+            # degrees <-> radians: a few ulp; dt differenced from times near 4.6e5 s: 1e-10 s
+            assert np.allclose(b[k], a[k], rtol=1e-13, atol=1e-9 if k == "dt" else 1e-15), (part, k)
+
+
+def test_kf_gins_bad_files(tmp_path):
+    log = _log(n=100, dt=0.005, t0=1000.0)
+    for k, s in (("std_n", 1.5), ("std_e", 1.2), ("std_d", 3.0)):
+        log.gnss[k] = np.full(len(log.gnss["time"]), s)
+    _write_kf_gins(tmp_path, log)
+    lines = (tmp_path / "imu.txt").read_text().splitlines()
+    lines[30] = lines[29]
+    (tmp_path / "imu.txt").write_text("\n".join(lines) + "\n")
+    with pytest.raises(LogError, match=r"imu.txt, line 31: duplicated time"):
+        read_kf_gins(tmp_path / "imu.txt", tmp_path / "gnss.txt")
+    (tmp_path / "gnss.txt").write_text("1000.1 30.0 114.0 20.0 1.0 1.0\n")
+    with pytest.raises(LogError, match=r"gnss.txt, line 1: 6 values, expected 7"):
+        read_kf_gins(tmp_path / "imu.txt", tmp_path / "gnss.txt")
+
+
+# -- gnss-ins-sim ----------------------------------------------------------------------------
+def test_gnss_ins_sim_copy_converts_to_the_scenario_log(tmp_path):
+    """The checked-in gnss-ins-sim run converts to exactly the log the scenario ships, and
+    the conversion follows the stated rule on the raw samples."""
+    log = read_gnss_ins_sim(GNSS_INS_SIM)
+    shipped = read_log(SCENARIO_LOG)
+    for part in ("imu", "gnss", "truth"):
+        a, b = getattr(log, part), getattr(shipped, part)
+        assert set(a) == set(b)
+        for k in a:
+            assert np.array_equal(a[k], b[k]), (part, k)
+    t = np.loadtxt(GNSS_INS_SIM / "time.csv", skiprows=1)
+    gyro = np.loadtxt(GNSS_INS_SIM / "gyro-0.csv", delimiter=",", skiprows=1)
+    k = 4321
+    assert log.imu["time"][k - 1] == t[k]
+    assert log.imu["dtheta_z"][k - 1] == pytest.approx(
+        0.5 * (t[k] - t[k - 1]) * math.radians(gyro[k - 1, 2] + gyro[k, 2]), rel=1e-15)
+    assert len(log.gnss["time"]) == 81 and int(log.gnss["valid"].sum()) == 41
+    assert log.imu_period == pytest.approx(0.01) and log.stop_time == pytest.approx(80.05)
+
+
+def test_gnss_ins_sim_unit_error_and_nothing_written(tmp_path, capsys):
+    src = tmp_path / "sim"
+    shutil.copytree(GNSS_INS_SIM, src)
+    text = (src / "gyro-0.csv").read_text().replace("gyro_y (deg/s)", "gyro_y (rad/s)", 1)
+    (src / "gyro-0.csv").write_text(text)
+    with pytest.raises(SystemExit) as exc:
+        main(["convert", "gnss-ins-sim", str(src), str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2
+    assert err.startswith(f"navfmu: error: {src / 'gyro-0.csv'}, line 1: column 'gyro_y "
+                          "(rad/s)' does not match the expected 'gyro_y (deg/s)'")
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sim"]
