@@ -42,6 +42,8 @@ def render():
                 text += _table(f"{name}: additional outputs", extra)
     text += _table("TrajectoryImu parameters", components.TrajectoryImu.parameters)
     text += _table("GnssReceiver parameters", components.GnssReceiver.parameters)
+    text += _table("ImuGnssReplay parameters (outputs: those of TrajectoryImu and GnssReceiver; "
+                   "log format: docs/sensor_log.md)", components.ImuGnssReplay.parameters)
     text += _table("INS/GNSS filter parameters (Kf; every filter has them)",
                    components.Kf.parameters)
     for name, cls in components.REGISTRY.items():

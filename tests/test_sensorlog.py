@@ -253,3 +253,16 @@ def test_gnss_ins_sim_unit_error_and_nothing_written(tmp_path, capsys):
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sim"]
+
+
+def test_docs_list_every_column_with_its_unit():
+    """docs/sensor_log.md documents the format: every column of every file, with its unit,
+    in that file's table."""
+    text = (ROOT / "docs" / "sensor_log.md").read_text()
+    for name, columns in sensorlog.COLUMNS.items():
+        section = text.split(f"### {name}", 1)[1].split("###", 1)[0]
+        rows = [r for r in section.splitlines() if r.startswith("| `")]
+        for column, unit in columns.items():
+            row = next((r for r in rows if f"`{column}`" in r.split("|")[1]), None)
+            assert row is not None, (name, column)
+            assert row.split("|")[2].strip() == (unit or "-"), (name, column, row)
