@@ -236,3 +236,27 @@ def test_cli_replay_of_a_bad_log_is_one_line(tmp_path, capsys):
                           "unknown column 'fix'")
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_replay_model_runs_in_libcosim(gis_run, monkeypatch):
+    """libcosim (its own SSP loader, Jacobi exchange) runs models/replay_gnss_ins_sim from its
+    folder (the relative log path of the .ssd).  libcosim hands the filter each step the
+    replay's outputs of the step before, so the filter sees the same inputs one step later:
+    its solution at a given nav_time is the one of our master, bit for bit."""
+    cosim = pytest.importorskip("libcosimpy.CosimExecution")
+    from libcosimpy.CosimObserver import CosimObserver
+
+    fmu_build.build(["ImuGnssReplay", "Kf"], log=None)
+    monkeypatch.chdir(GIS_MODEL)
+    ex = cosim.CosimExecution.from_ssp_file(ssp_path=str(GIS_MODEL), step_size=10_000_000)
+    observer = CosimObserver.create_last_value()
+    ex.add_observer(observer)
+    assert ex.simulate_until(20_000_000_000)
+    index = {s.name.decode(): s.index for s in ex.slave_infos()}
+    refs = {v.name.decode(): v.reference for v in ex.slave_variables(index["filter"])}
+    names = ["nav_time", "nav_lat", "nav_lon", "nav_h", "nav_vn", "nav_yaw", "std_pn", "nis"]
+    ours = observer.last_real_values(index["filter"], [refs[n] for n in names])
+    r = gis_run.results
+    row = int(np.flatnonzero(r.column("filter", "nav_time") == ours[0])[0])
+    assert ours[0] == pytest.approx(19.99)
+    assert ours == [float(r.column("filter", n)[row]) for n in names]
