@@ -76,3 +76,17 @@ def write_ssd(tmp_path):
         return p
 
     return write
+
+
+@pytest.fixture
+def navfmu_cli(capsys):
+    """Run the ``navfmu`` command line in-process: ``(exit status, stdout, stderr)``."""
+    from orchestrator.cli import main
+
+    def run(*args):
+        with pytest.raises(SystemExit) as exc:
+            main([str(a) for a in args])
+        out, err = capsys.readouterr()
+        return exc.value.code, out, err
+
+    return run

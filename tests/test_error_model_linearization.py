@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
 from navcore import earth
 from navcore.error_model import ATT, N_STATES, POS, VEL, system_matrix

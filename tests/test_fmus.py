@@ -147,6 +147,23 @@ def test_trajectory_state_save_restore_is_bit_identical(dist):
     assert np.all(np.diff(first[:, -1]) > 0)
 
 
+def _runs_after_restore(f, run, k0, n, serialize=False):
+    """``run(0, k0)``, save the FMU state, ``run(k0, n)``; restore, run again (and, with
+    ``serialize``, once more from a serialized and deserialized copy): the runs' outputs."""
+    run(0, k0)
+    state = f.fmu.getFMUstate()
+    runs = [run(k0, n)]
+    f.fmu.setFMUstate(state)
+    runs.append(run(k0, n))
+    if serialize:
+        copy = f.fmu.deSerializeFMUstate(f.fmu.serializeFMUstate(state))
+        f.fmu.setFMUstate(copy)
+        runs.append(run(k0, n))
+        f.fmu.freeFMUstate(copy)
+    f.fmu.freeFMUstate(state)
+    return runs
+
+
 REPLAY_LOG = fmu_build.ROOT / "models" / "replay_gnss_ins_sim" / "log"
 REPLAY_OUT = ["imu_time", "imu_dtheta_z", "imu_dvel_x", "gnss_lat", "truth_yaw"]
 
@@ -155,27 +172,17 @@ def test_replay_state_save_restore_is_bit_identical(dist):
     """ImuGnssReplay: the read position in the log is in the FMU state (and the log data with
     it); a restored or deserialized state replays the same samples."""
     f = _Fmu(dist / "ImuGnssReplay.fmu", "replay", {"log": str(REPLAY_LOG)})
-    out = REPLAY_OUT
 
     def run(k0, n):
         rows = []
         for k in range(k0, k0 + n):
             f.fmu.doStep(k * 0.01, 0.01)
-            rows.append(np.concatenate([f.reals(out), f.fmu.getInteger([f.vr["gnss_epoch"]])]))
+            rows.append(np.concatenate([f.reals(REPLAY_OUT),
+                                        f.fmu.getInteger([f.vr["gnss_epoch"]])]))
         return np.array(rows)
 
     try:
-        run(0, 1195)
-        state = f.fmu.getFMUstate()
-        first = run(1195, 30)
-        f.fmu.setFMUstate(state)
-        again = run(1195, 30)
-        blob = f.fmu.serializeFMUstate(state)
-        state2 = f.fmu.deSerializeFMUstate(blob)
-        f.fmu.setFMUstate(state2)
-        third = run(1195, 30)
-        f.fmu.freeFMUstate(state)
-        f.fmu.freeFMUstate(state2)
+        first, again, third = _runs_after_restore(f, run, 1195, 30, serialize=True)
     finally:
         f.close()
     assert np.array_equal(first, again) and np.array_equal(first, third)
@@ -218,12 +225,7 @@ def test_filter_state_save_restore_is_bit_identical(dist, name):
         return np.array(rows)
 
     try:
-        run(0, 135)
-        state = f.fmu.getFMUstate()
-        first = run(135, 160)
-        f.fmu.setFMUstate(state)
-        again = run(135, 160)
-        f.fmu.freeFMUstate(state)
+        first, again = _runs_after_restore(f, run, 135, 160)
     finally:
         f.close()
     assert np.array_equal(first, again)

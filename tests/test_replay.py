@@ -15,7 +15,6 @@ from navcore.replay import ImuGnssReplay
 from navcore.sensorlog import read_log
 from orchestrator import build as fmu_build
 from orchestrator import metrics, replay, scenarios
-from orchestrator.cli import main
 from orchestrator.results import Results
 
 ROOT = fmu_build.ROOT
@@ -57,16 +56,15 @@ def test_record_then_replay_gives_identical_filter_outputs(recorded, name):
         "position_rms_m"]
 
 
-def test_record_and_replay_through_the_fmus_and_the_cli(tmp_path, capsys):
+def test_record_and_replay_through_the_fmus_and_the_cli(tmp_path, navfmu_cli):
     """`navfmu run --log-sensors` then `navfmu run --replay`, through the FMUs: identical
     filter columns in the two results files; the replay's outputs equal the sources'."""
     fmu_build.build(["ImuGnssReplay", "TrajectoryImu", "GnssReceiver", "Kf"], log=None)
     for args in (["--stop", "3", "--log-sensors", str(tmp_path / "log"), "--out",
                   str(tmp_path / "a")],
                  ["--replay", str(tmp_path / "log"), "--out", str(tmp_path / "b")]):
-        with pytest.raises(SystemExit) as exc:
-            main(["run", str(AIRCRAFT), "--no-plots", *args])
-        assert exc.value.code == 0, capsys.readouterr().err
+        code, _, err = navfmu_cli("run", AIRCRAFT, "--no-plots", *args)
+        assert code == 0, err
     a = Results.from_csv(tmp_path / "a" / "results.csv")
     b = Results.from_csv(tmp_path / "b" / "results.csv")
     assert np.array_equal(a.data["filter"], b.data["filter"])
@@ -223,15 +221,13 @@ def test_replay_without_truth_and_without_velocity(tmp_path, capsys):
     assert math.isfinite(run.results.column("filter", "nav_lat")[-1])
 
 
-def test_cli_replay_of_a_bad_log_is_one_line(tmp_path, capsys):
+def test_cli_replay_of_a_bad_log_is_one_line(tmp_path, navfmu_cli):
     shutil.copytree(GIS_MODEL / "log", tmp_path / "log")
     text = (tmp_path / "log" / "gnss.csv").read_text().replace("valid", "fix", 1)
     (tmp_path / "log" / "gnss.csv").write_text(text)
-    with pytest.raises(SystemExit) as exc:
-        main(["run", str(AIRCRAFT), "--replay", str(tmp_path / "log"), "--out",
-              str(tmp_path / "out")])
-    err = capsys.readouterr().err
-    assert exc.value.code == 2
+    code, _, err = navfmu_cli("run", AIRCRAFT, "--replay", tmp_path / "log", "--out",
+                              tmp_path / "out")
+    assert code == 2
     assert err.startswith(f"navfmu: error: --replay: {tmp_path / 'log' / 'gnss.csv'}, line 1: "
                           "unknown column 'fix'")
     assert len(err.strip().splitlines()) == 1

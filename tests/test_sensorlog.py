@@ -14,7 +14,6 @@ import pytest
 from navcore import sensorlog
 from navcore.log_converters import read_gnss_ins_sim, read_kf_gins, trapezoid_increments
 from navcore.sensorlog import LogError, SensorLog, read_log, write_log
-from orchestrator.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 GNSS_INS_SIM = ROOT / "tests" / "data" / "gnss-ins-sim" / "motion_def-3d_mid_100Hz"
@@ -179,7 +178,7 @@ def _write_kf_gins(folder, log, week=2200):
          truth["pitch"] * d, truth["yaw"] * d]), fmt="%.17g")
 
 
-def test_kf_gins_files_round_trip_through_the_converter(tmp_path, capsys):
+def test_kf_gins_files_round_trip_through_the_converter(tmp_path, navfmu_cli):
     log = _log(n=400, dt=0.005, t0=456300.0)
     for k in ("vn", "ve", "vd"):
         del log.gnss[k]
@@ -188,11 +187,10 @@ def test_kf_gins_files_round_trip_through_the_converter(tmp_path, capsys):
         log.gnss[k] = np.full(len(log.gnss["time"]), s)
     log.truth["yaw"] = np.clip(log.truth["yaw"], -3.0, 3.0)
     _write_kf_gins(tmp_path, log)
-    with pytest.raises(SystemExit) as exc:
-        main(["convert", "kf-gins", str(tmp_path / "imu.txt"), str(tmp_path / "gnss.txt"),
-              str(tmp_path / "truth.nav"), str(tmp_path / "log")])
-    assert exc.value.code == 0
-    assert "400 IMU intervals of 0.005 s" in capsys.readouterr().out
+    code, out, _ = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt", tmp_path / "gnss.txt",
+                              tmp_path / "truth.nav", tmp_path / "log")
+    assert code == 0
+    assert "400 IMU intervals of 0.005 s" in out
     back = read_log(tmp_path / "log")
     assert not back.has_gnss_velocity
     for part in ("imu", "gnss", "truth"):
@@ -239,15 +237,13 @@ def test_gnss_ins_sim_copy_converts_to_the_scenario_log(tmp_path):
     assert log.imu_period == pytest.approx(0.01) and log.stop_time == pytest.approx(80.05)
 
 
-def test_gnss_ins_sim_unit_error_and_nothing_written(tmp_path, capsys):
+def test_gnss_ins_sim_unit_error_and_nothing_written(tmp_path, navfmu_cli):
     src = tmp_path / "sim"
     shutil.copytree(GNSS_INS_SIM, src)
     text = (src / "gyro-0.csv").read_text().replace("gyro_y (deg/s)", "gyro_y (rad/s)", 1)
     (src / "gyro-0.csv").write_text(text)
-    with pytest.raises(SystemExit) as exc:
-        main(["convert", "gnss-ins-sim", str(src), str(tmp_path / "out")])
-    err = capsys.readouterr().err
-    assert exc.value.code == 2
+    code, _, err = navfmu_cli("convert", "gnss-ins-sim", src, tmp_path / "out")
+    assert code == 2
     assert err.startswith(f"navfmu: error: {src / 'gyro-0.csv'}, line 1: column 'gyro_y "
                           "(rad/s)' does not match the expected 'gyro_y (deg/s)'")
     assert len(err.strip().splitlines()) == 1

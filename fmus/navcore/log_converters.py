@@ -32,47 +32,19 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 
 from .rotations import wrap_angle
-from .sensorlog import (GNSS_FILE, IMU_FILE, MAX_FILE_BYTES, TRUTH_FILE, LogError, SensorLog,
-                        check_log)
+from .sensorlog import (GNSS_FILE, IMU_FILE, TRUTH_FILE, LogError, SensorLog, check_log,
+                        parse_numbers, parse_rows, read_lines)
 
 _D2R = math.pi / 180.0
 _TITLE = re.compile(r"^\s*(?P<name>[^()]*?)\s*(?:\((?P<unit>[^)]*)\))?\s*$")
 
 
 # -- text tables -----------------------------------------------------------------------------
-def _lines(path: Path):
-    if not path.is_file():
-        raise LogError(f"{path}: file not found")
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise LogError(f"{path}: {size} bytes, more than the limit of {MAX_FILE_BYTES}")
-    try:
-        with open(path, encoding="utf-8", newline="") as f:
-            return f.read().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise LogError(f"{path}: cannot be read: {exc}") from None
-
-
-def _numbers(path, number, fields, names):
-    row = []
-    for name, text in zip(names, fields):
-        try:
-            value = float(text)
-        except ValueError:
-            raise LogError(f"{path}, line {number}: column '{name}': '{text.strip()}' is not a "
-                           "number") from None
-        if not math.isfinite(value):
-            raise LogError(f"{path}, line {number}: column '{name}' is {value} (values must "
-                           "be finite)")
-        row.append(value)
-    return row
-
-
 def read_titled_csv(path, expected: Sequence[tuple]) -> np.ndarray:
     """A gnss-ins-sim CSV: titles ``name (unit)`` equal to ``expected`` ((name, unit), ...;
     name None = any name), then rows of numbers.  Returns an (n, columns) array."""
     path = Path(path)
-    lines = _lines(path)
+    lines = read_lines(path)
     if not lines:
         raise LogError(f"{path}, line 1: no column titles")
     titles = [t for t in lines[0].split(",")]
@@ -87,18 +59,7 @@ def read_titled_csv(path, expected: Sequence[tuple]) -> np.ndarray:
             raise LogError(f"{path}, line 1: column '{title.strip()}' does not match the "
                            f"expected '{name or '*'} ({unit})'")
         names.append(m.group("name"))
-    rows = []
-    for number, line in enumerate(lines[1:], start=2):
-        if not line.strip():
-            continue
-        fields = line.split(",")
-        if len(fields) != len(names):
-            raise LogError(f"{path}, line {number}: {len(fields)} values, but {len(names)} "
-                           "column titles")
-        rows.append(_numbers(path, number, fields, names))
-    if not rows:
-        raise LogError(f"{path}: no samples after the title line")
-    return np.array(rows, dtype=np.float64)
+    return parse_rows(path, lines, names)[0]
 
 
 def read_plain_text(path, names: Sequence[str]) -> np.ndarray:
@@ -107,7 +68,7 @@ def read_plain_text(path, names: Sequence[str]) -> np.ndarray:
     line number of each row."""
     path = Path(path)
     rows, numbers = [], []
-    for number, line in enumerate(_lines(path), start=1):
+    for number, line in enumerate(read_lines(path), start=1):
         text = line.split("#", 1)[0].replace(",", " ")
         fields = text.split()
         if not fields:
@@ -115,7 +76,7 @@ def read_plain_text(path, names: Sequence[str]) -> np.ndarray:
         if len(fields) != len(names):
             raise LogError(f"{path}, line {number}: {len(fields)} values, expected "
                            f"{len(names)} ({', '.join(names)})")
-        rows.append(_numbers(path, number, fields, names))
+        rows.append(parse_numbers(path, number, fields, names))
         numbers.append(number)
     if not rows:
         raise LogError(f"{path}: no samples")
@@ -219,7 +180,8 @@ def read_kf_gins(imu_file, gnss_file, truth_file=None) -> SensorLog:
     imu["_line"] = raw_lines[1:]
     g, g_lines = read_plain_text(gnss_file, KF_GINS_GNSS)
     gnss = {"time": g[:, 0], "lat": g[:, 1] * _D2R, "lon": g[:, 2] * _D2R, "h": g[:, 3],
-            "valid": np.ones(len(g)), "std_n": g[:, 4], "std_e": g[:, 5], "std_d": g[:, 6], "_line": g_lines}
+            "valid": np.ones(len(g)), "std_n": g[:, 4], "std_e": g[:, 5], "std_d": g[:, 6],
+            "_line": g_lines}
     truth: Optional[Dict[str, np.ndarray]] = None
     if truth_file is not None:
         nav, nav_lines = read_plain_text(truth_file, KF_GINS_NAV)

@@ -131,10 +131,9 @@ def _parse_title(path, title: str, columns) -> Tuple[str, str]:
     return name, unit
 
 
-def _read_table(path: Path) -> Dict[str, np.ndarray]:
-    """Titles checked against the file's columns, values as arrays; errors name the line."""
-    name = path.name
-    columns = COLUMNS[name]
+def read_lines(path) -> list:
+    """The lines of a text file, refusing files over :data:`MAX_FILE_BYTES`."""
+    path = Path(path)
     if not path.is_file():
         raise LogError(f"{path}: file not found")
     size = path.stat().st_size
@@ -142,9 +141,31 @@ def _read_table(path: Path) -> Dict[str, np.ndarray]:
         raise LogError(f"{path}: {size} bytes, more than the limit of {MAX_FILE_BYTES}")
     try:
         with open(path, encoding="utf-8", newline="") as f:
-            lines = f.read().splitlines()
+            return f.read().splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise LogError(f"{path}: cannot be read: {exc}") from None
+
+
+def parse_numbers(path, number, fields, names) -> list:
+    """``fields`` (text) of line ``number`` as finite floats; errors name the column."""
+    row = []
+    for name, text in zip(names, fields):
+        try:
+            value = float(text)
+        except ValueError:
+            raise LogError(f"{path}, line {number}: column '{name}': '{text.strip()}' is not a "
+                           "number") from None
+        if not math.isfinite(value):
+            raise LogError(f"{path}, line {number}: column '{name}' is {value} (values must "
+                           "be finite)")
+        row.append(value)
+    return row
+
+
+def _read_table(path: Path) -> Dict[str, np.ndarray]:
+    """Titles checked against the file's columns, values as arrays; errors name the line."""
+    columns = COLUMNS[path.name]
+    lines = read_lines(path)
     if not lines or not lines[0].strip():
         raise LogError(f"{path}, line 1: no column titles")
     titles = [_parse_title(path, t, columns)[0] for t in lines[0].split(",")]
@@ -152,7 +173,16 @@ def _read_table(path: Path) -> Dict[str, np.ndarray]:
         if t in titles[:i]:
             raise LogError(f"{path}, line 1: column '{t}' appears twice")
     _check_columns(path, set(titles))
-    rows = []
+    table, numbers = parse_rows(path, lines, titles)
+    data = {t: np.ascontiguousarray(table[:, j]) for j, t in enumerate(titles)}
+    data["_line"] = numbers
+    return data
+
+
+def parse_rows(path, lines, titles):
+    """The comma-separated rows after the title line ``lines[0]`` as an (n, len(titles))
+    array, and the line number of each row (blank lines skipped)."""
+    rows, numbers = [], []
     for number, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
@@ -160,24 +190,11 @@ def _read_table(path: Path) -> Dict[str, np.ndarray]:
         if len(fields) != len(titles):
             raise LogError(f"{path}, line {number}: {len(fields)} values, but {len(titles)} "
                            "column titles")
-        row = []
-        for title, text in zip(titles, fields):
-            try:
-                value = float(text)
-            except ValueError:
-                raise LogError(f"{path}, line {number}: column '{title}': '{text.strip()}' "
-                               "is not a number") from None
-            if not math.isfinite(value):
-                raise LogError(f"{path}, line {number}: column '{title}' is {value} (values "
-                               "must be finite)")
-            row.append(value)
-        rows.append((number, row))
+        rows.append(parse_numbers(path, number, fields, titles))
+        numbers.append(number)
     if not rows:
         raise LogError(f"{path}: no samples after the title line")
-    table = np.array([r for _, r in rows], dtype=np.float64)
-    data = {t: np.ascontiguousarray(table[:, j]) for j, t in enumerate(titles)}
-    data["_line"] = np.array([n for n, _ in rows])
-    return data
+    return np.array(rows, dtype=np.float64), np.array(numbers)
 
 
 def _check_columns(path, present) -> None:
