@@ -9,6 +9,7 @@ import hashlib
 import json
 import math
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +31,9 @@ PARAMS = {
 FILTER_PARAMS = {"init_lat": LAT, "init_h": 100.0}
 #: a second IMM model far from the first, so the model probabilities move on these inputs
 PARAMS["ImmUkf"] = dict(FILTER_PARAMS, imm_q_scale_2=1e8)
+#: the replay plays the shipped 80 s gnss-ins-sim log (100 Hz, from t = 0)
+PARAMS["ImuGnssReplay"] = {
+    "log": str(Path(__file__).resolve().parent.parent / "models/replay_gnss_ins_sim/log")}
 
 
 def params_of(name):

@@ -49,6 +49,10 @@ class ImuGnssReplay(Component):
     inputs = ()
     outputs = signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
     default_experiment = (0.0, 10.0, 0.01)
+    # the log's arrays are re-read from the `log` parameter on restore; only the read
+    # positions and the held outputs change while stepping (navcore.state)
+    state_fields = ("next_imu", "n_gnss", "n_truth", "out")
+    derived_fields = ("log_folder", "imu", "gnss", "truth", "period", "start_time")
 
     def initialize(self, start_time):
         folder = self.params["log"]
