@@ -42,6 +42,7 @@ _G0 = 9.80665
 #: Datasheet units (only in parameters whose name says so) carry their factor; those with a
 #: fractional exponent (deg/sqrt(h), ug/sqrt(Hz)) are declared without a BaseUnit.
 UNITS = {
+    "1": ({}, 1.0),
     "s": ({"s": 1}, 1.0),
     "m": ({"m": 1}, 1.0),
     "rad": ({"rad": 1}, 1.0),

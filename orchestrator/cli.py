@@ -12,6 +12,7 @@ from pathlib import Path
 import click
 
 from .errors import NavfmuError
+from .exchange import ALGORITHMS
 
 DEFAULT_OUT = Path("navfmu-results")
 
@@ -127,6 +128,10 @@ def _common_run_options(f):
     f = click.option("--replay", "replay", type=click.Path(),
                      help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
                      "receiver) by ImuGnssReplay playing this sensor-log folder.")(f)
+    f = click.option("--algorithm", type=click.Choice(ALGORITHMS), default=ALGORITHMS[0],
+                     show_default=True, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("algorithm", v),
+                     help="Exchange: Gauss-Seidel order, or Jacobi (libcosim's).")(f)
     return f
 
 
@@ -144,6 +149,7 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
         runs.append(scenarios.simulate_scenario(
             model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
             window=window, progress=_progress_bar(label),
+            algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
             log=lambda m: click.echo(m, err=True), replay=replay))
     if log_sensors:
         from .replay import write_sensor_log
@@ -257,8 +263,10 @@ def convert_kf_gins(imu_file, gnss_file, rest):
 @click.option("--filters", help="Comma-separated filter FMUs (e.g. Ukf,CtfaUkf,ImmUkf): time "
               "each one swapped into the scenario, through the FMUs, instead of comparing the "
               "FMU and direct paths.")
+@click.option("--libcosim", "against_libcosim", is_flag=True, help="Time our master (Jacobi) "
+              "against libcosim on the same SSP and base step instead.")
 @click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
-def bench(scenario, stop, repeat, filters, as_json):
+def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
     time ratio and the per-step cost of each component.  With --filters: run it through the
     FMUs once per filter instead and print each filter's time per cycle and the ratios to the
@@ -266,6 +274,18 @@ def bench(scenario, stop, repeat, filters, as_json):
     from . import scenarios
 
     model = scenarios.load_scenario(scenario)
+    if against_libcosim:
+        from .libcosim_run import bench_against_libcosim
+
+        scenarios.ensure_fmus(model, log=lambda m: click.echo(m, err=True))
+        out = bench_against_libcosim(scenario, stop, repeat)
+        click.echo(json.dumps(out, indent=2) if as_json else
+                   f"{model.name}, {stop:g} s, fastest of {out['repeat']} alternating runs: ours "
+                   f"(jacobi) {out['ours_s']:.2f} s, libcosim recording every output "
+                   f"{out['libcosim_recorded_s']:.2f} s (ratio {out['ratio_recorded']:.2f}), "
+                   f"libcosim alone {out['libcosim_unrecorded_s']:.2f} s (ratio "
+                   f"{out['ratio_unrecorded']:.2f})")
+        return
     if filters is not None:
         names = [f.strip() for f in filters.split(",") if f.strip()]
         out = scenarios.bench_filters(model, names, stop_time=stop, repeat=repeat,
@@ -314,6 +334,36 @@ def _print_filter_bench(out):
                    f"{num(r['paper_ratio'], '12.2f')} {r['wall_s']:9.2f}")
     click.echo(f"  one cycle = one do_step of the filter FMU ({first['cycle_s']:g} s); ratios to "
                f"{out['baseline']}, the first filter")
+
+
+def _write_system(scenario, out, module_name):
+    """Build the model's stale FMUs, then write it with ``orchestrator.<module_name>``."""
+    import importlib
+
+    from . import scenarios
+
+    scenarios.ensure_fmus(scenarios.load_scenario(scenario), log=lambda m: click.echo(m, err=True))
+    writer = importlib.import_module(f".{module_name}", __package__)
+    click.echo(f"wrote {getattr(writer, module_name)(scenario, out)}")
+
+
+def _system_command(name, what, doc):
+    """``navfmu <name> SCENARIO --out FILE``: write the model as ``what``."""
+    def command(scenario, out):
+        _write_system(scenario, out, name)
+
+    command.__doc__ = doc
+    command = click.option("--out", required=True, type=click.Path(dir_okay=False),
+                           help=f"The {what} to write.")(command)
+    return cli.command(name=name)(click.argument("scenario", type=click.Path())(command))
+
+
+package = _system_command("package", "SSP archive (.ssp)",
+                          "Write SCENARIO as one self-contained SSP archive (FMUs under "
+                          "resources/).")
+export = _system_command("export", "FMU (.fmu)",
+                         "Write SCENARIO as one co-simulation FMU (fmpy's container, Jacobi at "
+                         "the base step).")
 
 
 def main(argv=None):

@@ -1,4 +1,4 @@
-"""The co-simulation master: fixed base step, integer decimation, Gauss-Seidel ordering.
+"""The co-simulation master: fixed base step, integer decimation, Gauss-Seidel or Jacobi exchange.
 
 Semantics
 ---------
@@ -18,7 +18,7 @@ These rules are exact; the tests check them with numbers.
    (zero-order hold).  If ``N`` is not a multiple of ``n_i``, the last ``N % n_i`` base steps
    are not stepped by that component and its outputs hold to the end.
 
-3. **Order.**  Within a macro step the due components are stepped one after the other in a
+3. **Order (Gauss-Seidel, the default).**  Within a macro step the due components are stepped one after the other in a
    fixed order: a topological order of the component graph (an edge for every connection,
    source component -> destination component), ties broken by declaration order in the SSD
    (among the components whose sources are all placed, the earliest-declared goes next).
@@ -27,6 +27,30 @@ These rules are exact; the tests check them with numbers.
    in the order sees that source's output at ``t_{k+1}`` (if the source was due in this macro
    step; otherwise its held value); this is Gauss-Seidel.  A decimated component, when due,
    sees its inputs' values at the end of its own step, ``t_{k+1}``.
+
+3J. **Jacobi** (``algorithm="jacobi"``, ``navfmu run --algorithm jacobi``): libcosim's
+   fixed-step algorithm (``src/cosim/algorithm/fixed_step_algorithm.cpp``), exactly.  With
+   the macro-step counter ``c`` (``c = k`` during macro step ``k``):
+
+   * component ``i`` is due in macro step ``k`` when ``k % n_i == 0`` and steps over
+     ``[t_k, t_k + n_i*h]`` (the same windows as rule 2, started at their beginning); a
+     window that would end after the stop is not started (libcosim starts it; no recorded
+     value differs);
+   * all due components step from the same instant, in declaration order, each on the
+     input values *transferred* to it so far (order does not matter);
+   * after the steps, ``c = k + 1``; every component whose window ends (``c % n_i == 0``)
+     has its outputs read: they appear in the recording and to connections only now, at
+     the end of its window, while the values it computed were final at its start;
+   * then every connection ``s.out -> d.in`` with ``c % lcm(n_s, n_d) == 0`` is
+     transferred (``d.in`` := ``s.out``'s latest read value); ``d`` receives it at its next
+     step.  So a decimated component's inputs are its sources' outputs at the *start* of
+     its window, and a component reading a decimated one sees that one's window ``m``
+     output from the end of window ``m``, one window after its inputs were taken (in
+     ``aircraft_500s``: the fix taken from the truth at t = 1 s reaches the filter at
+     t = 2 s).  Between transfers an input holds.
+
+   The tests check this against libcosim itself (bit for bit on every model) and with toy
+   components by hand.  There is no algebraic-loop rule: every connection is one step late.
 
 4. **Algebraic loops.**  If the graph has a cycle, no component of it can go first.  When no
    component is ready, the earliest-declared component that lies on a cycle is chosen; its
@@ -46,6 +70,13 @@ These rules are exact; the tests check them with numbers.
    outputs at ``start`` (row 0 of the recording) and the values the first macro step uses.
    Unconnected inputs keep their start values.
 
+5J. **Initialization under Jacobi** (libcosim's ``initialize``): parameters set and
+   initialization mode entered as in rule 5, outputs read; then as many iterations as there
+   are components of: set the transferred inputs (none in the first), read the outputs,
+   transfer every connection; then set the transferred inputs, exit initialization mode,
+   read the outputs, transfer every connection.  (libcosim sets the parameters once more in
+   initialization mode, with the same values.)
+
 6. **Recording.**  Every output of every component (or the selection given by ``record``:
    component names and/or ``"Component.variable"``) is recorded in preallocated arrays,
    Real/Integer/Boolean as float; row 0 holds the initial outputs, row ``j`` the outputs after
@@ -57,7 +88,12 @@ These rules are exact; the tests check them with numbers.
    ``Results.step_time_s[c]`` is the mean ``do_step`` time per call;
    ``Results.exchange_step_time_s[c]`` the mean of the whole sequence;
    ``metadata["master_overhead_s_per_step"]`` the loop's wall time not spent in those
-   sequences, per macro step (index gathering, recording, bookkeeping).
+   sequences, per macro step (index gathering, recording, bookkeeping).  Under Jacobi a
+   decimated component's outputs are read at the end of its window; that read is added to
+   the sequence of its step.
+
+The exchange itself (both algorithms, sharing one input-copying path) is
+:mod:`orchestrator.exchange`.
 
 8. **Swaps and wiring checks.**  Before anything runs, every connected variable must exist
    in its component's FMU/Python component with the right causality (output at the start,
@@ -79,69 +115,20 @@ import time as _time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Tuple
 
 import numpy as np
 
 from .backends import NUMERIC_TYPES, DirectInstance, FmuInstance, Instance, VarInfo
 from .errors import NavfmuError, WiringError
+from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from .results import Results
+from .fmu_path import searched_places
 from .ssp import ComponentSpec, Connection, SystemModel
 
 #: relative tolerance for "the run length / a step hint is an integer multiple of h"
 MULTIPLE_TOLERANCE = 1e-9
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
-
-
-# ----------------------------------------------------------------------------------------
-# Ordering
-# ----------------------------------------------------------------------------------------
-def _reachable(n: int, edges: Iterable[Tuple[int, int]]) -> List[set]:
-    succ: List[set] = [set() for _ in range(n)]
-    for a, b in edges:
-        succ[a].add(b)
-    reach = []
-    for s in range(n):
-        seen, stack = set(), [s]
-        while stack:
-            for nxt in succ[stack.pop()]:
-                if nxt not in seen:
-                    seen.add(nxt)
-                    stack.append(nxt)
-        reach.append(seen)
-    return reach
-
-
-def step_order(n_components: int, connections: Sequence[Tuple[int, int, Any]]
-               ) -> Tuple[List[int], List[Any]]:
-    """Order components 0..n-1 (declaration order) by the rules 3 and 4 of the module docstring.
-
-    ``connections`` are ``(source, destination, key)``; returns the order and the keys of the
-    delayed connections (in the order given).
-    """
-    delayed = {id(c): c for c in connections if c[0] == c[1]}
-    active = [c for c in connections if c[0] != c[1]]
-    remaining = list(range(n_components))
-    order: List[int] = []
-    while remaining:
-        rem = set(remaining)
-        blocked = {b for a, b, _ in active if a in rem and b in rem}
-        ready = [i for i in remaining if i not in blocked]
-        if ready:
-            order.append(ready[0])
-            remaining.remove(ready[0])
-            continue
-        # no component is ready: break the cycle at its earliest-declared component
-        sub = [(a, b) for a, b, _ in active if a in rem and b in rem]
-        reach = _reachable(n_components, sub)
-        on_cycle = [i for i in remaining if i in reach[i]]
-        victim = on_cycle[0]
-        same_scc = {j for j in remaining if j in reach[victim] and victim in reach[j]}
-        for c in list(active):
-            if c[1] == victim and c[0] in same_scc:
-                delayed[id(c)] = c
-                active.remove(c)
-    return order, [c[2] for c in connections if id(c) in delayed]
 
 
 # ----------------------------------------------------------------------------------------
@@ -170,7 +157,9 @@ def _describe_fmu(spec: ComponentSpec) -> _Described:
 
     path = spec.source
     if not path.is_file():
-        raise NavfmuError(f"component '{spec.name}': FMU file not found: {path}")
+        where = f"source=\"{spec.source_text}\" " if spec.source_text else ""
+        raise NavfmuError(f"component '{spec.name}': FMU file not found: {path} ({where}searched "
+                          f"{searched_places()})")
     try:
         md = read_model_description(str(path), validate=False)
     except Exception as exc:  # fmpy raises plain Exception for unreadable files
@@ -210,9 +199,13 @@ class Simulation:
                  registry: Optional[Mapping[str, type]] = None,
                  record: Optional[Iterable[str]] = None,
                  parameters: Optional[Mapping[str, Any]] = None,
-                 base_step: Optional[float] = None, record_every: int = 1):
+                 base_step: Optional[float] = None, record_every: int = 1,
+                 algorithm: str = "gauss-seidel"):
         if backend not in ("fmu", "direct"):
             raise NavfmuError(f"unknown backend '{backend}' (use 'fmu' or 'direct')")
+        if algorithm not in ALGORITHMS:
+            raise NavfmuError(f"unknown algorithm '{algorithm}' (use {' or '.join(ALGORITHMS)})")
+        self.algorithm = algorithm
         if backend == "direct" and registry is None:
             raise NavfmuError("the 'direct' backend needs a registry of Python components "
                               "(model name -> component class)")
@@ -238,7 +231,8 @@ class Simulation:
                  for c in model.connections]
         order, delayed = step_order(len(self.names), edges)
         self.order: List[str] = [self.names[i] for i in order]
-        self.delayed_connections: List[Connection] = delayed
+        # under Jacobi every connection is one step late: no loop needs breaking
+        self.delayed_connections: List[Connection] = delayed if algorithm != "jacobi" else []
 
     # -- checks -------------------------------------------------------------------------
     def _decimation(self, spec: ComponentSpec) -> int:
@@ -351,6 +345,38 @@ class Simulation:
                               f"base steps of {self.base_step} s")
         return n
 
+    def _layout(self):
+        """Signal vectors (per type, every component's read outputs, one slice each), the
+        position of every (component, output) in them, and every component's input sources."""
+        comps = self.components
+        source_of: Dict[str, Dict[str, Tuple[str, str]]] = {n: {} for n in self.names}
+        needed: Dict[str, set] = {n: set(self.recorded[n]) for n in self.names}
+        for conn in self.model.connections:
+            source_of[conn.end_component][conn.end_connector] = (conn.start_component,
+                                                                 conn.start_connector)
+            needed[conn.start_component].add(conn.start_connector)
+        out_names = {d.spec.name: [v.name for v in d.variables.values()
+                                   if v.name in needed[d.spec.name]] for d in comps}
+        position: Dict[Tuple[str, str], Tuple[str, int]] = {}
+        slices: Dict[str, Dict[str, Tuple[int, int]]] = {n: {} for n in self.names}
+        sizes = {t: 0 for t in NUMERIC_TYPES}
+        for d in comps:
+            n = d.spec.name
+            for t in NUMERIC_TYPES:
+                names = [v for v in out_names[n] if d.variables[v].type == t]
+                slices[n][t] = (sizes[t], sizes[t] + len(names))
+                for j, v in enumerate(names):
+                    position[(n, v)] = (t, sizes[t] + j)
+                sizes[t] += len(names)
+        vectors = {t: np.zeros(sizes[t], dtype=_DTYPES[t]) for t in NUMERIC_TYPES}
+        return vectors, position, slices, out_names, source_of
+
+    def _prepare(self, instances, vectors, slices, out_names, source_of) -> None:
+        for d, inst in zip(self.components, instances):
+            n = d.spec.name
+            views = [vectors[t][slice(*slices[n][t])] for t in NUMERIC_TYPES]
+            inst.prepare(list(source_of[n]), out_names[n], *views)
+
     def run(self, stop_time: Optional[float] = None,
             progress: Optional[Callable[[int, int], None]] = None) -> Results:
         """Run from the model's start time to ``stop_time`` (default: the model's).
@@ -359,150 +385,53 @@ class Simulation:
         """
         start = self.model.start_time
         stop = float(stop_time) if stop_time is not None else self.model.stop_time
-        h = self.base_step
         n_steps = self._n_steps(start, stop)
         record_every = self.record_every
         n_rows = n_steps // record_every + 1
-
-        comps = self.components
-        idx = self._index
-        # inputs of every component (connection order) and the outputs it must provide
-        inputs: Dict[str, List[Connection]] = {n: [] for n in self.names}
-        needed: Dict[str, set] = {n: set(self.recorded[n]) for n in self.names}
-        for conn in self.model.connections:
-            inputs[conn.end_component].append(conn)
-            needed[conn.start_component].add(conn.start_connector)
-        out_names = {d.spec.name: [v.name for v in d.variables.values()
-                                   if v.name in needed[d.spec.name]] for d in comps}
-
-        # global signal vectors: per type, every component's read outputs, one slice each
-        offsets: Dict[str, Dict[str, int]] = {t: {} for t in NUMERIC_TYPES}
-        by_type: Dict[str, Dict[str, List[str]]] = {t: {} for t in NUMERIC_TYPES}
-        position: Dict[Tuple[str, str], Tuple[str, int]] = {}
-        sizes = {t: 0 for t in NUMERIC_TYPES}
-        for d in comps:
-            n = d.spec.name
-            for t in NUMERIC_TYPES:
-                names = [v for v in out_names[n] if d.variables[v].type == t]
-                by_type[t][n] = names
-                offsets[t][n] = sizes[t]
-                for j, v in enumerate(names):
-                    position[(n, v)] = (t, sizes[t] + j)
-                sizes[t] += len(names)
-        vectors = {t: np.zeros(sizes[t], dtype=_DTYPES[t]) for t in NUMERIC_TYPES}
+        vectors, position, slices, out_names, source_of = self._layout()
         rec_index = {t: np.array([position[(n, v)][1] for n in self.names
                                   for v in self.recorded[n] if position[(n, v)][0] == t],
                                  dtype=np.intp) for t in NUMERIC_TYPES}
         recordings = {t: np.zeros((n_rows, len(rec_index[t])), dtype=_DTYPES[t])
                       for t in NUMERIC_TYPES}
-        # recording everything in vector order: one row copy per type and step
-        rec_all = {t: np.array_equal(rec_index[t], np.arange(sizes[t])) for t in NUMERIC_TYPES}
 
+        # recording everything in vector order: one row copy per type
+        whole = [t for t in NUMERIC_TYPES if np.array_equal(rec_index[t], np.arange(len(vectors[t])))]
+        picked = [t for t in NUMERIC_TYPES if t not in whole and len(rec_index[t])]
+
+        def record(row):
+            for t in whole:
+                recordings[t][row] = vectors[t]
+            for t in picked:
+                vectors[t].take(rec_index[t], out=recordings[t][row], mode="clip")
+
+        timing = Timing(len(self.components))
         instances: List[Instance] = []
         try:
-            for d in comps:
+            for d in self.components:
                 instances.append(d.make())
-            plan = []
-            for i, (d, inst) in enumerate(zip(comps, instances)):
-                n = d.spec.name
-                views = {t: vectors[t][offsets[t][n]:offsets[t][n] + len(by_type[t][n])]
-                         for t in NUMERIC_TYPES}
-                in_names = [c.end_connector for c in inputs[n]]
-                source_of = {c.end_connector: (c.start_component, c.start_connector)
-                             for c in inputs[n]}
-                inst.prepare(in_names, out_names[n], views["Real"], views["Integer"],
-                             views["Boolean"])
-                src = []
-                for t in NUMERIC_TYPES:
-                    names = inst.input_names[t]
-                    src.append(np.array([position[source_of[v]][1] for v in names], dtype=np.intp)
-                               if names else None)
-                plan.append((i, self.decimation[n], src[0], src[1], src[2],
-                             inst.real_in, inst.int_in, inst.bool_in,
-                             inst.set_inputs, inst.do_step, inst.get_outputs))
-            ordered_plan = [plan[idx[n]] for n in self.order]
-            # bound ndarray.take with mode="clip" (indices are valid by construction) costs
-            # a fraction of np.take(..., out=...) per call
-            take_real, take_int, take_bool = (vectors[t].take for t in NUMERIC_TYPES)
-
-            def exchange(entry):
-                _, _, rs, is_, bs, rin, iin, bin_, set_in, _, get_out = entry
-                if rs is not None:
-                    take_real(rs, out=rin, mode="clip")
-                if is_ is not None:
-                    take_int(is_, out=iin, mode="clip")
-                if bs is not None:
-                    take_bool(bs, out=bin_, mode="clip")
-                set_in()
-                get_out()
-
-            # -- initialization (rule 5) ------------------------------------------------
-            for d, inst in zip(comps, instances):
+            self._prepare(instances, vectors, slices, out_names, source_of)
+            slots = slots_for(self.names, self.decimation, instances, position, source_of)
+            order = [self._index[n] for n in self.order]
+            exchange = exchange_for(self.algorithm, slots, order, vectors, start,
+                                    self.base_step, n_steps, timing)
+            for d, inst in zip(self.components, instances):
                 inst.set_parameters(self.parameter_values[d.spec.name])
-            for inst in instances:
-                inst.enter_initialization(start, stop)
-            for entry in ordered_plan:
-                exchange(entry)
-            for n in self.order:
-                instances[idx[n]].exit_initialization()
-            for n in self.order:
-                instances[idx[n]].get_outputs()
-
-            def record(row):
-                for t in NUMERIC_TYPES:
-                    if rec_all[t]:
-                        recordings[t][row] = vectors[t]
-                    elif len(rec_index[t]):
-                        vectors[t].take(rec_index[t], out=recordings[t][row], mode="clip")
-
+            exchange.initialize(start, stop)
             record(0)
-
-            # -- macro steps (rules 1-3) ------------------------------------------------
-            n_comp = len(comps)
-            do_ns = [0] * n_comp
-            all_ns = [0] * n_comp
-            calls = [0] * n_comp
+            step = exchange.step
             progress_every = max(1, n_steps // 100)
             next_progress = progress_every if progress is not None else n_steps + 1
-            real_rec, int_rec, bool_rec = (recordings[t] for t in NUMERIC_TYPES)
-            real_vec, int_vec, bool_vec = (vectors[t] for t in NUMERIC_TYPES)
-            real_all, int_all, bool_all = (rec_all[t] for t in NUMERIC_TYPES)
-            simple_record = real_all and int_all and bool_all
-            clock = _time.perf_counter_ns
-            loop_start = clock()
+            loop_start = _time.perf_counter_ns()
             for k in range(n_steps):
+                step(k)
                 kp1 = k + 1
-                for (i, n, rs, is_, bs, rin, iin, bin_, set_in, do_step, get_out) in ordered_plan:
-                    if n != 1 and kp1 % n:
-                        continue
-                    t0 = clock()
-                    if rs is not None:
-                        take_real(rs, out=rin, mode="clip")
-                    if is_ is not None:
-                        take_int(is_, out=iin, mode="clip")
-                    if bs is not None:
-                        take_bool(bs, out=bin_, mode="clip")
-                    set_in()
-                    t1 = clock()
-                    do_step(start + (kp1 - n) * h, n * h)
-                    t2 = clock()
-                    get_out()
-                    t3 = clock()
-                    do_ns[i] += t2 - t1
-                    all_ns[i] += t3 - t0
-                    calls[i] += 1
                 if kp1 % record_every == 0:
-                    row = kp1 // record_every
-                    if simple_record:
-                        real_rec[row] = real_vec
-                        int_rec[row] = int_vec
-                        bool_rec[row] = bool_vec
-                    else:
-                        record(row)
+                    record(kp1 // record_every)
                 if kp1 == next_progress:
                     progress(kp1, n_steps)
                     next_progress = kp1 + progress_every
-            loop_ns = clock() - loop_start
+            loop_ns = _time.perf_counter_ns() - loop_start
             if progress is not None and n_steps % progress_every:
                 progress(n_steps, n_steps)
         finally:
@@ -510,11 +439,11 @@ class Simulation:
                 inst.terminate()
 
         return self._results(start, stop, n_steps, n_rows, recordings, rec_index, position,
-                             do_ns, all_ns, calls, loop_ns)
+                             timing, loop_ns)
 
     # -- results ------------------------------------------------------------------------
     def _results(self, start, stop, n_steps, n_rows, recordings, rec_index, position,
-                 do_ns, all_ns, calls, loop_ns) -> Results:
+                 timing, loop_ns) -> Results:
         h = self.base_step
         time_column = start + np.arange(n_rows, dtype=np.float64) * (self.record_every * h)
         # column of each recorded (component, variable) inside its type's recording
@@ -530,6 +459,7 @@ class Simulation:
             data[n] = arr
             columns[n] = list(names)
             units[n] = [d.variables[v].unit or d.spec.units.get(v, "") for v in names]
+        do_ns, all_ns, calls = timing.do_ns, timing.all_ns, timing.calls
         step_time = {}
         exchange_time = {}
         for i, n in enumerate(self.names):
@@ -540,6 +470,7 @@ class Simulation:
             "model": self.model.name,
             "ssd": str(self.model.path),
             "backend": self.backend,
+            "algorithm": self.algorithm,
             "base_step": h,
             "start_time": start,
             "stop_time": stop,

@@ -19,7 +19,8 @@ from . import plots
 from .errors import NavfmuError
 from .master import Simulation
 from .results import Results, atomic_write
-from .ssp import SystemModel, load_ssd
+from .ssp import SystemModel
+from .ssp_archive import load_model
 
 #: name of the component a ``--filter`` swap replaces
 FILTER_COMPONENT = "filter"
@@ -77,7 +78,7 @@ def swap_filter(model: SystemModel, filter: str) -> SystemModel:
 def load_scenario(path) -> SystemModel:
     from .replay import resolve_log_parameters
 
-    return resolve_log_parameters(load_ssd(Path(path)))
+    return resolve_log_parameters(load_model(Path(path)))
 
 
 def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
@@ -110,7 +111,8 @@ class Run:
 
 def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend: str = "fmu",
                       stop_time: Optional[float] = None, parameters=None, window=None,
-                      progress=None, build=True, log=print, replay=None) -> Run:
+                      progress=None, build=True, log=print, replay=None,
+                      algorithm="gauss-seidel") -> Run:
     """Run one scenario (optionally with the filter component swapped, and with its sensor
     components replaced by a replay of the sensor log in folder ``replay``, see
     :func:`orchestrator.replay.replay_model`) and compute metrics (not without a truth)."""
@@ -130,7 +132,7 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
-                     parameters=parameters, record=record)
+                     parameters=parameters, record=record, algorithm=algorithm)
     results = sim.run(stop_time=stop_time, progress=progress)
     run = Run(label, model, results)
     if not has_truth(results):

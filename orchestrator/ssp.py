@@ -5,8 +5,10 @@ files next to it).  The subset:
 
 * literal namespace prefixes ``ssd:``, ``ssc:``, ``ssv:`` (and ``osp:`` for the OSP
   annotations), because libcosim matches tag names literally;
-* one flat ``ssd:System`` with ``ssd:Elements/ssd:Component`` (``name``, ``source`` relative
-  to the .ssd file, optional ``type``), each with typed ``ssd:Connectors/ssd:Connector``
+* one flat ``ssd:System`` with ``ssd:Elements/ssd:Component`` (``name``, ``source``, ``type``
+  ``application/x-fmu-sharedlibrary``: SSP 1.0's default when absent, but OMSimulator skips a
+  component without it, so our models write it and any other value is an error), each with
+  typed ``ssd:Connectors/ssd:Connector``
   (``name``, ``kind`` input/output/parameter/calculatedParameter, one child ``ssc:Real``
   (optional ``unit``) / ``ssc:Integer`` / ``ssc:Boolean`` / ``ssc:String``);
 * ``ssd:ParameterBindings/ssd:ParameterBinding`` inline
@@ -19,6 +21,10 @@ files next to it).  The subset:
   osp:FixedStepAlgorithm@baseStepSize``; a component's own step as
   ``ssd:Annotations/ssc:Annotation[@type="com.opensimulationplatform"]/osp:StepSizeHint@value``
   inside the ``ssd:Component``.
+
+A component's ``source`` is resolved by :func:`orchestrator.fmu_path.resolve_source`
+(relative to the .ssd first, then a search path); :mod:`orchestrator.ssp_archive` reads a
+model packed as one ``.ssp`` archive.
 
 Anything outside the subset, or inconsistent, raises :class:`~orchestrator.errors.SspError`
 naming the file and the element/attribute.  Files are read as data only: with defusedxml,
@@ -38,6 +44,7 @@ import defusedxml.ElementTree as DefusedET
 from defusedxml import DefusedXmlException
 
 from .errors import SspError
+from .fmu_path import resolve_source
 
 SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -49,6 +56,8 @@ OSP_ANNOTATION_TYPE = "com.opensimulationplatform"
 REQUIRED_PREFIX = {SSD_NS: "ssd", SSC_NS: "ssc", SSV_NS: "ssv", OSP_NS: "osp"}
 PREFIX_OF = {uri: prefix for uri, prefix in REQUIRED_PREFIX.items()}
 
+#: the one component type of the subset (SSP 1.0's default)
+FMU_TYPE = "application/x-fmu-sharedlibrary"
 TYPES = ("Real", "Integer", "Boolean", "String")
 KINDS = ("input", "output", "parameter", "calculatedParameter")
 #: relative tolerance for "step hint is an integer multiple of the base step"
@@ -79,7 +88,9 @@ class ComponentSpec:
     parameters: Dict[str, Tuple[str, object]] = field(default_factory=dict)  # name -> (type, value)
     step_hint: Optional[float] = None
     units: Dict[str, str] = field(default_factory=dict)  # connector name -> unit (Real only)
-    type: str = ""
+    type: str = FMU_TYPE
+    #: the ``source`` attribute as written in the .ssd
+    source_text: str = ""
 
 
 @dataclass(frozen=True)
@@ -109,6 +120,8 @@ class SystemModel:
     connections: List[Connection]
     #: component name -> source it had before :meth:`replace_source` (swaps)
     replaced_sources: Dict[str, Path] = field(default_factory=dict)
+    #: the ``.ssp`` archive the model was read from (None for a folder)
+    archive: Optional[Path] = None
 
     def component(self, name: str) -> ComponentSpec:
         for c in self.components:
@@ -310,8 +323,12 @@ def _read_component(path: Path, elem: ET.Element) -> ComponentSpec:
     name = _attr(path, elem, "name", "<ssd:Component>")
     cwhere = f"<ssd:Component name=\"{name}\">"
     source = _attr(path, elem, "source", cwhere)
-    comp = ComponentSpec(name=name, source=(path.parent / source).resolve(),
-                         type=elem.get("type", ""))
+    ctype = elem.get("type", FMU_TYPE)
+    if ctype != FMU_TYPE:
+        raise SspError(f"{path}: {cwhere} type=\"{ctype}\" is not supported (only FMUs: "
+                       f"type=\"{FMU_TYPE}\")")
+    comp = ComponentSpec(name=name, source=resolve_source(path.parent, source), type=ctype,
+                         source_text=source)
     connectors = elem.find(_tag(SSD_NS, "Connectors"))
     if connectors is not None:
         for con in connectors.findall(_tag(SSD_NS, "Connector")):
@@ -471,5 +488,5 @@ def load_ssd(path) -> SystemModel:
                        stop_time=stop, components=components, connections=connections)
 
 
-__all__ = ["SystemModel", "ComponentSpec", "Connection", "load_ssd", "SSD_NS", "SSC_NS",
-           "SSV_NS", "OSP_NS"]
+__all__ = ["SystemModel", "ComponentSpec", "Connection", "load_ssd", "FMU_TYPE", "SSD_NS",
+           "SSC_NS", "SSV_NS", "OSP_NS"]

@@ -62,7 +62,7 @@ def test_registry_and_shared_contract():
         assert len(names) == len(set(names))
     extra = {p.name: p for p in components.Iakf.outputs[len(signals.FILTER_OUTPUTS):]}
     assert extra["r_est_pn"].unit == "m" and extra["r_est_vd"].unit == "m/s"
-    assert extra["compression"].unit == "" and extra["compression"].start == 1.0
+    assert extra["compression"].unit == "1" and extra["compression"].start == 1.0
     newton = {p.name: p for p in components.NewtonRobustKf.outputs}
     assert newton["n_rejected"].type == "Integer" and newton["chi2_max"].type == "Real"
 

@@ -60,8 +60,9 @@ SSD_EDITS = {
     "connection_to_unknown_component": ('endElement="filter" endConnector="gnss_epoch"',
                                         'endElement="filtre" endConnector="gnss_epoch"',
                                         ["filtre"]),
-    "missing_fmu_file": (f"{fmu_build.DIST}/Kf.fmu", "/nonexistent/Kf.fmu",
-                         ["/nonexistent/Kf.fmu"]),
+    # a source found nowhere on the search path (Kf.fmu would be found in fmus/dist by name)
+    "missing_fmu_file": (f"{fmu_build.DIST}/Kf.fmu", "/nonexistent/NoSuchFilter.fmu",
+                         ["/nonexistent/NoSuchFilter.fmu", "NAVFMU_FMU_PATH"]),
     "zero_base_step": ('baseStepSize="0.01"', 'baseStepSize="0"', ["baseStepSize"]),
     "negative_base_step": ('baseStepSize="0.01"', 'baseStepSize="-0.01"', ["baseStepSize"]),
     "step_hint_not_a_multiple_of_the_base_step": ('<osp:StepSizeHint value="1.0"/>',

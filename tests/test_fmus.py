@@ -44,9 +44,8 @@ def test_model_description_units_and_attributes(dist, name):
         child = sv[0]
         if child.tag == "Real":
             n_real += 1
-            if sv.get("causality") in ("input", "output"):
-                # every signal on an interface carries an SI unit unless dimensionless
-                assert child.get("unit") in units | {None}
+            # every Real carries a declared unit: SI, a datasheet unit, or "1" (dimensionless)
+            assert child.get("unit") in units, sv.get("name")
         if child.tag in ("Integer", "Boolean") and sv.get("causality") != "parameter":
             assert sv.get("variability") == "discrete"
     assert n_real > 0

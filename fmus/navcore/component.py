@@ -84,7 +84,9 @@ class Port:
     """One declared variable of a component.
 
     ``type`` is one of ``Real``, ``Integer``, ``Boolean``, ``String``; ``unit`` is the SI unit
-    symbol written to the model description ("" for dimensionless or non-Real variables).
+    symbol written to the model description: ``"1"`` for a dimensionless Real (NIS, scale
+    factors, probabilities; :func:`real` writes it when no unit is given), ``""`` for
+    Integer/Boolean/String variables, which carry no unit in FMI 2.0.
     """
 
     name: str
@@ -103,8 +105,13 @@ class Port:
         return str(self.start)
 
 
+#: the unit of a dimensionless Real
+DIMENSIONLESS = "1"
+
+
 def real(name, unit="", description="", start=0.0):
-    return Port(name, "Real", unit, description, start)
+    """A Real port; without ``unit`` it is dimensionless (:data:`DIMENSIONLESS`)."""
+    return Port(name, "Real", unit or DIMENSIONLESS, description, start)
 
 
 def integer(name, description="", start=0):

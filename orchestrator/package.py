@@ -1,0 +1,100 @@
+"""``navfmu package``: a model folder as one self-contained SSP archive (``.ssp``).
+
+The archive is a zip with, at its root, ``SystemStructure.ssd`` (the model's, comments kept),
+the ``.ssv`` files its parameter bindings name, ``paper.json`` if the folder has one, and
+every component's FMU under ``resources/<file name>``; each Component's ``source`` is
+rewritten to ``resources/<file name>`` (two different FMUs with the same file name get
+``_2``, ``_3``... suffixes), and every Component carries ``type``.  libcosim and our
+:func:`orchestrator.ssp.load_model` read it unchanged.  The archive is written to a
+temporary name and renamed.
+"""
+from __future__ import annotations
+
+import re
+import zipfile
+from pathlib import Path
+from typing import Dict
+
+from .errors import NavfmuError
+from .results import atomic_write
+from .ssp import FMU_TYPE
+from .ssp_archive import load_model
+
+RESOURCES = "resources"
+_EXTRA_FILES = ("paper.json",)
+
+
+def _resource_names(model) -> Dict[str, str]:
+    """component name -> archive path of its FMU (one entry per distinct FMU file)."""
+    by_file: Dict[Path, str] = {}
+    taken = set()
+    names = {}
+    for c in model.components:
+        src = Path(c.source).resolve()
+        if not src.is_file():
+            raise NavfmuError(f"component '{c.name}': FMU file not found: {src} (navfmu build?)")
+        if src not in by_file:
+            stem, n = src.stem, 1
+            candidate = f"{RESOURCES}/{src.name}"
+            while candidate in taken:
+                n += 1
+                candidate = f"{RESOURCES}/{stem}_{n}{src.suffix}"
+            taken.add(candidate)
+            by_file[src] = candidate
+        names[c.name] = by_file[src]
+    return names
+
+
+def _rewrite_ssd(text: str, sources: Dict[str, str]) -> str:
+    """Set ``source`` (and ``type``) of every ``<ssd:Component>`` start tag."""
+    def fix(match):
+        tag = match.group(0)
+        name = re.search(r'\bname="([^"]*)"', tag).group(1)
+        tag = re.sub(r'\bsource="[^"]*"', f'source="{sources[name]}"', tag)
+        if not re.search(r'\btype="', tag):
+            tag = tag.replace("<ssd:Component", f'<ssd:Component type="{FMU_TYPE}"', 1)
+        return tag
+
+    return re.sub(r"<ssd:Component\b[^>]*>", fix, text)
+
+
+def _bound_files(ssd: Path):
+    """The files the .ssd's ParameterBindings name (relative to the .ssd, inside its folder)."""
+    text = ssd.read_text(encoding="utf-8")
+    for source in re.findall(r'<ssd:ParameterBinding\b[^>]*\bsource="([^"]*)"', text):
+        path = (ssd.parent / source).resolve()
+        if ssd.parent.resolve() not in path.parents:
+            raise NavfmuError(f"{ssd}: parameter file '{source}' lies outside the model folder; "
+                              f"move it next to the .ssd to package the model")
+        yield source, path
+
+
+def package(model_dir, out) -> Path:
+    """Write ``model_dir`` (a model folder or its .ssd) as the archive ``out``; returns it."""
+    model = load_model(model_dir)
+    if model.archive is not None:
+        raise NavfmuError(f"{model_dir} is already an SSP archive")
+    out = Path(out)
+    if out.suffix.lower() != ".ssp":
+        raise NavfmuError(f"--out {out}: an SSP archive needs the extension .ssp")
+    sources = _resource_names(model)
+    ssd = model.path
+    ssd_text = _rewrite_ssd(ssd.read_text(encoding="utf-8"), sources)
+    files = list(_bound_files(ssd))
+    files += [(n, ssd.parent / n) for n in _EXTRA_FILES if (ssd.parent / n).is_file()]
+    fmus = {arc: Path(c.source).resolve() for c in model.components
+            for arc in [sources[c.name]]}
+
+    def write(f):
+        with zipfile.ZipFile(f, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+            zf.writestr("SystemStructure.ssd", ssd_text)
+            for arcname, path in files:
+                zf.write(path, arcname)
+            for arcname, path in fmus.items():
+                zf.write(path, arcname)
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return atomic_write(out, write, binary=True)
+
+
+__all__ = ["package"]
