@@ -4,7 +4,10 @@ An ``.ssp`` archive is a zip holding ``SystemStructure.ssd`` at its root (with i
 files and the FMUs its sources name, e.g. under ``resources/``), as ``navfmu package``
 writes it.  It is extracted once per process into a temporary folder that is removed at
 interpreter exit, and loaded from there by :func:`orchestrator.ssp.load_ssd`; the model's
-``archive`` then names the ``.ssp`` file (libcosim is given the archive itself).
+``archive`` then names the ``.ssp`` file (libcosim is given the archive itself).  An archive
+is read as data: at most :data:`MAX_MEMBERS` members and :data:`MAX_ARCHIVE_BYTES`
+uncompressed (checked from the zip directory before anything is written), no member outside
+the folder; the .ssd/.ssv inside are then bounded by :mod:`orchestrator.ssp`.
 """
 from __future__ import annotations
 
@@ -19,7 +22,24 @@ from typing import Dict, Tuple
 from .errors import SspError
 from .ssp import SystemModel, load_ssd
 
+#: bounds of an archive (ours: 4-7 members, 20-40 MB uncompressed)
+MAX_MEMBERS = 1000
+MAX_ARCHIVE_BYTES = 1024 * 1024 * 1024
 _EXTRACTED: Dict[Tuple[str, int, int], Path] = {}
+
+
+def _check_members(archive: Path, zf: zipfile.ZipFile, target: Path) -> None:
+    infos = zf.infolist()
+    if len(infos) > MAX_MEMBERS:
+        raise SspError(f"{archive}: {len(infos)} members, more than the {MAX_MEMBERS} an SSP "
+                       f"archive may hold")
+    total = sum(i.file_size for i in infos)
+    if total > MAX_ARCHIVE_BYTES:
+        raise SspError(f"{archive}: {total} bytes uncompressed, more than the "
+                       f"{MAX_ARCHIVE_BYTES} an SSP archive may hold")
+    for info in infos:
+        if target not in (target / info.filename).resolve().parents:
+            raise SspError(f"{archive}: member '{info.filename}' lies outside the archive")
 
 
 def _extract(archive: Path) -> Path:
@@ -32,9 +52,7 @@ def _extract(archive: Path) -> Path:
     atexit.register(shutil.rmtree, target, True)
     try:
         with zipfile.ZipFile(archive) as zf:
-            for member in zf.namelist():
-                if target not in (target / member).resolve().parents:
-                    raise SspError(f"{archive}: member '{member}' lies outside the archive")
+            _check_members(archive, zf, target)
             zf.extractall(target)
     except zipfile.BadZipFile as exc:
         raise SspError(f"{archive}: not an SSP archive (zip): {exc}") from None

@@ -71,3 +71,22 @@ def test_cli_refuses_a_wrong_extension(built, command, out, tmp_path, capsys):
         main([command, str(MODEL), "--out", str(tmp_path / out)])
     assert exit_.value.code == 2
     assert capsys.readouterr().err.startswith("navfmu: error: --out")
+
+
+def test_archive_beyond_its_bounds_or_escaping_is_refused(tmp_path, monkeypatch):
+    import zipfile
+
+    from orchestrator import ssp_archive
+
+    big = tmp_path / "big.ssp"
+    with zipfile.ZipFile(big, "w") as zf:
+        zf.writestr("SystemStructure.ssd", "x" * 2000)
+    monkeypatch.setattr(ssp_archive, "MAX_ARCHIVE_BYTES", 1000)
+    with pytest.raises(SspError, match="2000 bytes uncompressed, more than the 1000"):
+        load_model(big)
+    escaping = tmp_path / "escaping.ssp"
+    with zipfile.ZipFile(escaping, "w") as zf:
+        zf.writestr("../outside.ssd", "x")
+    with pytest.raises(SspError, match="lies outside the archive"):
+        load_model(escaping)
+    assert not (tmp_path / "outside.ssd").exists()
