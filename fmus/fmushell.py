@@ -86,6 +86,9 @@ def setup(slave, component_class):
     slave._failed = None
     slave._refused_state = None
     slave._vr_names = {}
+    # the FMU's identity hashes its sources: read them now, while the folder pythonfmu loaded
+    # them from exists (a host may delete it once the first instance is freed)
+    _identity(type(slave))
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
     for port in cls.inputs:

@@ -10,14 +10,19 @@ libcosim offers for Real and Integer variables only: libcosim has no call betwee
 initialization and the first step, so **Boolean outputs are NaN in row 0** (listed in
 ``metadata["unobserved_at_start"]``).
 
-Column names, order and units come from each FMU's model description, as in our master.  The
+libcosim runs with the model's folder (for an archive: our extraction of it, the same files)
+as the working directory: an FMU reading a file parameter relative to it (the replay's
+``log``) finds it as our loader does (relative to the .ssd).  Column names, order and units
+come from each FMU's model description, as in our master.  The
 loader's log is set to WARNING (:data:`LOG_LEVEL`), so a clean model prints nothing.
 libcosimpy is an optional dependency (the ``test`` extra); without it,
 :func:`run_libcosim` raises :class:`~orchestrator.errors.NavfmuError` saying so.
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
+import os
 import time as _time
 from typing import Dict, List, Optional
 
@@ -128,7 +133,26 @@ def run_libcosim(source, stop_time: Optional[float] = None) -> Results:
                 first.start_time_series(index[name], v.value_reference,
                                         getattr(CosimVariableType, v.type.upper()))
     wall = _time.perf_counter()
-    for k in range(n_steps):
+    with _working_directory(model.path.parent):
+        _steps(execution, lib, readers, first, table, model, names, outputs, offsets, index)
+    wall = _time.perf_counter() - wall
+    return _results(model, start, stop, n_steps, table, names, outputs, offsets, wall, ssp_path)
+
+
+@contextlib.contextmanager
+def _working_directory(folder):
+    previous = os.getcwd()
+    os.chdir(folder)
+    try:
+        yield
+    finally:
+        os.chdir(previous)
+
+
+def _steps(execution, lib, readers, first, table, model, names, outputs, offsets, index):
+    """Step ``execution`` once per row of ``table`` after the first, reading every output."""
+    start = model.start_time
+    for k in range(table.shape[0] - 1):
         if not execution.step(1):
             raise SimulationError(f"libcosim: step {k} from t = {start + k * model.base_step:.9g} "
                                   f"s failed: {_last_error(lib)}")
@@ -137,8 +161,6 @@ def run_libcosim(source, stop_time: Optional[float] = None) -> Results:
             r.read(row)
         if k == 0:
             _first_row(lib, first, table[0], names, outputs, offsets, index)
-    wall = _time.perf_counter() - wall
-    return _results(model, start, stop, n_steps, table, names, outputs, offsets, wall, ssp_path)
 
 
 def _first_row(lib, observer, row, names, outputs, offsets, index) -> None:
@@ -196,8 +218,9 @@ def _run_unrecorded(source, stop_time: float) -> float:
     h_ns = int(round(model.base_step * NS))
     execution = Execution.from_ssp_file(str(model.archive or model.path.parent), h_ns)
     t0 = _time.perf_counter()
-    if not execution.simulate_until(int(round(stop_time * NS))):
-        raise SimulationError(f"libcosim: the run of {source} failed")
+    with _working_directory(model.path.parent):
+        if not execution.simulate_until(int(round(stop_time * NS))):
+            raise SimulationError(f"libcosim: the run of {source} failed")
     return _time.perf_counter() - t0
 
 

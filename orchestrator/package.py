@@ -1,8 +1,9 @@
 """``navfmu package``: a model folder as one self-contained SSP archive (``.ssp``).
 
-The archive is a zip with, at its root, ``SystemStructure.ssd`` (the model's, comments kept),
-the ``.ssv`` files its parameter bindings name, ``paper.json`` if the folder has one, and
-every component's FMU under ``resources/<file name>``; each Component's ``source`` is
+The archive is a zip with, at its root, ``SystemStructure.ssd`` (the model's, comments kept)
+and every other file of the model folder at its relative path (``.ssv`` parameter files,
+``paper.json``, data such as the replay's sensor ``log/``; hidden files left out), and every
+component's FMU under ``resources/<file name>``; each Component's ``source`` is
 rewritten to ``resources/<file name>`` (two different FMUs with the same file name get
 ``_2``, ``_3``... suffixes), and every Component carries ``type``.  libcosim and our
 :func:`orchestrator.ssp.load_model` read it unchanged.  The archive is written to a
@@ -21,7 +22,6 @@ from .ssp import FMU_TYPE
 from .ssp_archive import load_model
 
 RESOURCES = "resources"
-_EXTRA_FILES = ("paper.json",)
 
 
 def _resource_names(model) -> Dict[str, str]:
@@ -58,15 +58,22 @@ def _rewrite_ssd(text: str, sources: Dict[str, str]) -> str:
     return re.sub(r"<ssd:Component\b[^>]*>", fix, text)
 
 
-def _bound_files(ssd: Path):
-    """The files the .ssd's ParameterBindings name (relative to the .ssd, inside its folder)."""
+def _folder_files(ssd: Path):
+    """(archive name, path) of every file of the model folder but the .ssd; refuses a
+    parameter binding to a file outside the folder (it would not be in the archive)."""
+    folder = ssd.parent.resolve()
     text = ssd.read_text(encoding="utf-8")
     for source in re.findall(r'<ssd:ParameterBinding\b[^>]*\bsource="([^"]*)"', text):
-        path = (ssd.parent / source).resolve()
-        if ssd.parent.resolve() not in path.parents:
+        if folder not in (folder / source).resolve().parents:
             raise NavfmuError(f"{ssd}: parameter file '{source}' lies outside the model folder; "
                               f"move it next to the .ssd to package the model")
-        yield source, path
+    for path in sorted(folder.rglob("*")):
+        rel = path.relative_to(folder)
+        if path.is_file() and path != ssd and not any(p.startswith(".") for p in rel.parts):
+            if rel.parts[0] == RESOURCES:
+                raise NavfmuError(f"{folder}: the folder has a '{RESOURCES}' entry, where the "
+                                  f"archive puts the FMUs")
+            yield rel.as_posix(), path
 
 
 def package(model_dir, out) -> Path:
@@ -80,8 +87,7 @@ def package(model_dir, out) -> Path:
     sources = _resource_names(model)
     ssd = model.path
     ssd_text = _rewrite_ssd(ssd.read_text(encoding="utf-8"), sources)
-    files = list(_bound_files(ssd))
-    files += [(n, ssd.parent / n) for n in _EXTRA_FILES if (ssd.parent / n).is_file()]
+    files = list(_folder_files(ssd))
     fmus = {arc: Path(c.source).resolve() for c in model.components
             for arc in [sources[c.name]]}
 

@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 from orchestrator import build as fmu_build
+from orchestrator import scenarios
 from orchestrator.master import Simulation
-from orchestrator.ssp_archive import load_model
 
 pytest.importorskip("libcosimpy", reason="libcosimpy (the test extra) is not installed")
 from orchestrator.libcosim_run import run_libcosim  # noqa: E402
 
 MODELS = sorted(p for p in (Path(__file__).resolve().parents[1] / "models").iterdir()
                 if (p / "SystemStructure.ssd").is_file())
+PAPER_MODELS = [p for p in MODELS if (p / "paper.json").is_file()]
 #: the stated window of the default run: 12 receiver periods, 600-1200 base steps
 WINDOW_S = 12.0
 
@@ -39,46 +40,52 @@ def assert_same_recording(a, b):
 
 @pytest.mark.parametrize("model_dir", MODELS, ids=[p.name for p in MODELS])
 def test_libcosim_equals_our_jacobi_master_bit_for_bit(built, model_dir, capfd):
-    ours = Simulation(load_model(model_dir), algorithm="jacobi").run(WINDOW_S)
+    ours = Simulation(scenarios.load_scenario(model_dir), algorithm="jacobi").run(WINDOW_S)
     capfd.readouterr()
     theirs = run_libcosim(model_dir, WINDOW_S)
     out, err = capfd.readouterr()
     assert out == "" and err == "", "libcosim logged at WARNING level or above"
     assert_same_recording(theirs, ours)
-    # the comparison has teeth: the receiver publishes fixes, the filter moves
-    assert theirs.column("gnss", "gnss_epoch")[-1] >= WINDOW_S - 2
+    # the comparison has teeth: fixes are published, the filter moves
+    source = next(c for c in theirs.components if theirs.has(c, "gnss_epoch"))
+    assert theirs.column(source, "gnss_epoch")[-1] >= WINDOW_S - 2
     assert np.ptp(theirs.column("filter", "nav_lat")) > 0
 
 
 def test_gauss_seidel_differs_from_libcosim_where_the_rules_differ(built):
     """Sanity of the test above: the default order gives other numbers (the filter sees this
     step's IMU increments instead of the previous step's)."""
-    model = MODELS[0]
-    gs = Simulation(load_model(model)).run(2.0)
-    jac = Simulation(load_model(model), algorithm="jacobi").run(2.0)
+    model = scenarios.load_scenario(PAPER_MODELS[0])
+    gs = Simulation(model).run(2.0)
+    jac = Simulation(model, algorithm="jacobi").run(2.0)
     assert not np.array_equal(gs.column("filter", "nav_time"), jac.column("filter", "nav_time"))
     np.testing.assert_allclose(jac.column("filter", "nav_time")[2:],
                                gs.column("filter", "nav_time")[1:-1])
 
 
-def test_a_packaged_archive_runs_in_libcosim_with_the_folders_numbers(built, tmp_path):
+@pytest.mark.parametrize("model_dir", [PAPER_MODELS[0]] + [p for p in MODELS
+                                                         if (p / "log").is_dir()][:1],
+                         ids=lambda p: p.name)
+def test_a_packaged_archive_runs_in_libcosim_with_the_folders_numbers(built, model_dir,
+                                                                      tmp_path):
     from orchestrator.package import package
 
-    archive = package(MODELS[0], tmp_path / "scenario.ssp")
-    folder = run_libcosim(MODELS[0], 3.0)
+    archive = package(model_dir, tmp_path / "scenario.ssp")
+    folder = run_libcosim(model_dir, 3.0)
     assert_same_recording(run_libcosim(archive, 3.0), folder)
-    assert_same_recording(folder, Simulation(load_model(archive), algorithm="jacobi").run(3.0))
+    assert_same_recording(folder, Simulation(scenarios.load_scenario(archive),
+                                             algorithm="jacobi").run(3.0))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("model_dir", MODELS, ids=[p.name for p in MODELS])
+@pytest.mark.parametrize("model_dir", PAPER_MODELS, ids=[p.name for p in PAPER_MODELS])
 def test_paper_scenarios_full_length_in_libcosim(built, model_dir):
     """Full length: libcosim's RMS per axis within 5 % of our default master's, every fix
     applied (needs filters that apply a fix at gnss_time within a latency bound)."""
     from orchestrator import metrics
 
     theirs = run_libcosim(model_dir)
-    ours = Simulation(load_model(model_dir)).run()
+    ours = Simulation(scenarios.load_scenario(model_dir)).run()
     m_theirs = metrics.filter_metrics(theirs, "filter")
     m_ours = metrics.filter_metrics(ours, "filter")
     for key in ("position_rms_m", "velocity_rms_mps", "attitude_rms_deg"):
