@@ -17,8 +17,12 @@ does the FMI side once for all of them:
   serializes it in the checked plain-data format of :mod:`navcore.state_format`: a blob is
   never code, and one that is refused leaves the instance as it was (see the state section);
 * never lets a Python exception escape an FMI call: a user error (bad parameter, NaN input)
-  is logged through the FMI logger and reported as fmi2Discard from ``do_step`` (the master
-  stops with that message); after such an error every further ``do_step`` is refused too.
+  is logged through the FMI logger as one message ``<instance>: <what>`` (the first
+  Error-level message of the instance: a master reports it as the cause) and reported as
+  fmi2Discard from ``do_step``; after such an error every further ``do_step`` is refused too.
+  A bug's traceback follows in a second message (category ``traceback``).
+* hands the experiment's stop time (fmi2SetupExperiment) to the component before it
+  initializes, so a component can refuse a run it cannot cover.
 """
 from __future__ import annotations
 
@@ -32,7 +36,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 from navcore import state_format
-from navcore.component import NavcoreError
+from navcore.component import NavcoreError, numerical_failure
 from navcore.state import StateError, capture_value, check_kind
 from navcore.state_format import StateFormatError
 
@@ -83,6 +87,7 @@ def setup(slave, component_class):
     slave._input_names = tuple(p.name for p in cls.inputs)
     slave._component = None
     slave._start_time = 0.0
+    slave._stop_time = None
     slave._failed = None
     slave._refused_state = None
     slave._vr_names = {}
@@ -120,6 +125,7 @@ def _register(slave, port, causality, variability, initial):
 # -- life cycle (bound as methods of each slave class) ------------------------------------
 def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
     slave._start_time = float(start_time)
+    slave._stop_time = None if stop_time is None else float(stop_time)
 
 
 def exit_initialization_mode(slave):
@@ -127,10 +133,12 @@ def exit_initialization_mode(slave):
     try:
         slave._component = slave.component_class(**params)
         slave._values.update(slave._component.start(slave._start_time))
+        if slave._stop_time is not None:
+            slave._component.check_stop_time(slave._stop_time)
     except NavcoreError as exc:
         _fail(slave, str(exc))
     except Exception as exc:  # a bug, not a user error: still never crash the host
-        _fail(slave, f"internal error during initialization: {exc!r}\n{traceback.format_exc()}")
+        _fail(slave, f"internal error during initialization: {exc!r}", traceback.format_exc())
 
 
 def do_step(slave, current_time, step_size):
@@ -149,17 +157,24 @@ def do_step(slave, current_time, step_size):
         inputs = {n: values[n] for n in slave._input_names}
         values.update(slave._component.step(current_time, step_size, inputs))
     except NavcoreError as exc:
-        _fail(slave, f"t={current_time:.6g} s: {exc}")
+        _fail(slave, f"{exc} (at t = {current_time:.6g} s)")
+        return False
+    except (ArithmeticError, ValueError) as exc:  # overflow, math domain: a diverged state
+        _fail(slave, f"{numerical_failure(exc)} (at t = {current_time:.6g} s)",
+              traceback.format_exc())
         return False
     except Exception as exc:
-        _fail(slave, f"t={current_time:.6g} s: internal error: {exc!r}\n{traceback.format_exc()}")
+        _fail(slave, f"internal error: {exc!r} (at t = {current_time:.6g} s)",
+              traceback.format_exc())
         return False
     return True
 
 
-def _fail(slave, message):
+def _fail(slave, message, details=None):
     slave._failed = message
     slave.log(f"{slave.instance_name}: {message}", Fmi2Status.error)
+    if details:
+        slave.log(details, Fmi2Status.error, "traceback")
 
 
 # -- batched value access ------------------------------------------------------------------

@@ -352,16 +352,36 @@ class FmuInstance(Instance):
             return ""
         return "\nFMU log:\n  " + "\n  ".join(self.log)
 
+    def _cause(self) -> Optional[str]:
+        """The FMU's own account of its failure: its first Error/Fatal log message (not a
+        traceback), without the status label, category and instance-name prefixes."""
+        for line in self.log:
+            label, _, rest = line.partition("] ")
+            if label not in ("[Error", "[Fatal"):
+                continue
+            category, sep, text = rest.partition(": ")
+            if not sep or category == "traceback":
+                continue
+            for prefix in (f"{self.name}: ", f"{self.model_name}: "):
+                if text.startswith(prefix):
+                    text = text[len(prefix):]
+            return text.splitlines()[0] if text else None
+        return None
+
     def _fail(self, what: str, status: Optional[int] = None, time: Optional[float] = None,
               at: bool = True) -> SimulationError:
-        """The error for a failed FMI call; ``time`` is stored (and shown if ``at``)."""
+        """The error for a failed FMI call; ``time`` is stored (and shown if ``at``).  Its
+        first line is the FMU's own message when it logged one (:meth:`_cause`), the failed
+        call follows on the next line; the whole log stays in ``log``."""
         if status == 4:
             self._fatal = True
         label = (f" with status {STATUS_LABELS[status]}"
                  if status is not None and 0 <= status < len(STATUS_LABELS) else "")
         when = f" at t = {time:.9g} s" if time is not None and at else ""
-        msg = (f"component '{self.name}' ({self.path.name}): {what} failed{label}{when}"
-               f"{self._log_text()}")
+        call = f"{what} failed{label}{when}"
+        cause = self._cause()
+        head = f"component '{self.name}' ({self.path.name}): "
+        msg = head + (f"{cause}\n  ({call})" if cause else call)
         return SimulationError(msg, component=self.name, time=time, log=tuple(self.log))
 
     def _checked(self, what: str, call, *args, time=None):
@@ -514,6 +534,14 @@ def _component_error_types() -> Tuple[type, ...]:
     return (NavcoreError,)
 
 
+def _numerical_failure(exc: Exception) -> str:
+    try:
+        from navcore.component import numerical_failure
+    except ImportError:
+        return f"the computation failed numerically ({exc!r})"
+    return numerical_failure(exc)
+
+
 def _output_writer(buf: np.ndarray, names: Sequence[str]):
     """A function copying ``outputs[name]`` for ``names`` into ``buf`` (one numpy store)."""
     if len(names) == 1:
@@ -572,9 +600,18 @@ class DirectInstance(Instance):
 
     def _error(self, what: str, exc: Exception, time: Optional[float],
                at: bool = True) -> SimulationError:
+        """Same shape as :meth:`FmuInstance._fail`: the component's message first, the
+        failed call on the next line."""
         when = f" at t = {time:.9g} s" if time is not None and at else ""
-        return SimulationError(f"component '{self.name}' ({self.model_name}): {what} failed{when}: "
-                               f"{exc}", component=self.name, time=time, log=(str(exc),))
+        text = str(exc)
+        if not isinstance(exc, self._errors):  # an arithmetic error: the state diverged
+            text = _numerical_failure(exc)
+        prefix = f"{self.model_name}: "
+        if text.startswith(prefix):
+            text = text[len(prefix):]
+        return SimulationError(f"component '{self.name}' ({self.model_name}): {text}\n"
+                               f"  ({what} failed{when})", component=self.name, time=time,
+                               log=(str(exc),))
 
     def _prepared(self) -> None:
         self._in_real = self.input_names["Real"]
@@ -598,13 +635,19 @@ class DirectInstance(Instance):
             try:
                 self.component.set_parameter(name, value)
             except self._errors as exc:
-                raise NavfmuError(f"component '{self.name}' ({self.model_name}): {exc}") from None
+                text = str(exc)
+                if text.startswith(f"{self.model_name}: "):
+                    text = text[len(self.model_name) + 2:]
+                raise NavfmuError(f"component '{self.name}' ({self.model_name}): {text}") from None
 
     def enter_initialization(self, start_time: float, stop_time: Optional[float]) -> None:
         self.time = start_time
         try:
             begin = getattr(self.component, "start", None) or self.component.initialize
             outputs = begin(start_time)
+            check = getattr(self.component, "check_stop_time", None)
+            if check is not None and stop_time is not None:
+                check(stop_time)
         except self._errors as exc:
             raise self._error("initialization", exc, start_time) from None
         self._store_outputs(outputs, "initialize")
@@ -644,7 +687,7 @@ class DirectInstance(Instance):
     def do_step(self, t: float, h: float) -> None:
         try:
             outputs = self.component.step(t, h, self._inputs)
-        except self._errors as exc:
+        except self._errors + (ArithmeticError, ValueError) as exc:
             raise self._error(f"step from t = {t:.9g} s to t = {t + h:.9g} s", exc, t,
                               at=False) from None
         self.time = t + h

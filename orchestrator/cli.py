@@ -1,36 +1,83 @@
 """The ``navfmu`` command line: build, validate, run, compare, bench, convert.
 
-User errors (:class:`~orchestrator.errors.NavfmuError`) print one line ``navfmu: error: ...``
-and exit with status 2; no traceback.  ``--debug`` shows tracebacks of internal errors.
+User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
+first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
+with status 2; no traceback.  ``--debug`` shows tracebacks of internal errors and the log of
+a failed component.  Ctrl-C ends every command with ``navfmu: interrupted`` and status 130
+(:mod:`orchestrator.interrupts`).
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
+import zipfile
 from pathlib import Path
 
 import click
 
-from .errors import NavfmuError
+from . import interrupts
+from .errors import NavfmuError, SimulationError
 from .exchange import ALGORITHMS
 
 DEFAULT_OUT = Path("navfmu-results")
 
 
-def _progress_bar(label):
+@contextlib.contextmanager
+def _progress_bars():
+    """A factory of tqdm progress callbacks (one bar per label, shown on a terminal only);
+    every bar is closed (its line cleared) when the block ends, also on an error, so a
+    message starts on its own line.  Each callback is a safe point for a deferred Ctrl-C."""
     from tqdm import tqdm
 
-    bar = {}
+    bars = []
 
-    def progress(done, total):
-        if "bar" not in bar:
-            bar["bar"] = tqdm(total=total, desc=label, unit="step", leave=False,
-                              mininterval=0.5, file=sys.stderr)
-        bar["bar"].update(done - bar["bar"].n)
-        if done >= total:
-            bar["bar"].close()
+    def factory(label):
+        bar = {}
 
-    return progress
+        def progress(done, total):
+            interrupts.check()
+            if "bar" not in bar:
+                bar["bar"] = tqdm(total=total, desc=label, unit="step", leave=False,
+                                  mininterval=0.5, file=sys.stderr, disable=None)
+                bars.append(bar["bar"])
+            bar["bar"].update(done - bar["bar"].n)
+            if done >= total:
+                bar["bar"].close()
+
+        return progress
+
+    try:
+        yield factory
+    finally:
+        for b in bars:
+            b.close()
+
+
+def _filter_names(text):
+    """``A,B,C`` -> names; at least one, none twice."""
+    names = [f.strip() for f in text.split(",") if f.strip()]
+    if not names:
+        raise NavfmuError("--filters: give at least one filter")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise NavfmuError(f"--filters: {', '.join(twice)} listed more than once ({text})")
+    return names
+
+
+class _Group(click.Group):
+    """Lists each command with its whole first sentence (click's default cuts it with
+    "..." at the terminal width)."""
+
+    def format_commands(self, ctx, formatter):
+        rows = []
+        for name in self.list_commands(ctx):
+            cmd = self.get_command(ctx, name)
+            if cmd is not None and not cmd.hidden:
+                rows.append((name, cmd.get_short_help_str(limit=10_000)))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
 
 def _parse_window(text):
@@ -64,7 +111,7 @@ def _parse_sets(items):
     return values
 
 
-@click.group()
+@click.group(cls=_Group)
 @click.option("--debug", is_flag=True, help="Show tracebacks of internal errors.")
 @click.pass_context
 def cli(ctx, debug):
@@ -101,7 +148,12 @@ def validate(fmus):
     for f in fmus:
         if not Path(f).is_file():
             raise NavfmuError(f"FMU file not found: {f}")
-        problems = validate_fmu(f)
+        if not zipfile.is_zipfile(f):
+            raise NavfmuError(f"{f}: not an FMU (an FMU is a zip archive)")
+        try:
+            problems = validate_fmu(f)
+        except Exception as exc:  # fmpy raises plain exceptions for broken archives
+            raise NavfmuError(f"{f}: cannot read the FMU: {exc}") from None
         if problems:
             bad += 1
             click.echo(f"{f}: {len(problems)} problem(s)")
@@ -137,20 +189,22 @@ def _common_run_options(f):
 
 def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
              replay=None, log_sensors=None):
-    from . import scenarios
+    from . import outputs, prechecks, scenarios
 
     model = scenarios.load_scenario(scenario)
     window = _parse_window(window)
     parameters = _parse_sets(sets)
-    out = Path(out) if out else DEFAULT_OUT / model.name
+    prechecks.check_stop_time(stop, model.start_time)
+    out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = []
-    for f in filters:
-        label = f or "scenario"
-        runs.append(scenarios.simulate_scenario(
-            model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
-            window=window, progress=_progress_bar(label),
-            algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
-            log=lambda m: click.echo(m, err=True), replay=replay))
+    with _progress_bars() as progress_bar:
+        for f in filters:
+            label = f or "scenario"
+            runs.append(scenarios.simulate_scenario(
+                model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
+                window=window, progress=progress_bar(label),
+                algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
+                log=lambda m: click.echo(m, err=True), replay=replay))
     if log_sensors:
         from .replay import write_sensor_log
 
@@ -213,9 +267,7 @@ def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, n
 @_common_run_options
 def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, replay):
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
-    names = [f.strip() for f in filters.split(",") if f.strip()]
-    if not names:
-        raise NavfmuError("--filters: give at least one filter")
+    names = _filter_names(filters)
     _execute(scenario, names, out, stop, backend, window, sets, fmt, no_plots,
              title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
 
@@ -254,8 +306,9 @@ def convert_kf_gins(imu_file, gnss_file, rest):
     click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst), dst))
 
 
-@cli.command()
-@click.argument("scenario", type=click.Path(), default="models/aircraft_500s")
+@cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "
+             "--filters, several filters against each other), in one process.")
+@click.argument("scenario", type=click.Path(), required=False)
 @click.option("--stop", type=float, default=100.0, show_default=True,
               help="Simulated time of each run [s].")
 @click.option("--repeat", type=int, default=3, show_default=True,
@@ -270,15 +323,17 @@ def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
     time ratio and the per-step cost of each component.  With --filters: run it through the
     FMUs once per filter instead and print each filter's time per cycle and the ratios to the
-    first filter (next to the paper's, from paper.json)."""
+    first filter (next to the paper's, from paper.json).  SCENARIO defaults to navfmu's own
+    models/aircraft_500s."""
+    from . import build as fmu_build
     from . import scenarios
 
-    model = scenarios.load_scenario(scenario)
+    model = scenarios.load_scenario(scenario or fmu_build.ROOT / "models" / "aircraft_500s")
     if against_libcosim:
         from .libcosim_run import bench_against_libcosim
 
         scenarios.ensure_fmus(model, log=lambda m: click.echo(m, err=True))
-        out = bench_against_libcosim(scenario, stop, repeat)
+        out = bench_against_libcosim(scenario or model.path, stop, repeat)
         click.echo(json.dumps(out, indent=2) if as_json else
                    f"{model.name}, {stop:g} s, fastest of {out['repeat']} alternating runs: ours "
                    f"(jacobi) {out['ours_s']:.2f} s, libcosim recording every output "
@@ -287,18 +342,21 @@ def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
                    f"{out['ratio_unrecorded']:.2f})")
         return
     if filters is not None:
-        names = [f.strip() for f in filters.split(",") if f.strip()]
-        out = scenarios.bench_filters(model, names, stop_time=stop, repeat=repeat,
-                                      progress_factory=_progress_bar,
-                                      reference=scenarios.paper_reference(model),
-                                      log=lambda m: click.echo(m, err=True))
+        names = _filter_names(filters)
+        with _progress_bars() as progress_bar:
+            out = scenarios.bench_filters(model, names, stop_time=stop, repeat=repeat,
+                                          progress_factory=progress_bar,
+                                          reference=scenarios.paper_reference(model),
+                                          log=lambda m: click.echo(m, err=True))
         if as_json:
             click.echo(json.dumps(scenarios._jsonable(out), indent=2))
             return
         _print_filter_bench(out)
         return
-    out = scenarios.bench(model, stop_time=stop, repeat=repeat, progress_factory=_progress_bar,
-                          log=lambda m: click.echo(m, err=True))
+    with _progress_bars() as progress_bar:
+        out = scenarios.bench(model, stop_time=stop, repeat=repeat,
+                              progress_factory=progress_bar,
+                              log=lambda m: click.echo(m, err=True))
     if as_json:
         click.echo(json.dumps(out, indent=2))
         return
@@ -369,19 +427,25 @@ export = _system_command("export", "FMU (.fmu)",
 def main(argv=None):
     debug = "--debug" in (argv if argv is not None else sys.argv[1:])
     try:
-        cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
+        with interrupts.deferred():
+            cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
     except NavfmuError as exc:
         click.echo(f"navfmu: error: {exc}", err=True)
+        if debug and isinstance(exc, SimulationError) and exc.log:
+            click.echo("component log:\n  " + "\n  ".join(exc.log), err=True)
         sys.exit(2)
-    except click.exceptions.Abort:
+    except (click.exceptions.Abort, KeyboardInterrupt):
         click.echo("navfmu: interrupted", err=True)
         sys.exit(130)
-    except click.ClickException as exc:
-        exc.show()
+    except click.exceptions.Exit as exc:  # --help
         sys.exit(exc.exit_code)
-    except KeyboardInterrupt:
-        click.echo("navfmu: interrupted", err=True)
-        sys.exit(130)
+    except click.UsageError as exc:
+        hint = (f"\n  (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else "")
+        click.echo(f"navfmu: error: {exc.format_message()}{hint}", err=True)
+        sys.exit(2)
+    except click.ClickException as exc:
+        click.echo(f"navfmu: error: {exc.format_message()}", err=True)
+        sys.exit(exc.exit_code)
     except Exception as exc:  # a bug: say so in one line unless --debug
         if debug:
             raise

@@ -1,5 +1,6 @@
-"""Matplotlib PNG plots of a run: errors with +-3 sigma, NIS, adaptive factors, estimated R,
-chi-square statistics with their gates, outlier detection, the truth trajectory.
+"""Matplotlib PNG plots of a run: errors with +-3 sigma (or, for several filters, sliding-window
+RMS), NIS, adaptive factors, estimated R, chi-square statistics with their gates, outlier
+detection, the truth trajectory.
 
 The comparison plots take ``entries``: a list of ``(label, results, component, errors)`` with
 ``errors`` from ``metrics.navigation_errors`` (one entry per filter, each possibly from its own
@@ -21,11 +22,28 @@ from scipy import stats  # noqa: E402
 from . import metrics as nav_metrics  # noqa: E402
 from .results import atomic_write  # noqa: E402
 
-_GROUPS = (
-    ("position", "pos_", ("n", "e", "d"), "std_p", 1.0, "m"),
-    ("velocity", "vel_", ("n", "e", "d"), "std_v", 1.0, "m/s"),
-    ("attitude", "phi_", ("n", "e", "d"), "std_att_", math.degrees(1.0), "deg"),
+#: the panels of the error plots, named as in the RMS tables: (group, unit, scale to the
+#: unit, [(axis label, error key, sign, sigma keys)]).  Position and velocity E/N/U (up = -down);
+#: attitude as the Euler-angle errors roll/pitch/yaw of the tables, whose sigmas come from
+#: the filter's N/E/D tilt sigmas (see :func:`_attitude_sigmas`).
+_PANELS = (
+    ("position", "m", 1.0, [("E", "pos_e", 1.0, "std_pe"), ("N", "pos_n", 1.0, "std_pn"),
+                            ("U", "pos_d", -1.0, "std_pd")]),
+    ("velocity", "m/s", 1.0, [("E", "vel_e", 1.0, "std_ve"), ("N", "vel_n", 1.0, "std_vn"),
+                              ("U", "vel_d", -1.0, "std_vd")]),
+    ("attitude", "deg", math.degrees(1.0), [("roll", "att_roll", 1.0, "roll"),
+                                            ("pitch", "att_pitch", 1.0, "pitch"),
+                                            ("yaw", "att_yaw", 1.0, "yaw")]),
 )
+ATTITUDE_NOTE = ("attitude: Euler-angle errors roll/pitch/yaw as in the tables; their sigmas "
+                 "come from the filter's tilt sigmas about N/E/D, turned by the heading psi: "
+                 "s_roll^2 = cos^2(psi) s_N^2 + sin^2(psi) s_E^2, s_pitch^2 = sin^2(psi) s_N^2 "
+                 "+ cos^2(psi) s_E^2, s_yaw = s_D (small angles, near-level attitude, N-E "
+                 "correlation neglected)")
+#: error plots of several filters show the RMS over a sliding window of this many seconds,
+#: or of this fraction of the run when that is longer
+RMS_WINDOW_S = 10.0
+RMS_WINDOW_FRACTION = 1.0 / 60.0
 
 
 def _save(fig, path):
@@ -37,29 +55,117 @@ def _save(fig, path):
         plt.close(fig)
 
 
+def _attitude_sigmas(results, name):
+    """1-sigma of the roll/pitch/yaw errors from the tilt sigmas ``std_att_n/e/d`` (see
+    :data:`ATTITUDE_NOTE`); None when the filter has no attitude sigmas."""
+    if not all(results.has(name, f"std_att_{a}") for a in "ned"):
+        return None
+    sn, se, sd = (results.column(name, f"std_att_{a}") for a in "ned")
+    c, s = np.cos(results.column(name, "nav_yaw")), np.sin(results.column(name, "nav_yaw"))
+    return {"roll": np.sqrt((c * sn) ** 2 + (s * se) ** 2),
+            "pitch": np.sqrt((s * sn) ** 2 + (c * se) ** 2), "yaw": sd}
+
+
+def _sigma(results, name, key, attitude):
+    if attitude is not None and key in attitude:
+        return attitude[key]
+    return results.column(name, key) if results.has(name, key) else None
+
+
+def _error_limit(values, valid):
+    """Half-height of a panel: from the errors (their 99.9 % |error| quantile, plus 30 %),
+    never from a sigma, so a diverging filter's envelope cannot flatten the others."""
+    finite = [np.abs(v[valid & np.isfinite(v)]) for v in values]
+    finite = [v for v in finite if v.size]
+    if not finite:
+        return None
+    peak = max(float(np.quantile(v, 0.999)) for v in finite)
+    return 1.3 * peak if peak > 0 else None
+
+
 def plot_errors(entries, path, title=""):
-    """Position, velocity and attitude errors (rows) per NED axis (columns) of every filter,
-    with the +-3 sigma envelope of the filter's own covariance (dashed, same colour)."""
-    fig, axes = plt.subplots(3, 3, figsize=(14, 9), sharex=True)
-    for f_i, (label, results, name, e) in enumerate(entries):
-        colour = f"C{f_i}"
-        t = e["time"]
-        for row, (group, err, axes_names, std, scale, unit) in enumerate(_GROUPS):
-            for col, a in enumerate(axes_names):
-                ax = axes[row, col]
-                ax.plot(t, e[err + a] * scale, color=colour, lw=0.8, label=label)
-                if results.has(name, std + a):
-                    s3 = 3.0 * results.column(name, std + a) * scale
-                    ax.plot(t, s3, color=colour, lw=0.6, ls="--")
-                    ax.plot(t, -s3, color=colour, lw=0.6, ls="--")
-                ax.set_title(f"{group} error {a.upper()}", fontsize=9)
-                ax.set_ylabel(unit)
-                ax.grid(True, alpha=0.3)
+    """Errors of one filter (one ``entries`` item) with its +-3 sigma (dashed), or, for several
+    filters, the RMS of each error over a sliding window (:func:`plot_error_rms`).  Rows
+    position/velocity/attitude, columns the axes of the RMS tables; each panel's scale comes
+    from the errors (a sigma beyond it is cut off at the frame)."""
+    if len(entries) > 1:
+        return plot_error_rms(entries, path, title)
+    label, results, name, e = entries[0]
+    attitude = _attitude_sigmas(results, name)
+    fig, axes = plt.subplots(3, 3, figsize=(14, 9.5), sharex=True)
+    t = e["time"]
+    for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
+        for col, (axis, key, sign, std) in enumerate(axes_spec):
+            ax = axes[row, col]
+            err = sign * e[key] * scale
+            ax.plot(t, err, color="C0", lw=0.8, label=f"{label} error")
+            limit = _error_limit([err], e["valid"])
+            sigma = _sigma(results, name, std, attitude)
+            if sigma is not None:
+                s3 = 3.0 * sigma * scale
+                off = limit is not None and bool(np.all(s3[e["valid"]] > limit))
+                ax.plot(t, s3, color="C1", lw=0.8, ls="--",
+                        label=f"{label} +-3 sigma" + (" (beyond the frame)" if off else ""))
+                ax.plot(t, -s3, color="C1", lw=0.8, ls="--")
+            if limit:
+                ax.set_ylim(-limit, limit)
+            ax.set_title(f"{group} error {axis}", fontsize=9)
+            ax.set_ylabel(unit)
+            ax.grid(True, alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    axes[0, 0].legend(fontsize=8, loc="upper left")
-    fig.suptitle(title or "errors (solid) and +-3 sigma from the filter (dashed)")
-    fig.tight_layout()
+    for ax in axes.flat:  # the first panel, and every panel whose sigma is off its scale
+        if ax is axes[0, 0] or any("beyond" in t for t in ax.get_legend_handles_labels()[1]):
+            ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle(title or "errors and the filter's own +-3 sigma")
+    fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
+    fig.tight_layout(rect=(0, 0.035, 1, 1))
+    return _save(fig, path)
+
+
+def _moving_rms(t, x, valid, window_s):
+    """RMS of ``x`` over a centred window of ``window_s`` seconds, on ``t``'s samples (NaN
+    where the window holds no valid sample)."""
+    sq = np.where(valid & np.isfinite(x), x * x, 0.0)
+    n = (valid & np.isfinite(x)).astype(float)
+    cs, cn = np.concatenate([[0.0], np.cumsum(sq)]), np.concatenate([[0.0], np.cumsum(n)])
+    lo = np.searchsorted(t, t - window_s / 2, side="left")
+    hi = np.searchsorted(t, t + window_s / 2, side="right")
+    count = cn[hi] - cn[lo]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, np.sqrt((cs[hi] - cs[lo]) / count), np.nan)
+
+
+def plot_error_rms(entries, path, title=""):
+    """Several filters: the RMS of every error over a sliding window (solid, one colour per
+    filter) and the RMS of the filter's own 1 sigma over the same window (dashed: what the
+    filter claims), log scale, so long runs and filters far apart stay readable."""
+    fig, axes = plt.subplots(3, 3, figsize=(14, 9.5), sharex=True)
+    span = max(float(e["time"][-1] - e["time"][0]) for _, _, _, e in entries if e["time"].size)
+    window = max(RMS_WINDOW_S, RMS_WINDOW_FRACTION * span)
+    for f_i, (label, results, name, e) in enumerate(entries):
+        t, valid = e["time"], e["valid"]
+        attitude = _attitude_sigmas(results, name)
+        step = max(1, t.size // 3000)  # a smooth curve needs no more points
+        for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
+            for col, (axis, key, sign, std) in enumerate(axes_spec):
+                ax = axes[row, col]
+                rms = _moving_rms(t, e[key] * scale, valid, window)
+                ax.semilogy(t[::step], rms[::step], color=f"C{f_i}", lw=0.9, label=label)
+                sigma = _sigma(results, name, std, attitude)
+                if sigma is not None:
+                    srms = _moving_rms(t, sigma * scale, valid, window)
+                    ax.semilogy(t[::step], srms[::step], color=f"C{f_i}", lw=0.7, ls="--",
+                                label=f"{label} 1 sigma (own)")
+                ax.set_title(f"{group} error {axis}: RMS over {window:g} s", fontsize=9)
+                ax.set_ylabel(unit)
+                ax.grid(True, which="both", alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    axes[0, 0].legend(fontsize=7, loc="best", ncol=2)
+    fig.suptitle(title or f"RMS errors over a sliding {window:g} s window")
+    fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
+    fig.tight_layout(rect=(0, 0.035, 1, 1))
     return _save(fig, path)
 
 
@@ -99,9 +205,8 @@ def _constant(values):
 def plot_series(entries, variables, path, title=""):
     """Diagnostic outputs (adaptive scales, fading factor, model probabilities...) over time:
     one panel per variable, one line per filter that has it.  A variable that stays at one
-    value in every filter that has it gets no panel but a line in the footnote (unless no
-    variable changes at all: then every one gets its panel).  Returns None if no filter has
-    any of ``variables``."""
+    value in every filter that has it gets no panel but a line in the footnote.  Returns None
+    (no plot) if no filter has any of ``variables`` or none of them changes."""
     present = [v for v in variables if any(r.has(c, v) for _, r, c, _ in entries)]
     if not present:
         return None
@@ -112,9 +217,9 @@ def plot_series(entries, variables, path, title=""):
         if all(_constant(v) for v in values) and len(set(first)) <= 1:
             holders = [label for label, r, c, _ in entries if r.has(c, var)]
             constant[var] = (first[0] if first else float("nan"), holders)
-    panels = [v for v in present if v not in constant] or present
-    if len(panels) == len(present):
-        constant = {}
+    panels = [v for v in present if v not in constant]
+    if not panels:
+        return None
     fig, axes = plt.subplots(len(panels), 1, figsize=(12, 2.4 * len(panels) + 0.4),
                              sharex=True, squeeze=False)
     for ax, var in zip(axes[:, 0], panels):

@@ -14,8 +14,11 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
 from . import build as fmu_build
+from . import interrupts
 from . import metrics as nav_metrics
+from . import outputs
 from . import plots
+from . import prechecks
 from .errors import NavfmuError
 from .master import Simulation
 from .results import Results, atomic_write
@@ -133,6 +136,7 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
                      parameters=parameters, record=record, algorithm=algorithm)
+    prechecks.check_simulation(sim, stop_time)
     results = sim.run(stop_time=stop_time, progress=progress)
     run = Run(label, model, results)
     if not has_truth(results):
@@ -330,25 +334,39 @@ def format_comparison(comparison: Dict[str, Any], bench_command: str = "",
 def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, title="",
                   reference=None) -> List[Path]:
     """Results (one file per run), metrics.json, report.json (:func:`paper_comparison` with
-    ``reference``, when it has anything) and plots; every file written atomically."""
+    ``reference``, when it has anything) and plots, replacing the folder ``out`` as a whole
+    (:func:`orchestrator.outputs.staged`: all of them appear together or none does).
+    Returns the paths the files have in ``out``."""
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    with outputs.staged(out) as stage:
+        names = [p.name for p in _write_files(runs, stage, fmt, plots_on, title, reference)]
+    return [out / n for n in names]
+
+
+def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]:
+    """Write every output file into the folder ``out``; a pending Ctrl-C stops between files."""
     written = []
+
+    def add(path):
+        if path:
+            written.append(path)
+        interrupts.check()
+
     for run in runs:
         stem = "results" if len(runs) == 1 else f"results_{run.label}"
         if fmt == "npz":
-            written.append(run.results.to_npz(out / f"{stem}.npz"))
+            add(run.results.to_npz(out / f"{stem}.npz"))
         else:
-            written.append(run.results.to_csv(out / f"{stem}.csv"))
+            add(run.results.to_csv(out / f"{stem}.csv"))
     summary = {run.label: {"metrics": run.metrics,
                            "step_time_s": run.results.step_time_s,
                            "exchange_step_time_s": run.results.exchange_step_time_s,
                            "metadata": _jsonable(run.results.metadata)} for run in runs}
-    written.append(atomic_write(out / "metrics.json",
-                                lambda f: f.write(json.dumps(summary, indent=2, sort_keys=True))))
+    add(atomic_write(out / "metrics.json",
+                     lambda f: f.write(json.dumps(summary, indent=2, sort_keys=True))))
     comparison = paper_comparison(runs, reference)
     if comparison:
-        written.append(atomic_write(out / "report.json", lambda f: f.write(
+        add(atomic_write(out / "report.json", lambda f: f.write(
             json.dumps(_jsonable(comparison), indent=2, sort_keys=True))))
     if plots_on and all(has_truth(run.results) for run in runs):
         entries = []
@@ -358,16 +376,19 @@ def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, titl
                 entries.append((label, run.results, f,
                                 nav_metrics.navigation_errors(run.results, f)))
         if entries:
-            written.append(plots.plot_errors(entries, out / "errors.png", title))
-            written.append(plots.plot_nis(entries, out / "nis.png", title))
-            for p in (plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png", title),
-                      plots.plot_r_estimate(entries, out / "r_estimate.png", title),
-                      plots.plot_chi2(entries, out / "chi2.png", title),
-                      plots.plot_outliers(entries, out / "outliers.png", title)):
-                if p:
-                    written.append(p)
+            add(plots.plot_errors(entries, out / "errors.png", title))
+            if len(entries) > 1:  # errors.png compares RMS; each filter's +-3 sigma apart
+                for entry in entries:
+                    safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in entry[0])
+                    add(plots.plot_errors([entry], out / f"errors_{safe}.png",
+                                          f"{entry[0]} ({title})" if title else entry[0]))
+            add(plots.plot_nis(entries, out / "nis.png", title))
+            add(plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png", title))
+            add(plots.plot_r_estimate(entries, out / "r_estimate.png", title))
+            add(plots.plot_chi2(entries, out / "chi2.png", title))
+            add(plots.plot_outliers(entries, out / "outliers.png", title))
         truth = nav_metrics.find_component(runs[0].results, "truth_", ("time", "lat", "lon", "h"))
-        written.append(plots.plot_trajectory(runs[0].results, truth, out / "trajectory.png", title))
+        add(plots.plot_trajectory(runs[0].results, truth, out / "trajectory.png", title))
     return written
 
 
@@ -383,16 +404,26 @@ def _jsonable(value):
     return str(value)
 
 
+def _check_bench_run(model: SystemModel, stop_time, repeat) -> int:
+    """The checked ``repeat`` count of a benchmark (at least one run) and its stop time."""
+    if int(repeat) != repeat or repeat < 1:
+        raise NavfmuError(f"--repeat: the number of runs per path must be a positive integer, "
+                          f"got {repeat}")
+    prechecks.check_stop_time(stop_time, model.start_time)
+    return int(repeat)
+
+
 def bench(model: SystemModel, stop_time: Optional[float] = None, repeat: int = 2,
           progress_factory=None, log=print) -> Dict[str, Any]:
     """Run the same system through the navcore objects directly and through the FMUs, in one
     process, alternating ``repeat`` times; keep each path's fastest run (the machine is shared,
     the minimum is the least disturbed) and return wall times, their ratio and the
     per-component costs of those runs."""
+    repeat = _check_bench_run(model, stop_time, repeat)
     ensure_fmus(model, log=log)
     out: Dict[str, Any] = {}
     best: Dict[str, Any] = {}
-    for _ in range(max(1, int(repeat))):
+    for _ in range(repeat):
         for backend in ("direct", "fmu"):
             sim = Simulation(model, backend=backend,
                              registry=registry() if backend == "direct" else None)
@@ -408,7 +439,7 @@ def bench(model: SystemModel, stop_time: Optional[float] = None, repeat: int = 2
                         "exchange_us": {c: 1e6 * v for c, v in res.exchange_step_time_s.items()},
                         "master_overhead_us": 1e6 * res.metadata.get("master_overhead_s_per_step",
                                                                      float("nan"))}
-    out["repeat"] = max(1, int(repeat))
+    out["repeat"] = repeat
     out["ratio"] = out["fmu"]["wall_s"] / out["direct"]["wall_s"]
     a, b = best["fmu"][1], best["direct"][1]
     out["identical"] = all(
@@ -431,10 +462,10 @@ def bench_filters(model: SystemModel, filters: Sequence[str], stop_time: Optiona
         raise NavfmuError("--filters: give at least one filter")
     if len(set(filters)) != len(filters):
         raise NavfmuError(f"--filters: a filter is listed twice: {', '.join(filters)}")
+    repeat = _check_bench_run(model, stop_time, repeat)
     models = {f: swap_filter(model, f) for f in filters}
     for m in models.values():
         ensure_fmus(m, log=log)
-    repeat = max(1, int(repeat))
     best: Dict[str, Dict[str, Any]] = {}
     for _ in range(repeat):
         for f in filters:

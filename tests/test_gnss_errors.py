@@ -190,11 +190,15 @@ def test_same_seed_identical_and_deepcopy_continues():
 
 
 @pytest.mark.parametrize("name,value,fragment", [
-    ("pos_sigma_n", -1.0, ">= 0"),
+    ("pos_sigma_n", -1.0, "outside the accepted range [0, 10000] m"),
+    ("pos_sigma_e", 1e300, "outside the accepted range [0, 10000] m"),
+    ("noise_steps", "1,2,vel,1,1e300,1", "se"),
+    ("noise_steps", "1,2,vel,1,500,1", "[0, 100] m/s"),
+    ("outlier_patches", "1,2,vel,ne,1e300", "peak"),
     ("vel_sigma_d", float("nan"), "finite"),
     ("vel_sigma_e", "fast", "number"),
-    ("fix_interval", 0.0, "> 0"),
-    ("outlier_multiple", -3.0, ">= 0"),
+    ("fix_interval", 0.0, "(0, 3600] s"),
+    ("outlier_multiple", -3.0, "[0, 10000]"),
     ("noise_steps", "1,2,acc,1,1,1", "1,2,acc,1,1,1"),
     ("noise_steps", "1,2,pos,1,1", "5 fields"),
     ("noise_steps", "1,2,pos,1,-1,1", "se"),

@@ -46,7 +46,7 @@ class Gain(Component):
         return {"y": 0.0}
 
     def step(self, t, h, inputs):
-        self.check_inputs_finite(inputs, ["u"])
+        self.check_inputs(inputs, ["u"])
         if inputs["u"] > self.params.get("limit", np.inf):
             raise InputError(f"{self.model_name}: input 'u' = {inputs['u']} is too large")
         return {"y": self.params["k"] * inputs["u"]}
@@ -284,8 +284,9 @@ def test_failure_mid_run_names_component_and_time(write_ssd, tmp_path):
         sim.run()
     msg = str(info.value)
     # the ramp reaches 1.5 > 1.3 in the step ending at t = 1.5
-    assert "component 'gain' (LimitedGain): step from t = 1.25 s to t = 1.5 s failed" in msg
-    assert "'u' = 1.5 is too large" in msg
+    first, detail = msg.splitlines()[:2]
+    assert first.startswith("component 'gain' (LimitedGain): ") and "'u' = 1.5 is too large" in first
+    assert "(step from t = 1.25 s to t = 1.5 s failed)" in detail
     assert info.value.component == "gain" and info.value.time == 1.25
 
 
@@ -452,9 +453,12 @@ def test_fmu_failure_names_component_time_and_log(write_ssd, toy_fmus, tmp_path,
     with pytest.raises(SimulationError) as info:
         sim.run()
     msg = str(info.value)
-    assert "component 'scaler' (ToyScaler.fmu): fmi2DoStep from t = 0.6 s to t = 0.8 s" in msg
-    assert "status Discard" in msg
-    assert "input u = 0.4 exceeds the limit 0.35 (100%)" in msg
+    # the FMU's own message first, the failed call after it, the whole log kept
+    first, detail = msg.splitlines()[:2]
+    assert first.startswith("component 'scaler' (ToyScaler.fmu): ")
+    assert "input u = 0.4 exceeds the limit 0.35 (100%)" in first
+    assert "fmi2DoStep from t = 0.6 s to t = 0.8 s" in detail and "status Discard" in detail
+    assert any("exceeds the limit" in line for line in info.value.log)
     assert info.value.time == pytest.approx(0.6)
     assert os.listdir(extract_dir) == []
 

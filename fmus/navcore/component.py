@@ -56,6 +56,18 @@ model inside a component):
   and the items of a buffer that is empty in a fresh component, accept only numeric data
   (None, numbers, arrays and containers of them; give the attribute a start value of the
   right kind if it will hold text).
+
+Parameter ranges
+----------------
+Each numeric parameter declares its accepted range once, on its :class:`Port`
+(``limits``, a :class:`Limits`); :meth:`Component.set_parameter` refuses a value outside it
+(every Real must also be finite) with a :class:`ParameterError` naming the parameter, the
+value and the range.  Upper bounds are where physics (or the float range) gives one, so a
+huge but finite value is refused here instead of overflowing inside the component.
+Cross-parameter conditions (``t1 < t2``) stay in ``initialize`` (:meth:`Component.require`).
+After ``start``, the FMU shell and the master call ``check_stop_time(stop_time)`` with the
+experiment's stop time (when the host gives one), so a component can refuse a run it cannot
+cover.
 """
 from __future__ import annotations
 
@@ -79,6 +91,45 @@ class InputError(NavcoreError):
     """An input has an unusable value (NaN, inf, out of range); the message names it."""
 
 
+def numerical_failure(exc: Exception) -> str:
+    """The message for an arithmetic error (overflow, math domain) escaping a component's
+    step: its state diverged, which declared ranges alone cannot rule out."""
+    return (f"the computation failed numerically ({exc!r}): the state diverged; the inputs or "
+            "parameters are outside what the component can follow")
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Accepted range of a numeric parameter: ``low``..``high`` (inclusive unless
+    ``low_open``/``high_open``); infinite bounds mean unbounded (a Real is always finite)."""
+
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+
+    def contains(self, x: float) -> bool:
+        if not math.isfinite(x):
+            return False
+        above = x > self.low if self.low_open else x >= self.low
+        below = x < self.high if self.high_open else x <= self.high
+        return above and below
+
+    def text(self, unit: str = "") -> str:
+        """The range as a user reads it, e.g. ``[0, 1e+04] m``, ``(0, 1)`` or ``finite``."""
+        if self.low == -math.inf and self.high == math.inf:
+            return "finite"
+        lo = "-inf" if self.low == -math.inf else f"{self.low:.6g}"
+        hi = "inf" if self.high == math.inf else f"{self.high:.6g}"
+        left = "(" if self.low_open or self.low == -math.inf else "["
+        right = ")" if self.high_open or self.high == math.inf else "]"
+        return f"{left}{lo}, {hi}{right}" + (f" {unit}" if unit not in ("", DIMENSIONLESS) else "")
+
+
+#: any finite value
+FINITE = Limits()
+
+
 @dataclass(frozen=True)
 class Port:
     """One declared variable of a component.
@@ -86,7 +137,8 @@ class Port:
     ``type`` is one of ``Real``, ``Integer``, ``Boolean``, ``String``; ``unit`` is the SI unit
     symbol written to the model description: ``"1"`` for a dimensionless Real (NIS, scale
     factors, probabilities; :func:`real` writes it when no unit is given), ``""`` for
-    Integer/Boolean/String variables, which carry no unit in FMI 2.0.
+    Integer/Boolean/String variables, which carry no unit in FMI 2.0; ``limits`` is the
+    accepted range of a Real or Integer parameter (or of an input a component checks).
     """
 
     name: str
@@ -94,6 +146,7 @@ class Port:
     unit: str = ""
     description: str = ""
     start: Any = 0.0
+    limits: Limits = FINITE
 
     def default(self):
         if self.type == "Real":
@@ -109,13 +162,13 @@ class Port:
 DIMENSIONLESS = "1"
 
 
-def real(name, unit="", description="", start=0.0):
+def real(name, unit="", description="", start=0.0, limits=FINITE):
     """A Real port; without ``unit`` it is dimensionless (:data:`DIMENSIONLESS`)."""
-    return Port(name, "Real", unit or DIMENSIONLESS, description, start)
+    return Port(name, "Real", unit or DIMENSIONLESS, description, start, limits)
 
 
-def integer(name, description="", start=0):
-    return Port(name, "Integer", "", description, start)
+def integer(name, description="", start=0, limits=FINITE):
+    return Port(name, "Integer", "", description, start, limits)
 
 
 def boolean(name, description="", start=False):
@@ -137,7 +190,6 @@ class Component(ABC):
     outputs: ClassVar[Tuple[Port, ...]] = ()
     #: default experiment (start, stop, step) written to the model description
     default_experiment: ClassVar[Tuple[float, float, float]] = (0.0, 10.0, 0.01)
-
     def __init__(self, **params):
         self.params: Dict[str, Any] = {p.name: p.default() for p in self.parameters}
         for name, value in params.items():
@@ -161,6 +213,10 @@ class Component(ABC):
             raise ParameterError(
                 f"{self.model_name}: parameter '{name}' expects a {port.type}, got {value!r}"
             ) from None
+        if port.type in ("Real", "Integer") and not port.limits.contains(value):
+            raise ParameterError(
+                f"{self.model_name}: parameter '{name}' = {value!r} is outside the accepted "
+                f"range {port.limits.text(port.unit)}")
         self.params[name] = value
 
     @classmethod
@@ -178,33 +234,25 @@ class Component(ABC):
             raise ParameterError(f"{self.model_name}: parameter '{name}' = "
                                  f"{self.params[name]!r} {requirement}")
 
-    def require_finite(self, *names: str) -> None:
-        for n in names:
-            v = self.params[n]
-            if not math.isfinite(v):
-                raise ParameterError(f"{self.model_name}: parameter '{n}' must be finite, got {v}")
-
-    def require_nonnegative(self, *names: str) -> None:
-        self.require_finite(*names)
-        for n in names:
-            if self.params[n] < 0:
-                raise ParameterError(
-                    f"{self.model_name}: parameter '{n}' must be >= 0, got {self.params[n]}"
-                )
-
-    def require_positive(self, *names: str) -> None:
-        self.require_finite(*names)
-        for n in names:
-            if self.params[n] <= 0:
-                raise ParameterError(
-                    f"{self.model_name}: parameter '{n}' must be > 0, got {self.params[n]}"
-                )
-
-    def check_inputs_finite(self, inputs: Dict[str, Any], names) -> None:
+    def check_inputs(self, inputs: Dict[str, Any], names) -> None:
+        """Raise an :class:`InputError` naming the first of the Real inputs ``names`` that is
+        not finite or outside the range its port declares."""
+        ports = type(self)._input_ports()
         for n in names:
             v = inputs[n]
-            if not math.isfinite(v):
-                raise InputError(f"{self.model_name}: input '{n}' is {v} (must be finite)")
+            port = ports.get(n)
+            limits = port.limits if port is not None else FINITE
+            if not limits.contains(v):
+                raise InputError(f"{self.model_name}: input '{n}' = {v} is outside the accepted "
+                                 f"range {limits.text(port.unit if port else '')}")
+
+    @classmethod
+    def _input_ports(cls) -> Dict[str, Port]:
+        ports = cls.__dict__.get("_input_port_map")
+        if ports is None:
+            ports = {p.name: p for p in cls.inputs}
+            cls._input_port_map = ports
+        return ports
 
     # -- life cycle -------------------------------------------------------------------
     @abstractmethod
@@ -214,6 +262,10 @@ class Component(ABC):
     @abstractmethod
     def step(self, t: float, h: float, inputs: Dict[str, Any]) -> Dict[str, Any]:
         """Advance from ``t`` to ``t + h``; return the outputs valid at ``t + h``."""
+
+    def check_stop_time(self, stop_time: float) -> None:
+        """Raise a :class:`ParameterError` if this component, started, cannot run until
+        ``stop_time`` (the experiment's; default: any stop time is fine)."""
 
     def start(self, start_time: float) -> Dict[str, Any]:
         """Begin a run at ``start_time``: record it (it is part of the state) and

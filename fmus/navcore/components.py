@@ -11,9 +11,11 @@ import math
 import numpy as np
 
 from . import signals
-from .component import Component, InputError, ParameterError, integer, real, string
-from .gnss_errors import GnssErrorModel
-from .imu_errors import DPH, DPSH, UG, ImuErrorModel, INTENSITY_REFERENCE_RATE
+from .component import (Component, InputError, Limits,
+                        ParameterError, boolean, integer, real, string)
+from .gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS, GnssErrorModel
+from .imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, DPH, DPSH, GYRO_ARW_LIMITS,
+                         GYRO_BIAS_LIMITS, INTENSITY_REFERENCE_RATE, UG, ImuErrorModel)
 from .ins_gnss_kf import MEASUREMENTS, ErrorStateKf, KfConfig
 from .rotations import dcm_to_euler
 from .strapdown import Strapdown
@@ -21,6 +23,8 @@ from .trajectory import TrajectoryGenerator, load_profile
 
 #: relative tolerance on times compared across components (s)
 TIME_TOLERANCE = 1e-9
+#: accepted seeds (numpy's generators take non-negative integers; FMI Integers are 32 bit)
+SEED_LIMITS = Limits(0, 2**31 - 1)
 
 _UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug",
                       "ug/sqrt(Hz)": "ug/sqrt(Hz)", "ppm": "ppm", "urad": "urad",
@@ -29,13 +33,14 @@ _UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug"
 
 
 def ports_from_table(table):
-    """Ports for a ``{name: (default, unit, description)}`` parameter table of a navcore model."""
+    """Ports for a ``{name: (default, unit, description, limits)}`` parameter table of a
+    navcore model (``limits`` None for a string)."""
     ports = []
-    for name, (default, unit, description) in table.items():
+    for name, (default, unit, description, limits) in table.items():
         if isinstance(default, str):
             ports.append(string(name, description, default))
         else:
-            ports.append(real(name, _UNIT_OF_DATASHEET[unit], description, default))
+            ports.append(real(name, _UNIT_OF_DATASHEET[unit], description, default, limits))
     return tuple(ports)
 
 
@@ -59,8 +64,11 @@ class TrajectoryImu(Component):
     parameters = (
         string("profile", "built-in motion profile name (static, aircraft_500s, manoeuvre_1h, "
                "uav_maneuver) or path of a JSON profile file", "aircraft_500s"),
-        real("imu_period", "s", "IMU sampling interval; the component is stepped with it", 0.01),
-        integer("seed", "seed of every random error of the IMU", 1),
+        real("imu_period", "s", "IMU sampling interval; the component is stepped with it", 0.01,
+             Limits(0.0, 1.0, low_open=True)),
+        boolean("extend_profile", "allow a run beyond the profile's end (the truth then flies "
+                "on at the final velocity and attitude)", False),
+        integer("seed", "seed of every random error of the IMU", 1, SEED_LIMITS),
         *ports_from_table(ImuErrorModel.PARAMETERS),
     )
     inputs = ()
@@ -70,7 +78,6 @@ class TrajectoryImu(Component):
     derived_fields = ("dt",)
 
     def initialize(self, start_time):
-        self.require_positive("imu_period")
         self.dt = self.params["imu_period"]
         profile = load_profile(self.params["profile"])
         self.generator = TrajectoryGenerator(profile, self.dt)
@@ -82,6 +89,15 @@ class TrajectoryImu(Component):
         out.update({p.name: 0.0 for p in signals.IMU})
         out["imu_time"] = self.start_time
         return out
+
+    def check_stop_time(self, stop_time):
+        """Refuse a run past the profile's end unless ``extend_profile``."""
+        end = self.start_time + self.generator.duration
+        if not self.params["extend_profile"] and stop_time > end + TIME_TOLERANCE * max(1.0, end):
+            raise ParameterError(
+                f"{self.model_name}: the run ends at {stop_time:g} s, after the end of "
+                f"profile '{self.params['profile']}' at {end:g} s; stop by {end:g} s or set "
+                "parameter 'extend_profile' = true to fly on at the final velocity")
 
     def _truth(self, s):
         return {"truth_time": self.start_time + s["time"], "truth_lat": s["lat"],
@@ -116,7 +132,7 @@ class GnssReceiver(Component):
                    "with per-axis noise, noise steps, outlier patches, periodic m-times "
                    "outliers and outages; 'gnss_epoch' counts fixes.")
     parameters = (
-        integer("seed", "seed of every random error of the receiver", 2),
+        integer("seed", "seed of every random error of the receiver", 2, SEED_LIMITS),
         *ports_from_table(GnssErrorModel.PARAMETERS),
     )
     inputs = signals.TRUTH[:7]
@@ -126,7 +142,6 @@ class GnssReceiver(Component):
     derived_fields = ("interval",)
 
     def initialize(self, start_time):
-        self.require_positive("fix_interval")
         self.model = GnssErrorModel({k: self.params[k] for k in GnssErrorModel.PARAMETERS},
                                     self.params["seed"])
         self.interval = self.params["fix_interval"]
@@ -140,7 +155,7 @@ class GnssReceiver(Component):
     def step(self, t, h, inputs):
         if not h > 0:
             raise InputError(f"{self.model_name}: step size {h} s must be > 0")
-        self.check_inputs_finite(inputs, ("truth_time", "truth_lat", "truth_lon", "truth_h",
+        self.check_inputs(inputs, ("truth_time", "truth_lat", "truth_lon", "truth_h",
                                           "truth_vn", "truth_ve", "truth_vd"))
         t_truth = inputs["truth_time"]
         if t_truth + TIME_TOLERANCE * max(1.0, abs(t_truth)) < self.next_fix:
@@ -161,40 +176,54 @@ class GnssReceiver(Component):
 
 
 # ---------------------------------------------------------------------------------------
+#: accepted ranges of the filters' parameters: the initial state within the ranges of the
+#: signals (navcore.signals); an assumed GNSS sigma positive and at most the receiver model's
+_LAT, _LON, _HEIGHT = signals.LATITUDE, signals.LONGITUDE, signals.HEIGHT
+_SPEED, _ANGLE = signals.VELOCITY, signals.EULER_ANGLE
+_R_POS = Limits(0.0, POS_SIGMA_LIMITS.high, low_open=True)
+_R_VEL = Limits(0.0, VEL_SIGMA_LIMITS.high, low_open=True)
+_TAU = Limits(0.0, 1e9)
 _FILTER_PARAMETERS = (
-    real("init_lat", "rad", "initial latitude", 0.0),
-    real("init_lon", "rad", "initial longitude", 0.0),
-    real("init_h", "m", "initial height", 0.0),
-    real("init_vn", "m/s", "initial velocity north", 0.0),
-    real("init_ve", "m/s", "initial velocity east", 0.0),
-    real("init_vd", "m/s", "initial velocity down", 0.0),
-    real("init_roll", "rad", "initial roll", 0.0),
-    real("init_pitch", "rad", "initial pitch", 0.0),
-    real("init_yaw", "rad", "initial yaw", 0.0),
-    real("p0_pos", "m", "initial 1-sigma position error, each axis", 5.0),
-    real("p0_vel", "m/s", "initial 1-sigma velocity error, each axis", 0.3),
+    real("init_lat", "rad", "initial latitude", 0.0, _LAT),
+    real("init_lon", "rad", "initial longitude", 0.0, _LON),
+    real("init_h", "m", "initial height", 0.0, _HEIGHT),
+    real("init_vn", "m/s", "initial velocity north", 0.0, _SPEED),
+    real("init_ve", "m/s", "initial velocity east", 0.0, _SPEED),
+    real("init_vd", "m/s", "initial velocity down", 0.0, _SPEED),
+    real("init_roll", "rad", "initial roll", 0.0, _ANGLE),
+    real("init_pitch", "rad", "initial pitch", 0.0, _ANGLE),
+    real("init_yaw", "rad", "initial yaw", 0.0, _ANGLE),
+    real("p0_pos", "m", "initial 1-sigma position error, each axis", 5.0, Limits(0.0, 1e5)),
+    real("p0_vel", "m/s", "initial 1-sigma velocity error, each axis", 0.3, Limits(0.0, 1e3)),
     real("p0_att_level", "rad", "initial 1-sigma roll/pitch (north/east tilt) error",
-         math.radians(1.0)),
-    real("p0_att_yaw", "rad", "initial 1-sigma heading error", math.radians(1.0)),
-    real("p0_gyro_bias_dph", "deg/h", "initial 1-sigma gyro bias", 0.1),
-    real("p0_accel_bias_ug", "ug", "initial 1-sigma accelerometer bias", 100.0),
-    real("q_gyro_arw_dpsh", "deg/sqrt(h)", "gyro angle random walk assumed by the filter", 0.001),
+         math.radians(1.0), Limits(0.0, math.pi)),
+    real("p0_att_yaw", "rad", "initial 1-sigma heading error", math.radians(1.0),
+         Limits(0.0, math.pi)),
+    real("p0_gyro_bias_dph", "deg/h", "initial 1-sigma gyro bias", 0.1, GYRO_BIAS_LIMITS),
+    real("p0_accel_bias_ug", "ug", "initial 1-sigma accelerometer bias", 100.0,
+         ACCEL_BIAS_LIMITS),
+    real("q_gyro_arw_dpsh", "deg/sqrt(h)", "gyro angle random walk assumed by the filter", 0.001,
+         GYRO_ARW_LIMITS),
     real("q_accel_vrw_ugpsHz", "ug/sqrt(Hz)", "accel velocity random walk assumed by the filter",
-         5.0),
-    real("q_gyro_bias_instability_dph", "deg/h", "Gauss-Markov gyro bias sigma assumed", 0.0),
-    real("q_gyro_bias_tau_s", "s", "Gauss-Markov gyro bias correlation time (0 = constant)", 0.0),
-    real("q_accel_bias_instability_ug", "ug", "Gauss-Markov accel bias sigma assumed", 0.0),
+         5.0, ACCEL_VRW_LIMITS),
+    real("q_gyro_bias_instability_dph", "deg/h", "Gauss-Markov gyro bias sigma assumed", 0.0,
+         GYRO_BIAS_LIMITS),
+    real("q_gyro_bias_tau_s", "s", "Gauss-Markov gyro bias correlation time (0 = constant)", 0.0,
+         _TAU),
+    real("q_accel_bias_instability_ug", "ug", "Gauss-Markov accel bias sigma assumed", 0.0,
+         ACCEL_BIAS_LIMITS),
     real("q_accel_bias_tau_s", "s", "Gauss-Markov accel bias correlation time (0 = constant)",
-         0.0),
-    real("r_pos_n", "m", "GNSS position 1-sigma assumed, north", 5.0),
-    real("r_pos_e", "m", "GNSS position 1-sigma assumed, east", 5.0),
-    real("r_pos_d", "m", "GNSS position 1-sigma assumed, down", 5.0),
-    real("r_vel_n", "m/s", "GNSS velocity 1-sigma assumed, north", 0.3),
-    real("r_vel_e", "m/s", "GNSS velocity 1-sigma assumed, east", 0.3),
-    real("r_vel_d", "m/s", "GNSS velocity 1-sigma assumed, down", 0.3),
+         0.0, _TAU),
+    real("r_pos_n", "m", "GNSS position 1-sigma assumed, north", 5.0, _R_POS),
+    real("r_pos_e", "m", "GNSS position 1-sigma assumed, east", 5.0, _R_POS),
+    real("r_pos_d", "m", "GNSS position 1-sigma assumed, down", 5.0, _R_POS),
+    real("r_vel_n", "m/s", "GNSS velocity 1-sigma assumed, north", 0.3, _R_VEL),
+    real("r_vel_e", "m/s", "GNSS velocity 1-sigma assumed, east", 0.3, _R_VEL),
+    real("r_vel_d", "m/s", "GNSS velocity 1-sigma assumed, down", 0.3, _R_VEL),
     string("measurement", "GNSS measurement used: 'position' or 'position_velocity'",
            "position_velocity"),
-    real("max_fix_age", "s", "fixes older than this (by gnss_time vs imu_time) are ignored", 0.5),
+    real("max_fix_age", "s", "fixes older than this (by gnss_time vs imu_time) are ignored", 0.5,
+         Limits(0.0, 3600.0)),
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -224,16 +253,6 @@ class InsGnssFilter(Component):
     # -- configuration -----------------------------------------------------------------
     def make_config(self):
         p = self.params
-        self.require_nonnegative(
-            "p0_pos", "p0_vel", "p0_att_level", "p0_att_yaw", "p0_gyro_bias_dph",
-            "p0_accel_bias_ug", "q_gyro_arw_dpsh", "q_accel_vrw_ugpsHz",
-            "q_gyro_bias_instability_dph", "q_gyro_bias_tau_s", "q_accel_bias_instability_ug",
-            "q_accel_bias_tau_s", "max_fix_age")
-        self.require_positive("r_pos_n", "r_pos_e", "r_pos_d", "r_vel_n", "r_vel_e", "r_vel_d")
-        self.require_finite("init_lat", "init_lon", "init_h", "init_vn", "init_ve", "init_vd",
-                            "init_roll", "init_pitch", "init_yaw")
-        self.require("init_lat", abs(p["init_lat"]) < math.pi / 2,
-                     "rad is not a latitude (|lat| < pi/2)")
         self.require("measurement", p["measurement"] in MEASUREMENTS,
                      f"is not one of {sorted(MEASUREMENTS)}")
         p0 = np.concatenate([
@@ -275,7 +294,7 @@ class InsGnssFilter(Component):
     def step(self, t, h, inputs):
         if not h > 0:
             raise InputError(f"{self.model_name}: step size {h} s must be > 0")
-        self.check_inputs_finite(inputs, _IMU_INPUT_NAMES)
+        self.check_inputs(inputs, _IMU_INPUT_NAMES)
         imu_dt = inputs["imu_dt"]
         imu_time = inputs["imu_time"]
         out = self.out
@@ -300,7 +319,7 @@ class InsGnssFilter(Component):
         return out
 
     def _update(self, inputs):
-        self.check_inputs_finite(inputs, _GNSS_VALUE_NAMES)
+        self.check_inputs(inputs, _GNSS_VALUE_NAMES)
         age = self.nav_time - inputs["gnss_time"]
         if abs(age) > self.params["max_fix_age"]:
             return
@@ -338,9 +357,10 @@ class InsGnssFilter(Component):
         std = np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0))
         for i, name in enumerate(_STD_NAMES):
             out[name] = float(std[i])
-        if not all(math.isfinite(out[k]) for k in ("nav_lat", "nav_lon", "nav_h", "std_pn")):
-            raise InputError(f"{self.model_name}: the navigation solution became non-finite "
-                             f"at t = {self.nav_time} s (filter diverged)")
+        if not math.isfinite(sum(out.values())):  # one pass over every output
+            bad = next(k for k, v in out.items() if not math.isfinite(v))
+            raise InputError(f"{self.model_name}: output '{bad}' became non-finite at t = "
+                             f"{self.nav_time} s (the filter diverged)")
 
 
 _STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
@@ -383,21 +403,19 @@ class SageHusaFading(InsGnssFilter):
     engine_class = SageHusaFadingKf
     extra_parameters = (
         real("forgetting_factor", "", "Sage-Husa forgetting factor b, 0 < b <= 1 (paper 001: "
-             "0.95-0.99; memory about 1/(1-b) updates)", DEFAULT_FORGETTING_FACTOR),
+             "0.95-0.99; memory about 1/(1-b) updates)", DEFAULT_FORGETTING_FACTOR,
+             Limits(0.0, 1.0, low_open=True)),
         real("reserve_gamma", "", "reserve coefficient gamma of the divergence test (paper 001 "
-             "eq. 11; 1 = strictest)", DEFAULT_RESERVE_GAMMA),
+             "eq. 11; 1 = strictest)", DEFAULT_RESERVE_GAMMA, Limits(0.0, 1e12, low_open=True)),
         real("r_floor_fraction", "", "floor of the estimated R as a fraction of the initial R "
-             "diagonal (variances)", DEFAULT_R_FLOOR_FRACTION),
+             "diagonal (variances)", DEFAULT_R_FLOOR_FRACTION, Limits(0.0, 1e6, low_open=True)),
         real("max_fading_factor", "", "cap on the fading factor lambda (0 = no cap, as in the "
-             "paper)", 0.0),
+             "paper; else >= 1)", 0.0, Limits(0.0, 1e6)),
     )
     extra_outputs = _R_EST_OUTPUTS
 
     def engine_options(self):
         p = self.params
-        self.require_positive("forgetting_factor", "reserve_gamma", "r_floor_fraction")
-        self.require_nonnegative("max_fading_factor")
-        self.require("forgetting_factor", p["forgetting_factor"] <= 1.0, "must be in (0, 1]")
         cap = p["max_fading_factor"]
         self.require("max_fading_factor", not 0.0 < cap < 1.0, "must be 0 (no cap) or >= 1")
         return dict(forgetting_factor=p["forgetting_factor"], reserve_gamma=p["reserve_gamma"],
@@ -419,7 +437,8 @@ class Iakf(SageHusaFading):
     engine_class = IakfKf
     extra_parameters = SageHusaFading.extra_parameters + (
         real("outlier_alpha", "", "significance alpha of the chi2(m) outlier gate of eq. 14 "
-             "(paper 001: 0.05 or 0.02)", DEFAULT_OUTLIER_ALPHA),
+             "(paper 001: 0.05 or 0.02)", DEFAULT_OUTLIER_ALPHA,
+             Limits(0.0, 1.0, low_open=True, high_open=True)),
     )
     extra_outputs = SageHusaFading.extra_outputs + (
         real("compression", "", "outlier compression factor Y of the latest update (eq. 14; "
@@ -428,9 +447,7 @@ class Iakf(SageHusaFading):
 
     def engine_options(self):
         options = super().engine_options()
-        alpha = self.params["outlier_alpha"]
-        self.require("outlier_alpha", 0.0 < alpha < 1.0, "must be in (0, 1)")
-        options["outlier_alpha"] = alpha
+        options["outlier_alpha"] = self.params["outlier_alpha"]
         return options
 
     def write_diagnostics(self, result):
@@ -448,8 +465,10 @@ class NewtonRobustKf(InsGnssFilter):
     engine_class = _NewtonEngine
     extra_parameters = (
         real("chi2_threshold", "", "gate of the per-observation chi-square statistic "
-             "v_i^2/S_ii (paper 004: 6.635 = chi2(1) at alpha 0.01)", CHI2_THRESHOLD_PAPER_004),
-        integer("newton_order", "order of the Newton extrapolation polynomial (paper 004: 4)", 4),
+             "v_i^2/S_ii (paper 004: 6.635 = chi2(1) at alpha 0.01)", CHI2_THRESHOLD_PAPER_004,
+             Limits(0.0, 1e6, low_open=True)),
+        integer("newton_order", "order of the Newton extrapolation polynomial (paper 004: 4)", 4,
+                Limits(0, 10)),
         string("replacement_variance", "R of a replaced observation: 'propagated' (R times the "
                "noise gain of the extrapolation) or 'nominal' (R unchanged)", "propagated"),
     )
@@ -461,8 +480,6 @@ class NewtonRobustKf(InsGnssFilter):
 
     def engine_options(self):
         p = self.params
-        self.require_positive("chi2_threshold")
-        self.require("newton_order", p["newton_order"] >= 0, "must be >= 0")
         self.require("replacement_variance", p["replacement_variance"] in REPLACEMENT_VARIANCES,
                      f"is not one of {list(REPLACEMENT_VARIANCES)}")
         return dict(chi2_threshold=p["chi2_threshold"], newton_order=p["newton_order"],
@@ -482,9 +499,9 @@ class Igg3RobustKf(InsGnssFilter):
     engine_class = _Igg3Engine
     extra_parameters = (
         real("igg_k0", "", "IGG-III constant k0: standardized innovations up to k0 keep full "
-             "weight", 1.5),
+             "weight", 1.5, Limits(0.0, 100.0, low_open=True)),
         real("igg_k1", "", "IGG-III constant k1: standardized innovations above k1 are "
-             "rejected", 3.0),
+             "rejected", 3.0, Limits(0.0, 100.0, low_open=True)),
     )
     extra_outputs = (
         real("min_weight", "", "smallest IGG-III weight of the latest update (1 = none "
@@ -494,7 +511,6 @@ class Igg3RobustKf(InsGnssFilter):
 
     def engine_options(self):
         p = self.params
-        self.require_positive("igg_k0", "igg_k1")
         self.require("igg_k1", p["igg_k1"] > p["igg_k0"], f"must be > igg_k0 = {p['igg_k0']}")
         return dict(igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
 
@@ -529,6 +545,8 @@ REGISTRY.update({cls.model_name: cls for cls in (SageHusaFading, Iakf, NewtonRob
 from .ukf_filters import (  # noqa: E402  (kept with the classes that use them)
     DEFAULT_PREDICT_INTERVAL, CtfaUkfEngine, ImmUkfEngine, UkfEngine)
 
+#: accepted Q scales of the IMM models (relative to the configured Q)
+_Q_SCALE = Limits(0.0, 1e6, low_open=True)
 #: most IMM models a component offers (outputs model_prob_1..3)
 _IMM_MAX_MODELS = 3
 
@@ -544,20 +562,17 @@ class Ukf(InsGnssFilter):
     extra_parameters = (
         real("ukf_predict_interval", "s", "interval of the UKF time update (interval means of "
              "the nominal navigation; 0 = every IMU step); always also before an update",
-             DEFAULT_PREDICT_INTERVAL),
-        real("ukf_alpha", "", "scaled unscented transform alpha (eq. 11, 0 < alpha <= 1)", 1.0),
-        real("ukf_beta", "", "scaled unscented transform beta (eq. 13; 2 = Gaussian)", 2.0),
-        real("ukf_kappa", "", "scaled unscented transform kappa (eq. 11)", 0.0),
+             DEFAULT_PREDICT_INTERVAL, Limits(0.0, 3600.0)),
+        real("ukf_alpha", "", "scaled unscented transform alpha (eq. 11, 0 < alpha <= 1)", 1.0,
+             Limits(0.0, 1.0, low_open=True)),
+        real("ukf_beta", "", "scaled unscented transform beta (eq. 13; 2 = Gaussian)", 2.0,
+             Limits(-1e3, 1e3)),
+        real("ukf_kappa", "", "scaled unscented transform kappa (eq. 11; n + kappa > 0 for the "
+             "15-state filter)", 0.0, Limits(-15.0, 1e3, low_open=True)),
     )
 
     def engine_options(self):
         p = self.params
-        self.require_nonnegative("ukf_predict_interval")
-        self.require_positive("ukf_alpha")
-        self.require_finite("ukf_beta", "ukf_kappa")
-        self.require("ukf_alpha", p["ukf_alpha"] <= 1.0, "must be in (0, 1] (paper 000, eq. 11)")
-        self.require("ukf_kappa", 15 + p["ukf_kappa"] > 0.0,
-                     "must be > -15 (n + kappa > 0 for the 15-state filter)")
         return dict(predict_interval=p["ukf_predict_interval"], alpha=p["ukf_alpha"],
                     beta=p["ukf_beta"], kappa=p["ukf_kappa"])
 
@@ -573,11 +588,11 @@ class CtfaUkf(Ukf):
     extra_parameters = Ukf.extra_parameters + (
         real("q_max_scale", "", "Qmax = q_max_scale * Qmin, Qmin = the configured Q (paper 000: "
              "an integer multiple; 100 = the noise variance of a 10 deg/s manoeuvre in "
-             "models/uav_maneuver)", 100.0),
+             "models/uav_maneuver)", 100.0, Limits(1.0, 1e6)),
         real("ctfa_t1", "", "lower chi-square threshold of eq. 25 (0 = 6.25 for a 3-dimensional "
-             "measurement, else the 90 % chi-square quantile)", 0.0),
+             "measurement, else the 90 % chi-square quantile)", 0.0, Limits(0.0, 1e4)),
         real("ctfa_t2", "", "upper chi-square threshold of eq. 25 (0 = 11.35 for a 3-dimensional "
-             "measurement, else the 99 % chi-square quantile)", 0.0),
+             "measurement, else the 99 % chi-square quantile)", 0.0, Limits(0.0, 1e4)),
     )
     extra_outputs = (
         real("chi2", "", "chi-square statistic of the latest update (eq. 24)"),
@@ -585,8 +600,6 @@ class CtfaUkf(Ukf):
 
     def engine_options(self):
         p = self.params
-        self.require_nonnegative("ctfa_t1", "ctfa_t2")
-        self.require("q_max_scale", p["q_max_scale"] >= 1.0, "must be >= 1 (Qmax >= Qmin)")
         return dict(super().engine_options(), q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
                     t2=p["ctfa_t2"])
 
@@ -611,13 +624,16 @@ class ImmUkf(Ukf):
                    "once per GNSS interval, closed-loop feedback of the combined estimate.")
     engine_class = ImmUkfEngine
     extra_parameters = Ukf.extra_parameters + (
-        integer("imm_models", "number of models (2 or 3)", 2),
-        real("imm_q_scale_1", "", "Q scale of model 1 relative to the configured Q", 1.0),
-        real("imm_q_scale_2", "", "Q scale of model 2 (default: CtfaUkf's Qmax)", 100.0),
+        integer("imm_models", "number of models (2 or 3)", 2, Limits(2, 3)),
+        real("imm_q_scale_1", "", "Q scale of model 1 relative to the configured Q", 1.0,
+             _Q_SCALE),
+        real("imm_q_scale_2", "", "Q scale of model 2 (default: CtfaUkf's Qmax)", 100.0,
+             _Q_SCALE),
         real("imm_q_scale_3", "", "Q scale of model 3 (used when imm_models = 3; default "
-             "between models 1 and 2)", 10.0),
+             "between models 1 and 2)", 10.0, _Q_SCALE),
         real("imm_p_stay", "", "Markov probability of staying in a model per GNSS interval "
-             "(diagonal of the transition matrix; the rest spread evenly)", 0.95),
+             "(diagonal of the transition matrix; the rest spread evenly)", 0.95,
+             Limits(0.0, 1.0, low_open=True, high_open=True)),
     )
     extra_outputs = tuple(
         real(f"model_prob_{j}", "", f"IMM probability of model {j} after the latest update "
@@ -625,12 +641,7 @@ class ImmUkf(Ukf):
 
     def engine_options(self):
         p = self.params
-        r = p["imm_models"]
-        self.require("imm_models", r in (2, 3), "must be 2 or 3")
-        names = [f"imm_q_scale_{j}" for j in range(1, r + 1)]
-        self.require_positive(*names)
-        self.require_finite("imm_p_stay")
-        self.require("imm_p_stay", 0.0 < p["imm_p_stay"] < 1.0, "must be in (0, 1)")
+        names = [f"imm_q_scale_{j}" for j in range(1, p["imm_models"] + 1)]
         return dict(super().engine_options(), q_scales=[p[n] for n in names],
                     p_stay=p["imm_p_stay"])
 

@@ -33,33 +33,28 @@ from typing import Any, Callable, Dict, List, Sequence, Tuple
 
 import numpy as np
 
-from .component import InputError, ParameterError
+from .component import InputError, Limits, ParameterError
 from .earth import ned_to_lla_delta
 
 #: tolerance [s] used when comparing fix times with window edges and outlier epochs
 TIME_TOLERANCE = 1e-6
+
+#: accepted GNSS error sigmas: beyond 10 km / 100 m/s a fix carries no position or velocity
+#: information for an INS (and the fix errors leave the range where a small-angle
+#: position-to-latitude conversion holds); outlier peaks are bounded by ten times that
+POS_SIGMA_LIMITS = Limits(0.0, 1e4)
+VEL_SIGMA_LIMITS = Limits(0.0, 100.0)
+POS_PEAK_LIMITS = Limits(0.0, 1e5)
+VEL_PEAK_LIMITS = Limits(0.0, 1e3)
+#: times of windows and epochs: within about 30 years of the start
+TIME_LIMITS = Limits(-1e9, 1e9)
+TIME_LIMITS_NONNEGATIVE = Limits(0.0, 1e9)
 
 _AXIS_INDEX = {"n": 0, "e": 1, "d": 2}
 _QUANTITIES = ("pos", "vel")
 
 
 # -- parsing helpers ----------------------------------------------------------------------
-def finite_float(value: Any) -> float:
-    """Field converter: a finite float (raises ValueError otherwise)."""
-    x = float(value)
-    if not math.isfinite(x):
-        raise ValueError(f"{value!r} is not finite")
-    return x
-
-
-def nonnegative_float(value: Any) -> float:
-    """Field converter: a finite float >= 0."""
-    x = finite_float(value)
-    if x < 0.0:
-        raise ValueError(f"{value!r} is negative")
-    return x
-
-
 def quantity_name(value: Any) -> str:
     """Field converter: ``pos`` or ``vel``."""
     q = str(value).strip().lower()
@@ -125,9 +120,8 @@ def parse_records(text: Any, name: str,
     return result
 
 
-def read_float(params: Dict[str, Any], name: str, default: float, *,
-               nonnegative: bool = False, positive: bool = False) -> float:
-    """Read parameter ``name`` from ``params`` as a finite float, with the checks asked for."""
+def read_float(params: Dict[str, Any], name: str, default: float) -> float:
+    """Read parameter ``name`` from ``params`` as a finite float."""
     value = params.get(name, default)
     try:
         x = float(value)
@@ -135,11 +129,28 @@ def read_float(params: Dict[str, Any], name: str, default: float, *,
         raise ParameterError(f"parameter '{name}' must be a number, got {value!r}") from None
     if not math.isfinite(x):
         raise ParameterError(f"parameter '{name}' must be finite, got {x}")
-    if nonnegative and x < 0.0:
-        raise ParameterError(f"parameter '{name}' must be >= 0, got {x}")
-    if positive and x <= 0.0:
-        raise ParameterError(f"parameter '{name}' must be > 0, got {x}")
     return x
+
+
+def read_declared(params: Dict[str, Any], name: str, table) -> float:
+    """Read parameter ``name`` as a float within the range its ``table`` entry
+    ``(default, unit, description, limits)`` declares (the one declaration of that range)."""
+    default, unit, _, limits = table[name]
+    x = read_float(params, name, default)
+    if not limits.contains(x):
+        raise ParameterError(f"parameter '{name}' = {x!r} is outside the accepted range "
+                             f"{limits.text(unit)}")
+    return x
+
+
+def bounded_float(limits: Limits, unit: str = "") -> Callable[[Any], float]:
+    """Field converter: a float within ``limits``."""
+    def convert(value: Any) -> float:
+        x = float(value)
+        if not limits.contains(x):
+            raise ValueError(f"{value!r} is outside the accepted range {limits.text(unit)}")
+        return x
+    return convert
 
 
 def check_known(params: Dict[str, Any], known, owner: str) -> None:
@@ -201,21 +212,26 @@ class GnssErrorModel:
                       "outages", "seed")
 
     #: name -> (default, unit, description) of every parameter, for components declaring them
-    PARAMETERS: Dict[str, Tuple[Any, str, str]] = {
-        "pos_sigma_n": (0.0, "m", "1-sigma white position error, north"),
-        "pos_sigma_e": (0.0, "m", "1-sigma white position error, east"),
-        "pos_sigma_d": (0.0, "m", "1-sigma white position error, down"),
-        "vel_sigma_n": (0.0, "m/s", "1-sigma white velocity error, north"),
-        "vel_sigma_e": (0.0, "m/s", "1-sigma white velocity error, east"),
-        "vel_sigma_d": (0.0, "m/s", "1-sigma white velocity error, down"),
-        "noise_steps": ("", "", "'t0,t1,pos|vel,sn,se,sd; ...' sigmas replaced inside [t0,t1)"),
+    PARAMETERS: Dict[str, Tuple[Any, str, str, Limits]] = {
+        "pos_sigma_n": (0.0, "m", "1-sigma white position error, north", POS_SIGMA_LIMITS),
+        "pos_sigma_e": (0.0, "m", "1-sigma white position error, east", POS_SIGMA_LIMITS),
+        "pos_sigma_d": (0.0, "m", "1-sigma white position error, down", POS_SIGMA_LIMITS),
+        "vel_sigma_n": (0.0, "m/s", "1-sigma white velocity error, north", VEL_SIGMA_LIMITS),
+        "vel_sigma_e": (0.0, "m/s", "1-sigma white velocity error, east", VEL_SIGMA_LIMITS),
+        "vel_sigma_d": (0.0, "m/s", "1-sigma white velocity error, down", VEL_SIGMA_LIMITS),
+        "noise_steps": ("", "", "'t0,t1,pos|vel,sn,se,sd; ...' sigmas replaced inside [t0,t1)",
+                        None),
         "outlier_patches": ("", "", "'t0,t1,pos|vel,axes,peak; ...' outliers of magnitude "
-                                    "peak*U(0.5,1), random sign, on the axes (subset of ned)"),
-        "outlier_period": (0.0, "s", "period of the m-times outlier epochs (0 = off)"),
-        "outlier_offset": (0.0, "s", "time of the first m-times outlier epoch"),
-        "outlier_multiple": (0.0, "", "m: outlier magnitude in multiples of the sigma in force"),
-        "fix_interval": (1.0, "s", "interval between fixes (to match outlier epochs to fixes)"),
-        "outages": ("", "", "'t0,t1; ...' fixes inside [t0,t1) are invalid"),
+                                    "peak*U(0.5,1), random sign, on the axes (subset of ned)",
+                            None),
+        "outlier_period": (0.0, "s", "period of the m-times outlier epochs (0 = off)",
+                           TIME_LIMITS_NONNEGATIVE),
+        "outlier_offset": (0.0, "s", "time of the first m-times outlier epoch", TIME_LIMITS),
+        "outlier_multiple": (0.0, "", "m: outlier magnitude in multiples of the sigma in force",
+                             Limits(0.0, 1e4)),
+        "fix_interval": (1.0, "s", "interval between fixes (to match outlier epochs to fixes)",
+                         Limits(0.0, 3600.0, low_open=True)),
+        "outages": ("", "", "'t0,t1; ...' fixes inside [t0,t1) are invalid", None),
     }
 
     #: random numbers drawn per fix (constant, see module docstring)
@@ -224,23 +240,36 @@ class GnssErrorModel:
 
     def __init__(self, params: Dict[str, Any], seed: int):
         check_known(params, self.PARAMETERS, "GnssErrorModel")
-        self.pos_sigma = np.array([read_float(params, f"pos_sigma_{a}", 0.0, nonnegative=True)
+        table = self.PARAMETERS
+        self.pos_sigma = np.array([read_declared(params, f"pos_sigma_{a}", table)
                                    for a in "ned"])
-        self.vel_sigma = np.array([read_float(params, f"vel_sigma_{a}", 0.0, nonnegative=True)
+        self.vel_sigma = np.array([read_declared(params, f"vel_sigma_{a}", table)
                                    for a in "ned"])
+        time_field = bounded_float(TIME_LIMITS, "s")
+        # a noise step's sigmas: the larger (position) bound, checked per quantity below
+        sigma_field = bounded_float(POS_SIGMA_LIMITS)
         self.noise_steps = parse_records(params.get("noise_steps", ""), "noise_steps", (
-            ("t0", finite_float), ("t1", finite_float), ("quantity", quantity_name),
-            ("sn", nonnegative_float), ("se", nonnegative_float), ("sd", nonnegative_float)))
+            ("t0", time_field), ("t1", time_field), ("quantity", quantity_name),
+            ("sn", sigma_field), ("se", sigma_field), ("sd", sigma_field)))
         self.outlier_patches = parse_records(
             params.get("outlier_patches", ""), "outlier_patches", (
-                ("t0", finite_float), ("t1", finite_float), ("quantity", quantity_name),
-                ("axes", ned_axes), ("peak", nonnegative_float)))
-        self.outlier_period = read_float(params, "outlier_period", 0.0, nonnegative=True)
-        self.outlier_offset = read_float(params, "outlier_offset", 0.0)
-        self.outlier_multiple = read_float(params, "outlier_multiple", 0.0, nonnegative=True)
-        self.fix_interval = read_float(params, "fix_interval", 1.0, positive=True)
+                ("t0", time_field), ("t1", time_field), ("quantity", quantity_name),
+                ("axes", ned_axes), ("peak", bounded_float(POS_PEAK_LIMITS))))
+        for records, name, bounds, first in (
+                (self.noise_steps, "noise_steps", {"vel": VEL_SIGMA_LIMITS}, 3),
+                (self.outlier_patches, "outlier_patches", {"vel": VEL_PEAK_LIMITS}, 4)):
+            for record in records:
+                limits = bounds.get(record[2])
+                if limits and not all(limits.contains(x) for x in record[first:]):
+                    raise ParameterError(
+                        f"parameter '{name}': record '{','.join(map(str, record))}': a velocity "
+                        f"value is outside the accepted range {limits.text('m/s')}")
+        self.outlier_period = read_declared(params, "outlier_period", table)
+        self.outlier_offset = read_declared(params, "outlier_offset", table)
+        self.outlier_multiple = read_declared(params, "outlier_multiple", table)
+        self.fix_interval = read_declared(params, "fix_interval", table)
         self.outages = parse_records(params.get("outages", ""), "outages",
-                                     (("t0", finite_float), ("t1", finite_float)))
+                                     (("t0", time_field), ("t1", time_field)))
         try:
             self.seed = int(seed)
         except (TypeError, ValueError):

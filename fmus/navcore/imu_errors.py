@@ -41,8 +41,9 @@ from typing import Any, Dict, List, Tuple
 
 import numpy as np
 
-from .component import InputError, ParameterError
-from .gnss_errors import check_known, finite_float, nonnegative_float, parse_records, read_float
+from .component import InputError, Limits, ParameterError
+from .gnss_errors import (TIME_LIMITS, bounded_float, check_known, parse_records,
+                          read_declared)
 
 #: standard gravity [m/s^2], the "g" of datasheet units (ug, deg/h/g)
 G0 = 9.80665
@@ -56,6 +57,24 @@ UG = 1e-6 * G0
 #: reference angular rate [rad/s] of the recommended intensity measure (see ImuErrorModel)
 INTENSITY_REFERENCE_RATE = 0.1
 
+# Accepted ranges of the error parameters (one declaration each, used by PARAMETERS below).
+# Upper bounds: beyond them the sensor measures nothing (a gyro bias of 1e5 deg/h is 28
+# deg/s, an accelerometer bias of 1e6 ug is 1 g, a scale factor of 1e5 ppm is 10 %, a
+# misalignment of 1e5 urad is 6 deg); noise densities and vibration at the same scale.
+GYRO_BIAS_LIMITS = Limits(0.0, 1e5)           # deg/h
+GYRO_ARW_LIMITS = Limits(0.0, 1e3)            # deg/sqrt(h)
+ACCEL_BIAS_LIMITS = Limits(0.0, 1e6)          # ug
+ACCEL_VRW_LIMITS = Limits(0.0, 1e5)           # ug/sqrt(Hz)
+SCALE_FACTOR_LIMITS = Limits(0.0, 1e5)        # ppm
+MISALIGNMENT_LIMITS = Limits(0.0, 1e5)        # urad
+G_SENSITIVITY_LIMITS = Limits(0.0, 1e4)       # deg/h/g
+#: correlation times: <= 0 disables the Gauss-Markov process
+TAU_LIMITS = Limits(-1e9, 1e9)                # s
+#: white-noise multipliers (windows, intensity gain)
+NOISE_FACTOR_LIMITS = Limits(0.0, 1e3)
+VIBRATION_GYRO_LIMITS = Limits(0.0, 10.0)     # rad/s
+VIBRATION_ACCEL_LIMITS = Limits(0.0, 100.0)   # m/s^2
+
 # off-diagonal (row, column) positions of a 3x3 misalignment matrix, in draw order
 _OFF_DIAGONAL = ((0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1))
 
@@ -67,8 +86,9 @@ def parse_windows(text: Any, name: str) -> List[Tuple[float, float, float]]:
     a list of 3-tuples is accepted as well.  Malformed text raises :class:`ParameterError`
     naming the parameter ``name`` and the bad record.
     """
-    return parse_records(text, name, (("t0", finite_float), ("t1", finite_float),
-                                      ("factor", nonnegative_float)))
+    time_field = bounded_float(TIME_LIMITS, "s")
+    return parse_records(text, name, (("t0", time_field), ("t1", time_field),
+                                      ("factor", bounded_float(NOISE_FACTOR_LIMITS))))
 
 
 class ImuErrorModel:
@@ -140,35 +160,40 @@ class ImuErrorModel:
                       "_vibration_on")
 
     #: name -> (default, unit, description) of every parameter, for components declaring them
-    PARAMETERS: Dict[str, Tuple[Any, str, str]] = {
-        "gyro_bias_dph": (0.0, "deg/h", "1-sigma constant gyro bias, drawn per axis"),
-        "gyro_arw_dpsh": (0.0, "deg/sqrt(h)", "gyro angle random walk"),
+    PARAMETERS: Dict[str, Tuple[Any, str, str, Limits]] = {
+        "gyro_bias_dph": (0.0, "deg/h", "1-sigma constant gyro bias, drawn per axis",
+                          GYRO_BIAS_LIMITS),
+        "gyro_arw_dpsh": (0.0, "deg/sqrt(h)", "gyro angle random walk", GYRO_ARW_LIMITS),
         "gyro_bias_instability_dph": (0.0, "deg/h", "steady-state sigma of the Gauss-Markov "
-                                                    "gyro bias"),
+                                                    "gyro bias", GYRO_BIAS_LIMITS),
         "gyro_bias_tau_s": (0.0, "s", "correlation time of the Gauss-Markov gyro bias "
-                                      "(<= 0 disables)"),
-        "gyro_scale_factor_ppm": (0.0, "ppm", "1-sigma gyro scale-factor error, per axis"),
+                                      "(<= 0 disables)", TAU_LIMITS),
+        "gyro_scale_factor_ppm": (0.0, "ppm", "1-sigma gyro scale-factor error, per axis",
+                                  SCALE_FACTOR_LIMITS),
         "gyro_misalignment_urad": (0.0, "urad", "1-sigma gyro misalignment, per off-diagonal "
-                                                "element"),
+                                                "element", MISALIGNMENT_LIMITS),
         "g_sensitivity_dphpg": (0.0, "deg/h/g", "1-sigma gyro g-sensitivity, per element of "
-                                                "a 3x3 matrix"),
-        "accel_bias_ug": (0.0, "ug", "1-sigma constant accelerometer bias, drawn per axis"),
-        "accel_vrw_ugpsHz": (0.0, "ug/sqrt(Hz)", "accelerometer velocity random walk"),
+                                                "a 3x3 matrix", G_SENSITIVITY_LIMITS),
+        "accel_bias_ug": (0.0, "ug", "1-sigma constant accelerometer bias, drawn per axis",
+                          ACCEL_BIAS_LIMITS),
+        "accel_vrw_ugpsHz": (0.0, "ug/sqrt(Hz)", "accelerometer velocity random walk",
+                             ACCEL_VRW_LIMITS),
         "accel_bias_instability_ug": (0.0, "ug", "steady-state sigma of the Gauss-Markov "
-                                                 "accelerometer bias"),
+                                                 "accelerometer bias", ACCEL_BIAS_LIMITS),
         "accel_bias_tau_s": (0.0, "s", "correlation time of the Gauss-Markov accelerometer "
-                                       "bias (<= 0 disables)"),
+                                       "bias (<= 0 disables)", TAU_LIMITS),
         "accel_scale_factor_ppm": (0.0, "ppm", "1-sigma accelerometer scale-factor error, "
-                                               "per axis"),
+                                               "per axis", SCALE_FACTOR_LIMITS),
         "accel_misalignment_urad": (0.0, "urad", "1-sigma accelerometer misalignment, per "
-                                                 "off-diagonal element"),
+                                                 "off-diagonal element", MISALIGNMENT_LIMITS),
         "noise_level_windows": ("", "", "'t0,t1,factor; ...' white noise multiplied by factor "
-                                        "inside [t0,t1)"),
-        "noise_intensity_gain": (0.0, "", "white noise multiplied by 1 + gain*intensity"),
+                                        "inside [t0,t1)", None),
+        "noise_intensity_gain": (0.0, "", "white noise multiplied by 1 + gain*intensity",
+                                 NOISE_FACTOR_LIMITS),
         "vibration_gyro_rps": (0.0, "rad/s", "1-sigma vibration rate noise per sample at "
-                                             "intensity 1"),
+                                             "intensity 1", VIBRATION_GYRO_LIMITS),
         "vibration_accel_mps2": (0.0, "m/s2", "1-sigma vibration specific-force noise per "
-                                              "sample at intensity 1"),
+                                              "sample at intensity 1", VIBRATION_ACCEL_LIMITS),
     }
 
     #: random numbers drawn per apply() call (6 white noise, 6 Gauss-Markov driving noise)
@@ -178,10 +203,9 @@ class ImuErrorModel:
         check_known(params, self.PARAMETERS, "ImuErrorModel")
 
         def sigma(name: str) -> float:
-            return read_float(params, name, 0.0, nonnegative=True)
+            return read_declared(params, name, self.PARAMETERS)
 
-        def tau(name: str) -> float:
-            return read_float(params, name, 0.0)
+        tau = sigma
 
         # datasheet units -> SI, once
         gyro_bias = sigma("gyro_bias_dph") * DPH

@@ -8,31 +8,47 @@ the time the navigation solution is valid for, ``truth_time`` the time of the tr
 """
 from __future__ import annotations
 
-from .component import boolean, integer, real
+import math
+
+from .component import Limits, boolean, integer, real
 
 AXES_NED = ("n", "e", "d")
 AXES_BODY = ("x", "y", "z")
 
+# Accepted ranges of the signals a component checks on its inputs: times within about 30
+# years of the start, positions on or near the earth (latitude within the poles, heights
+# from a deep valley to low orbit), speeds of anything that flies; per IMU interval of at most
+# 1 s, a rotation of at most pi and a velocity change of at most 1 km/s (100 g for 1 s).
+TIME = Limits(-1e9, 1e9)
+LATITUDE = Limits(-math.pi / 2, math.pi / 2, low_open=True, high_open=True)
+LONGITUDE = Limits(-2 * math.pi, 2 * math.pi)
+EULER_ANGLE = Limits(-2 * math.pi, 2 * math.pi)
+HEIGHT = Limits(-1e5, 1e6)
+VELOCITY = Limits(-1e4, 1e4)
+INTERVAL = Limits(0.0, 1.0)
+DTHETA = Limits(-math.pi, math.pi)
+DVEL = Limits(-1e3, 1e3)
+
 TRUTH = (
-    real("truth_time", "s", "time the truth sample is valid for"),
-    real("truth_lat", "rad", "true geodetic latitude"),
-    real("truth_lon", "rad", "true longitude"),
-    real("truth_h", "m", "true height above the WGS-84 ellipsoid"),
-    real("truth_vn", "m/s", "true velocity north"),
-    real("truth_ve", "m/s", "true velocity east"),
-    real("truth_vd", "m/s", "true velocity down"),
+    real("truth_time", "s", "time the truth sample is valid for", limits=TIME),
+    real("truth_lat", "rad", "true geodetic latitude", limits=LATITUDE),
+    real("truth_lon", "rad", "true longitude", limits=LONGITUDE),
+    real("truth_h", "m", "true height above the WGS-84 ellipsoid", limits=HEIGHT),
+    real("truth_vn", "m/s", "true velocity north", limits=VELOCITY),
+    real("truth_ve", "m/s", "true velocity east", limits=VELOCITY),
+    real("truth_vd", "m/s", "true velocity down", limits=VELOCITY),
     real("truth_roll", "rad", "true roll (ZYX Euler)"),
     real("truth_pitch", "rad", "true pitch (ZYX Euler)"),
     real("truth_yaw", "rad", "true yaw / heading (ZYX Euler), (-pi, pi]"),
 )
 
 IMU = (
-    real("imu_time", "s", "end of the interval the increments cover"),
-    real("imu_dt", "s", "length of the interval the increments cover"),
-    *(real(f"imu_dtheta_{a}", "rad", f"angle increment about body {a} over the interval")
-      for a in AXES_BODY),
-    *(real(f"imu_dvel_{a}", "m/s", f"specific-force velocity increment along body {a}")
-      for a in AXES_BODY),
+    real("imu_time", "s", "end of the interval the increments cover", limits=TIME),
+    real("imu_dt", "s", "length of the interval the increments cover", limits=INTERVAL),
+    *(real(f"imu_dtheta_{a}", "rad", f"angle increment about body {a} over the interval",
+           limits=DTHETA) for a in AXES_BODY),
+    *(real(f"imu_dvel_{a}", "m/s", f"specific-force velocity increment along body {a}",
+           limits=DVEL) for a in AXES_BODY),
     *(real(f"imu_gyro_{a}", "rad/s", f"mean angular rate about body {a} (dtheta/dt)")
       for a in AXES_BODY),
     *(real(f"imu_accel_{a}", "m/s2", f"mean specific force along body {a} (dvel/dt)")
@@ -40,13 +56,13 @@ IMU = (
 )
 
 GNSS = (
-    real("gnss_time", "s", "time the latest fix was taken"),
-    real("gnss_lat", "rad", "measured latitude"),
-    real("gnss_lon", "rad", "measured longitude"),
-    real("gnss_h", "m", "measured height above the ellipsoid"),
-    real("gnss_vn", "m/s", "measured velocity north"),
-    real("gnss_ve", "m/s", "measured velocity east"),
-    real("gnss_vd", "m/s", "measured velocity down"),
+    real("gnss_time", "s", "time the latest fix was taken", limits=TIME),
+    real("gnss_lat", "rad", "measured latitude", limits=LATITUDE),
+    real("gnss_lon", "rad", "measured longitude", limits=LONGITUDE),
+    real("gnss_h", "m", "measured height above the ellipsoid", limits=HEIGHT),
+    real("gnss_vn", "m/s", "measured velocity north", limits=VELOCITY),
+    real("gnss_ve", "m/s", "measured velocity east", limits=VELOCITY),
+    real("gnss_vd", "m/s", "measured velocity down", limits=VELOCITY),
     boolean("gnss_valid", "the latest fix is usable (false during outages)"),
     integer("gnss_epoch", "counter of fixes; a filter updates when it changes"),
 )

@@ -1,0 +1,85 @@
+"""Declared ranges of the components' parameters and inputs (navcore, no FMI).
+
+Every numeric parameter declares its accepted range once, on its port; setting a value
+outside it (or a non-finite Real) is refused with the parameter, the value and the range.
+"""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from navcore import components, signals
+from navcore.component import InputError, Limits, ParameterError
+from navcore.gnss_errors import GnssErrorModel
+from navcore.imu_errors import ImuErrorModel
+
+NUMERIC = [(cls, p) for cls in components.REGISTRY.values() for p in cls.parameters
+           if p.type in ("Real", "Integer")]
+
+
+def test_limits_text_and_membership():
+    assert Limits(0.0, 1.0, low_open=True).text("m") == "(0, 1] m"
+    assert Limits().text() == "finite" and Limits(0.0).text() == "[0, inf)"
+    assert Limits(-math.pi / 2, math.pi / 2, True, True).text("rad") == "(-1.5708, 1.5708) rad"
+    lim = Limits(0.0, 1.0, low_open=True)
+    assert [lim.contains(x) for x in (0.0, 1e-300, 1.0, 1.0000001, math.nan, math.inf)] == [
+        False, True, True, False, False, False]
+
+
+def test_every_default_is_accepted_and_extremes_are_refused():
+    for cls, port in NUMERIC:
+        assert port.limits.contains(port.default()), (cls.model_name, port.name)
+        cls(**{port.name: port.default()})
+        bad = [math.nan, math.inf, -math.inf] if port.type == "Real" else []
+        bad += [x for x in (1e300, -1e300) if not port.limits.contains(x)]
+        for value in bad:
+            with pytest.raises(ParameterError) as err:
+                cls(**{port.name: value})
+            text = str(err.value)
+            assert f"parameter '{port.name}'" in text, text
+            assert port.limits.text(port.unit) in text, text
+
+
+def test_huge_sigma_and_bias_name_the_range():
+    with pytest.raises(ParameterError, match=r"'pos_sigma_n' = 1e\+300 is outside the "
+                                             r"accepted range \[0, 10000\] m"):
+        components.GnssReceiver(pos_sigma_n=1e300)
+    with pytest.raises(ParameterError, match=r"'accel_bias_ug' = 1e\+300 is outside the "
+                                             r"accepted range \[0, 1e\+06\] ug"):
+        components.TrajectoryImu(accel_bias_ug=1e300)
+
+
+def test_error_models_use_the_same_declaration():
+    """The error models read their tables' ranges, so a direct user of the model gets the
+    same refusal as the component."""
+    with pytest.raises(ParameterError, match=r"\[0, 1e\+06\] ug"):
+        ImuErrorModel({"accel_bias_ug": 2e6}, seed=1)
+    with pytest.raises(ParameterError, match=r"\[0, 100\] m/s"):
+        GnssErrorModel({"vel_sigma_n": 1e3}, seed=1)
+    port = {p.name: p for p in components.GnssReceiver.parameters}["vel_sigma_n"]
+    assert port.limits is GnssErrorModel.PARAMETERS["vel_sigma_n"][3]
+
+
+def test_inputs_out_of_range_name_the_input():
+    kf = components.Kf()
+    kf.initialize(0.0)
+    inputs = components.Kf.default_inputs()
+    inputs.update(imu_time=0.01, imu_dt=0.01, imu_dtheta_x=1e300)
+    with pytest.raises(InputError, match=r"input 'imu_dtheta_x' = 1e\+300 is outside the "
+                                         r"accepted range \[-3.14159, 3.14159\] rad"):
+        kf.step(0.0, 0.01, inputs)
+    assert {p.name: p for p in signals.GNSS}["gnss_lat"].limits is signals.LATITUDE
+
+
+def test_stop_time_beyond_the_profile():
+    traj = components.TrajectoryImu(profile="aircraft_500s")
+    traj.stop_time = 500.0
+    traj.initialize(0.0)  # up to the end: fine
+    traj = components.TrajectoryImu(profile="aircraft_500s")
+    traj.stop_time = 500.5
+    with pytest.raises(ParameterError, match="after the end of profile 'aircraft_500s' at 500 s"):
+        traj.initialize(0.0)
+    traj = components.TrajectoryImu(profile="aircraft_500s", extend_profile=True)
+    traj.stop_time = 500.5
+    traj.initialize(0.0)
