@@ -74,12 +74,10 @@ def test_inputs_out_of_range_name_the_input():
 
 def test_stop_time_beyond_the_profile():
     traj = components.TrajectoryImu(profile="aircraft_500s")
-    traj.stop_time = 500.0
-    traj.initialize(0.0)  # up to the end: fine
-    traj = components.TrajectoryImu(profile="aircraft_500s")
-    traj.stop_time = 500.5
+    traj.start(0.0)
+    traj.check_stop_time(500.0)  # up to the end: fine
     with pytest.raises(ParameterError, match="after the end of profile 'aircraft_500s' at 500 s"):
-        traj.initialize(0.0)
+        traj.check_stop_time(500.5)
     traj = components.TrajectoryImu(profile="aircraft_500s", extend_profile=True)
-    traj.stop_time = 500.5
-    traj.initialize(0.0)
+    traj.start(0.0)
+    traj.check_stop_time(500.5)

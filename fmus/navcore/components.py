@@ -546,7 +546,7 @@ from .ukf_filters import (  # noqa: E402  (kept with the classes that use them)
     DEFAULT_PREDICT_INTERVAL, CtfaUkfEngine, ImmUkfEngine, UkfEngine)
 
 #: accepted Q scales of the IMM models (relative to the configured Q)
-_Q_SCALE = Limits(0.0, 1e6, low_open=True)
+_Q_SCALE = Limits(0.0, 1e12, low_open=True)
 #: most IMM models a component offers (outputs model_prob_1..3)
 _IMM_MAX_MODELS = 3
 
@@ -588,7 +588,7 @@ class CtfaUkf(Ukf):
     extra_parameters = Ukf.extra_parameters + (
         real("q_max_scale", "", "Qmax = q_max_scale * Qmin, Qmin = the configured Q (paper 000: "
              "an integer multiple; 100 = the noise variance of a 10 deg/s manoeuvre in "
-             "models/uav_maneuver)", 100.0, Limits(1.0, 1e6)),
+             "models/uav_maneuver)", 100.0, Limits(1.0, 1e12)),
         real("ctfa_t1", "", "lower chi-square threshold of eq. 25 (0 = 6.25 for a 3-dimensional "
              "measurement, else the 90 % chi-square quantile)", 0.0, Limits(0.0, 1e4)),
         real("ctfa_t2", "", "upper chi-square threshold of eq. 25 (0 = 11.35 for a 3-dimensional "
