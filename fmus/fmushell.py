@@ -23,6 +23,25 @@ does the FMI side once for all of them:
   A bug's traceback follows in a second message (category ``traceback``).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.
+
+Hostile or careless host calls (FMI rules checked here and in
+:meth:`navcore.component.Component.advance`):
+
+* ``doStep`` whose communication point is not where the previous step ended (back or ahead),
+  or whose step size is not > 0: refused, nothing changes, a following legal step works;
+* get/set of an unknown value reference or one of another type, set of an output, set of a
+  (fixed) parameter after ``fmi2ExitInitializationMode``: refused (nothing is written; a get
+  returns NaN / 0 / false / "" for the bad references), logged at once with fmi2Error naming
+  the value reference or variable, and reported again by the next ``doStep``, which is
+  refused once.
+
+Statuses: pythonfmu 0.7.0 (its C++ side, ``PySlaveInstance.cpp`` / ``fmi2.cpp``) turns a
+Python exception in *any* call into fmi2Fatal and releases the Python instance, so the
+host's next call on it reads freed memory (the segfault seen with a wrong value reference);
+a ``do_step`` returning False becomes fmi2Discard, and there is no way for Python code to
+make a get/set return anything but fmi2OK or fmi2Fatal.  So no exception may leave these
+functions: a refused doStep returns fmi2Discard (not fmi2Error), a refused get/set returns
+fmi2OK with the fmi2Error message in the log and the refusal of the next doStep.
 """
 from __future__ import annotations
 
@@ -36,7 +55,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 from navcore import state_format
-from navcore.component import NavcoreError, numerical_failure
+from navcore.component import NavcoreError, RefusedCall, numerical_failure
 from navcore.state import StateError, capture_value, check_kind
 from navcore.state_format import StateFormatError
 
@@ -90,7 +109,11 @@ def setup(slave, component_class):
     slave._stop_time = None
     slave._failed = None
     slave._refused_state = None
-    slave._vr_names = {}
+    slave._refused = None      # a refused get/set, reported by the next do_step
+    slave._initialized = False
+    slave._vr_names = {}       # type -> {value reference: name}
+    slave._settable = {}       # type -> {value reference: name} that may be set now
+    slave._causality = {}
     # the FMU's identity hashes its sources: read them now, while the folder pythonfmu loaded
     # them from exists (a host may delete it once the first instance is freed)
     _identity(type(slave))
@@ -120,6 +143,9 @@ def _register(slave, port, causality, variability, initial):
     )
     slave.register_variable(var, nested=False)
     slave._vr_names.setdefault(port.type, {})[var.value_reference] = name
+    slave._causality[name] = causality.name
+    if causality != Fmi2Causality.output:
+        slave._settable.setdefault(port.type, {})[var.value_reference] = name
 
 
 # -- life cycle (bound as methods of each slave class) ------------------------------------
@@ -130,6 +156,10 @@ def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
 
 def exit_initialization_mode(slave):
     params = {p.name: slave._values[p.name] for p in slave.component_class.parameters}
+    slave._initialized = True
+    inputs = set(slave._input_names)
+    slave._settable = {t: {vr: n for vr, n in names.items() if n in inputs}
+                       for t, names in slave._settable.items()}
     try:
         slave._component = slave.component_class(**params)
         slave._values.update(slave._component.start(slave._start_time))
@@ -152,10 +182,23 @@ def do_step(slave, current_time, step_size):
         slave.log(f"{slave.instance_name}: refusing to step after an earlier error: "
                   f"{slave._failed}", Fmi2Status.error)
         return False
+    if slave._refused is not None:
+        message, slave._refused = slave._refused, None
+        slave.log(f"{slave.instance_name}: doStep at t = {current_time!r} s refused once "
+                  f"because of an earlier refused call: {message}", Fmi2Status.error)
+        return False
+    component = slave._component
+    if component is None:
+        slave.log(f"{slave.instance_name}: doStep before fmi2ExitInitializationMode",
+                  Fmi2Status.error)
+        return False
     values = slave._values
     try:
         inputs = {n: values[n] for n in slave._input_names}
-        values.update(slave._component.step(current_time, step_size, inputs))
+        values.update(component.advance(current_time, step_size, inputs))
+    except RefusedCall as exc:
+        slave.log(f"{slave.instance_name}: {exc}", Fmi2Status.error)
+        return False
     except NavcoreError as exc:
         _fail(slave, f"{exc} (at t = {current_time:.6g} s)")
         return False
@@ -167,6 +210,8 @@ def do_step(slave, current_time, step_size):
         _fail(slave, f"internal error: {exc!r} (at t = {current_time:.6g} s)",
               traceback.format_exc())
         return False
+    for notice in component.take_notices():
+        slave.log(f"{slave.instance_name}: {notice}", Fmi2Status.warning)
     return True
 
 
@@ -181,27 +226,70 @@ def _fail(slave, message, details=None):
 # pythonfmu's own get_real/set_real look every variable up through its ScalarVariable object
 # and a getter closure (about 1 us per variable); these read and write the value dict
 # directly, which matters because the master calls them for every component every step.
+# They never raise (module docstring): a bad call is refused through _refuse.
+_PLACEHOLDER = {"Real": float("nan"), "Integer": 0, "Boolean": False, "String": ""}
+
+
 def _getter(type_name):
     def get(slave, vrs):
         names = slave._vr_names.get(type_name, {})
         values = slave._values
         try:
             return [values[names[vr]] for vr in vrs]
-        except KeyError as exc:
-            raise TypeError(f"valueReference {exc.args[0]} is not a {type_name} variable") from None
+        except (KeyError, TypeError):
+            bad = [vr for vr in vrs if names.get(vr) is None]
+            _refuse(slave, f"fmi2Get{type_name}: " + _unknown(slave, type_name, bad))
+            return [values[names[vr]] if names.get(vr) is not None else _PLACEHOLDER[type_name]
+                    for vr in vrs]
     return get
 
 
 def _setter(type_name):
     def set_(slave, vrs, new_values):
-        names = slave._vr_names.get(type_name, {})
-        values = slave._values
+        settable = slave._settable.get(type_name, {})
         try:
-            for vr, value in zip(vrs, new_values):
-                values[names[vr]] = value
-        except KeyError as exc:
-            raise TypeError(f"valueReference {exc.args[0]} is not a {type_name} variable") from None
+            names = [settable[vr] for vr in vrs]
+        except (KeyError, TypeError):
+            _refuse(slave, f"fmi2Set{type_name}: " + _why_not_settable(slave, type_name, vrs))
+            return
+        slave._values.update(zip(names, new_values))
     return set_
+
+
+def _unknown(slave, type_name, vrs):
+    others = {vr: (t, n) for t, names in slave._vr_names.items() for vr, n in names.items()}
+    parts = []
+    for vr in vrs:
+        if vr in others:
+            t, n = others[vr]
+            parts.append(f"valueReference {vr} is '{n}', of type {t}, not {type_name}")
+        else:
+            parts.append(f"valueReference {vr} is no variable of {slave.modelName}")
+    return "; ".join(parts)
+
+
+def _why_not_settable(slave, type_name, vrs):
+    names = slave._vr_names.get(type_name, {})
+    settable = slave._settable.get(type_name, {})
+    unknown = [vr for vr in vrs if vr not in names]
+    parts = [_unknown(slave, type_name, unknown)] if unknown else []
+    for vr in vrs:
+        name = names.get(vr)
+        if name is None or vr in settable:
+            continue
+        if slave._causality[name] == "output":
+            parts.append(f"'{name}' (valueReference {vr}) is an output; only inputs and "
+                         "parameters can be set")
+        else:
+            parts.append(f"parameter '{name}' (valueReference {vr}) is fixed: it can only be "
+                         "set before fmi2ExitInitializationMode")
+    return "; ".join(parts) + " (nothing was set)"
+
+
+def _refuse(slave, message):
+    slave._refused = message
+    slave.log(f"{slave.instance_name}: {message}", Fmi2Status.error)
+
 
 
 # -- FMU state: declared data only, never code ---------------------------------------------

@@ -686,7 +686,8 @@ class DirectInstance(Instance):
 
     def do_step(self, t: float, h: float) -> None:
         try:
-            outputs = self.component.step(t, h, self._inputs)
+            advance = getattr(self.component, "advance", None) or self.component.step
+            outputs = advance(t, h, self._inputs)
         except self._errors + (ArithmeticError, ValueError) as exc:
             raise self._error(f"step from t = {t:.9g} s to t = {t + h:.9g} s", exc, t,
                               at=False) from None

@@ -5,5 +5,6 @@ Modules are named for what they compute: ``earth`` (WGS-84), ``rotations``, ``st
 ``gnss_errors`` (sensor error models), ``error_model`` (15-state INS error dynamics),
 ``ins_gnss_kf`` (error-state Kalman filter), ``adaptive_laws`` (papers 001 and 004),
 ``unscented``/``ctfa``/``imm`` (paper 000), ``components`` (the step-wise models wrapped by
-the FMUs) and ``signals`` (the variable contracts).
+the FMUs), ``signals`` (the variable contracts), ``timing`` (sample grids and the one time
+tolerance) and ``latency`` (the history that applies a late GNSS fix at its time).
 """

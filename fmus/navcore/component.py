@@ -68,15 +68,23 @@ Cross-parameter conditions (``t1 < t2``) stay in ``initialize`` (:meth:`Componen
 After ``start``, the FMU shell and the master call ``check_stop_time(stop_time)`` with the
 experiment's stop time (when the host gives one), so a component can refuse a run it cannot
 cover.
+A caller (the FMU shell, the master's direct backend) drives a component through
+:meth:`Component.start` and :meth:`Component.advance`, which add the rules every component
+shares: communication points follow each other (``t`` of a step is where the previous one
+ended, within :func:`navcore.timing.time_tolerance`) and a step size is > 0; a call that
+breaks them raises :class:`RefusedCall` and changes nothing.  Messages a component wants a
+user to see without failing (a fix it did not use, say) are queued with :meth:`notify` and
+collected by the caller with :meth:`take_notices`.
 """
 from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar, Dict, Tuple
+from typing import Any, ClassVar, Dict, List, Tuple
 
 from . import state as _state
+from .timing import time_tolerance
 
 
 class NavcoreError(ValueError):
@@ -128,6 +136,9 @@ class Limits:
 
 #: any finite value
 FINITE = Limits()
+class RefusedCall(NavcoreError):
+    """A call the component refused before changing anything (a communication point that
+    jumps, a step size <= 0): the caller may go on with a legal call."""
 
 
 @dataclass(frozen=True)
@@ -192,6 +203,7 @@ class Component(ABC):
     default_experiment: ClassVar[Tuple[float, float, float]] = (0.0, 10.0, 0.01)
     def __init__(self, **params):
         self.params: Dict[str, Any] = {p.name: p.default() for p in self.parameters}
+        self.notices: List[str] = []
         for name, value in params.items():
             self.set_parameter(name, value)
 
@@ -271,15 +283,20 @@ class Component(ABC):
         """Begin a run at ``start_time``: record it (it is part of the state) and
         :meth:`initialize`."""
         self.initial_time = float(start_time)
-        return self.initialize(self.initial_time)
+        outputs = self.initialize(self.initial_time)
+        self.communication_time = self.initial_time
+        return outputs
 
     # -- state (module docstring) ----------------------------------------------------------
     #: instance attributes that change while stepping (restored by set_state)
-    state_fields: ClassVar[Tuple[str, ...]] = ()
-    #: instance attributes rebuilt from the parameters by __init__ and initialize
-    derived_fields: ClassVar[Tuple[str, ...]] = ("params", "initial_time")
+    state_fields: ClassVar[Tuple[str, ...]] = ("communication_time",)
+    #: instance attributes rebuilt from the parameters by __init__ and initialize (the
+    #: notices are transient: the caller collects them after every step)
+    derived_fields: ClassVar[Tuple[str, ...]] = ("params", "initial_time", "notices")
     #: start time of a component initialized without :meth:`start`
     initial_time: float = 0.0
+    #: end of the last step (the start time until the first one)
+    communication_time: float = 0.0
 
     def get_state(self) -> Dict[str, Any]:
         """The state as plain data: ``{"params", "initial_time", "fields"}``."""
@@ -307,6 +324,32 @@ class Component(ABC):
         component.start(start_time)
         _state.restore(component, state["fields"], where)
         return component
+
+    def advance(self, t: float, h: float, inputs: Dict[str, Any]) -> Dict[str, Any]:
+        """:meth:`step` from ``t`` to ``t + h`` after checking that ``t`` is where the previous
+        step ended and ``h > 0`` (:class:`RefusedCall` otherwise, nothing changed)."""
+        if not h > 0:  # also NaN
+            raise RefusedCall(f"{self.model_name}: communication step size {h} s at t = {t} s "
+                              "must be > 0")
+        expected = self.communication_time
+        if not abs(t - expected) <= time_tolerance(h, expected):
+            raise RefusedCall(
+                f"{self.model_name}: doStep at t = {t!r} s but the previous step ended at "
+                f"t = {expected!r} s; communication points must follow each other (restore "
+                "an FMU state to go back)")
+        outputs = self.step(t, h, inputs)
+        self.communication_time = t + h
+        return outputs
+
+    def notify(self, message: str) -> None:
+        """Queue a message for the user (logged by the caller as a warning)."""
+        self.notices.append(message)
+
+    def take_notices(self) -> List[str]:
+        """The queued messages, oldest first; the queue is emptied."""
+        notices, self.notices = self.notices, []
+        return notices
+
 
     def set_state(self, state: Any) -> None:
         """Become the component of ``state`` (see :meth:`from_state`); unchanged on error."""

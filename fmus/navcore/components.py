@@ -11,20 +11,26 @@ import math
 import numpy as np
 
 from . import signals
+from . import state as _state
 from .component import (Component, InputError, Limits,
                         ParameterError, boolean, integer, real, string)
 from .gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS, GnssErrorModel
 from .imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, DPH, DPSH, GYRO_ARW_LIMITS,
                          GYRO_BIAS_LIMITS, INTENSITY_REFERENCE_RATE, UG, ImuErrorModel)
 from .ins_gnss_kf import MEASUREMENTS, ErrorStateKf, KfConfig
+from .latency import SolutionHistory
 from .rotations import dcm_to_euler
 from .strapdown import Strapdown
+from .timing import TIME_TOLERANCE, same_time, samples_reached, time_tolerance
 from .trajectory import TrajectoryGenerator, load_profile
 
-#: relative tolerance on times compared across components (s)
-TIME_TOLERANCE = 1e-9
 #: accepted seeds (numpy's generators take non-negative integers; FMI Integers are 32 bit)
 SEED_LIMITS = Limits(0, 2**31 - 1)
+#: default latency bound of the filters (parameter ``max_fix_age``) [s]: a 1 Hz receiver
+#: under a Jacobi master (libcosim) reaches the filter one receiver period (1 s) after the
+#: fix was taken; the extra half period covers a receiver's own output latency up to 0.5 s
+#: on top (or a 2 Hz receiver with a 1 s delay)
+DEFAULT_MAX_FIX_AGE = 1.5
 
 _UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug",
                       "ug/sqrt(Hz)": "ug/sqrt(Hz)", "ppm": "ppm", "urad": "urad",
@@ -44,18 +50,14 @@ def ports_from_table(table):
     return tuple(ports)
 
 
-def _check_step(component, name, h, expected):
-    if not h > 0:
-        raise InputError(f"{component.model_name}: step size {h} s must be > 0")
-    if abs(h - expected) > TIME_TOLERANCE * max(1.0, expected):
-        raise ParameterError(
-            f"{component.model_name}: parameter '{name}' = {expected} s but the component is "
-            f"stepped with {h} s; step it at its own period")
-
-
 # ---------------------------------------------------------------------------------------
 class TrajectoryImu(Component):
-    """6-DOF truth from a motion profile and the IMU increments measured along it."""
+    """6-DOF truth from a motion profile and the IMU increments measured along it.
+
+    Samples every ``imu_period`` on its own grid (:mod:`navcore.timing`): a communication
+    step covering k epochs computes all k samples and outputs the last (k steps of one
+    period give the same numbers bit for bit); a step reaching no epoch holds the outputs.
+    """
 
     model_name = "TrajectoryImu"
     description = ("Truth trajectory from a motion profile on WGS-84 and the strapdown IMU "
@@ -64,7 +66,8 @@ class TrajectoryImu(Component):
     parameters = (
         string("profile", "built-in motion profile name (static, aircraft_500s, manoeuvre_1h, "
                "uav_maneuver) or path of a JSON profile file", "aircraft_500s"),
-        real("imu_period", "s", "IMU sampling interval; the component is stepped with it", 0.01,
+        real("imu_period", "s", "IMU sampling interval (samples on this grid; any communication "
+             "step)", 0.01,
              Limits(0.0, 1.0, low_open=True)),
         boolean("extend_profile", "allow a run beyond the profile's end (the truth then flies "
                 "on at the final velocity and attitude)", False),
@@ -74,7 +77,7 @@ class TrajectoryImu(Component):
     inputs = ()
     outputs = signals.TRUTH + signals.IMU
     default_experiment = (0.0, 500.0, 0.01)
-    state_fields = ("generator", "errors", "start_time", "n")
+    state_fields = ("generator", "errors", "start_time", "n", "out")
     derived_fields = ("dt",)
 
     def initialize(self, start_time):
@@ -88,7 +91,8 @@ class TrajectoryImu(Component):
         out = self._truth(self.generator.state())
         out.update({p.name: 0.0 for p in signals.IMU})
         out["imu_time"] = self.start_time
-        return out
+        self.out = out
+        return dict(out)
 
     def check_stop_time(self, stop_time):
         """Refuse a run past the profile's end unless ``extend_profile``."""
@@ -106,7 +110,11 @@ class TrajectoryImu(Component):
                 "truth_pitch": s["pitch"], "truth_yaw": s["yaw"]}
 
     def step(self, t, h, inputs):
-        _check_step(self, "imu_period", h, self.dt)
+        for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):
+            self.out = self._sample()
+        return self.out
+
+    def _sample(self):
         truth, dtheta, dvel = self.generator.step()
         self.n += 1
         t_end = self.start_time + self.n * self.dt
@@ -116,16 +124,24 @@ class TrajectoryImu(Component):
         out["imu_time"] = t_end
         out["imu_dt"] = self.dt
         for i, a in enumerate(signals.AXES_BODY):
-            out[f"imu_dtheta_{a}"] = dtheta[i]
-            out[f"imu_dvel_{a}"] = dvel[i]
-            out[f"imu_gyro_{a}"] = dtheta[i] / self.dt
-            out[f"imu_accel_{a}"] = dvel[i] / self.dt
+            dth, dv = float(dtheta[i]), float(dvel[i])   # plain floats: the outputs are state
+            out[f"imu_dtheta_{a}"] = dth
+            out[f"imu_dvel_{a}"] = dv
+            out[f"imu_gyro_{a}"] = dth / self.dt
+            out[f"imu_accel_{a}"] = dv / self.dt
         return out
 
 
 # ---------------------------------------------------------------------------------------
 class GnssReceiver(Component):
-    """Position/velocity fixes from the truth at the receiver's own rate, with its errors."""
+    """Position/velocity fixes from the truth at the receiver's own rate, with its errors.
+
+    Driven by the truth's time tag: a fix is taken when ``truth_time`` reaches the next epoch
+    of its grid (one per step; epochs a coarse step jumps over are skipped), so any
+    communication step works.  ``output_delay`` > 0 publishes each fix at the first
+    communication point at least that long after ``gnss_time`` (which keeps the time the
+    fix was taken): the latency of a real receiver's solution.
+    """
 
     model_name = "GnssReceiver"
     description = ("GNSS receiver: position and velocity fixes from the truth at its own rate "
@@ -133,15 +149,20 @@ class GnssReceiver(Component):
                    "outliers and outages; 'gnss_epoch' counts fixes.")
     parameters = (
         integer("seed", "seed of every random error of the receiver", 2, SEED_LIMITS),
+        real("output_delay", "s", "latency of the receiver's output: a fix is published this "
+             "long after it was taken, with its gnss_time unchanged (0 = at once)", 0.0,
+             Limits(0.0, 3600.0)),
         *ports_from_table(GnssErrorModel.PARAMETERS),
     )
     inputs = signals.TRUTH[:7]
     outputs = signals.GNSS + signals.GNSS_INJECTED
     default_experiment = (0.0, 500.0, 1.0)
-    state_fields = ("model", "next_fix", "n_fix", "start_time", "out")
-    derived_fields = ("interval",)
+    state_fields = ("model", "next_fix", "n_fix", "start_time", "out", "queue")
+    derived_fields = ("interval", "delay")
 
     def initialize(self, start_time):
+        self.delay = self.params["output_delay"]
+        self.queue = []   # fixes taken, not yet published (output_delay > 0)
         self.model = GnssErrorModel({k: self.params[k] for k in GnssErrorModel.PARAMETERS},
                                     self.params["seed"])
         self.interval = self.params["fix_interval"]
@@ -153,26 +174,35 @@ class GnssReceiver(Component):
         return dict(self.out)
 
     def step(self, t, h, inputs):
-        if not h > 0:
-            raise InputError(f"{self.model_name}: step size {h} s must be > 0")
         self.check_inputs(inputs, ("truth_time", "truth_lat", "truth_lon", "truth_h",
                                           "truth_vn", "truth_ve", "truth_vd"))
         t_truth = inputs["truth_time"]
-        if t_truth + TIME_TOLERANCE * max(1.0, abs(t_truth)) < self.next_fix:
-            return self.out
+        if t_truth + time_tolerance(self.interval, t_truth) >= self.next_fix:
+            fix = self._fix(t_truth, inputs)
+            if self.delay == 0.0:
+                self.out = fix
+            else:
+                self.queue.append(fix)
+        if self.queue:
+            now = t + h
+            tol = time_tolerance(self.interval, now)
+            while self.queue and self.queue[0]["gnss_time"] + self.delay <= now + tol:
+                self.out = self.queue.pop(0)
+        return self.out
+
+    def _fix(self, t_truth, inputs):
         # one fix per due epoch; epochs missed by a coarse step are skipped, not queued
-        k = math.floor((t_truth - self.start_time) / self.interval + 1e-9)
+        k = samples_reached(self.start_time, self.interval, t_truth)
         self.next_fix = self.start_time + (k + 1) * self.interval
         fix = self.model.measure(t_truth, inputs["truth_lat"], inputs["truth_lon"],
                                  inputs["truth_h"],
                                  np.array([inputs["truth_vn"], inputs["truth_ve"],
                                            inputs["truth_vd"]]))
         self.n_fix += 1
-        self.out = {"gnss_time": t_truth, "gnss_lat": fix["lat"], "gnss_lon": fix["lon"],
-                    "gnss_h": fix["h"], "gnss_vn": fix["vn"], "gnss_ve": fix["ve"],
-                    "gnss_vd": fix["vd"], "gnss_valid": bool(fix["valid"]),
-                    "gnss_epoch": self.n_fix, "gnss_outlier": bool(fix["outlier"])}
-        return self.out
+        return {"gnss_time": t_truth, "gnss_lat": fix["lat"], "gnss_lon": fix["lon"],
+                "gnss_h": fix["h"], "gnss_vn": fix["vn"], "gnss_ve": fix["ve"],
+                "gnss_vd": fix["vd"], "gnss_valid": bool(fix["valid"]),
+                "gnss_epoch": self.n_fix, "gnss_outlier": bool(fix["outlier"])}
 
 
 # ---------------------------------------------------------------------------------------
@@ -222,8 +252,9 @@ _FILTER_PARAMETERS = (
     real("r_vel_d", "m/s", "GNSS velocity 1-sigma assumed, down", 0.3, _R_VEL),
     string("measurement", "GNSS measurement used: 'position' or 'position_velocity'",
            "position_velocity"),
-    real("max_fix_age", "s", "fixes older than this (by gnss_time vs imu_time) are ignored", 0.5,
-         Limits(0.0, 3600.0)),
+    real("max_fix_age", "s", "latency bound: a fix whose gnss_time is more than this from the "
+         "filter's nav_time is not applied (counted in n_stale_fixes); a later one is applied "
+         "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -236,14 +267,25 @@ class InsGnssFilter(Component):
 
     Subclasses name their engine (``engine_class``), may add parameters (``extra_parameters``)
     and diagnostic outputs (``extra_outputs``), and build the engine in :meth:`make_engine`.
+
+    Time of validity, for every engine: a fix is applied at the IMU epoch nearest its
+    ``gnss_time`` -- at once, after waiting (a fix from the future) or by rollback and exact
+    re-propagation from a checkpoint (a late fix; :mod:`navcore.latency`, Groves 2013 sec.
+    3.3) -- within the latency bound ``max_fix_age`` (:data:`DEFAULT_MAX_FIX_AGE`); beyond
+    it, it is counted in ``n_stale_fixes``.  The filter follows the IMU's time tags, not the
+    communication step: each new interval must start where the last one integrated ended.
     """
 
     engine_class = ErrorStateKf
     extra_parameters = ()
     extra_outputs = ()
+    #: the filter applies fixes, so it keeps the history that late ones need
+    applies_fixes = True
     inputs = signals.FILTER_INPUTS
     default_experiment = (0.0, 500.0, 0.01)
-    state_fields = ("engine", "nav_time", "last_epoch", "out")
+    state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
+                    "n_stale", "late_fixes")
+    derived_fields = ("max_fix_age",)
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -276,24 +318,35 @@ class InsGnssFilter(Component):
     def make_engine(self, config, nav):
         return self.engine_class(config, nav, **self.engine_options())
 
-    # -- life cycle --------------------------------------------------------------------
-    def initialize(self, start_time):
+    def fresh_engine(self):
+        """The engine as it starts, built from the parameters (validated first)."""
         p = self.params
         config = self.make_config()
         nav = Strapdown.from_euler(p["init_lat"], p["init_lon"], p["init_h"],
                                    np.array([p["init_vn"], p["init_ve"], p["init_vd"]]),
                                    p["init_roll"], p["init_pitch"], p["init_yaw"])
-        self.engine = self.make_engine(config, nav)
+        return self.make_engine(config, nav)
+
+    # -- life cycle --------------------------------------------------------------------
+    def initialize(self, start_time):
+        p = self.params
+        self.engine = self.fresh_engine()
         self.nav_time = float(start_time)
+        self.imu_dt = 0.0            # length of the last IMU interval integrated
         self.last_epoch = 0
+        self.max_fix_age = p["max_fix_age"]
+        self.history = SolutionHistory(self.nav_time, self.engine)
+        self.pending = []            # fixes from the future: (gnss_time, lat, lon, h, v)
+        self.n_stale = 0
+        self.late_fixes = False      # a fix was applied in the past: dense checkpoints
         self.out = {q.name: q.default() for q in self.outputs}
         self._write_solution()
         self.write_diagnostics(None)  # extra outputs start from the engine's initial state
         return dict(self.out)
 
     def step(self, t, h, inputs):
-        if not h > 0:
-            raise InputError(f"{self.model_name}: step size {h} s must be > 0")
+        """Integrate the new IMU interval (if any), then apply the fixes due (module
+        :mod:`navcore.latency`: at the IMU epoch nearest their gnss_time)."""
         self.check_inputs(inputs, _IMU_INPUT_NAMES)
         imu_dt = inputs["imu_dt"]
         imu_time = inputs["imu_time"]
@@ -301,33 +354,99 @@ class InsGnssFilter(Component):
         out["updated"] = False
         # a new IMU interval ends after the one already integrated: mechanize it
         if imu_time > self.nav_time + 0.5 * imu_dt and imu_dt > 0:
-            if abs(imu_dt - h) > 1e-6 * h:
+            begin = imu_time - imu_dt
+            if not same_time(begin, self.nav_time, imu_dt):
+                skipped = round((begin - self.nav_time) / imu_dt)
                 raise InputError(
-                    f"{self.model_name}: input 'imu_dt' = {imu_dt} s but the filter is stepped "
-                    f"with {h} s; step the filter at the IMU rate so no increment is lost")
+                    f"{self.model_name}: input 'imu_time' = {imu_time!r} s with 'imu_dt' = "
+                    f"{imu_dt!r} s starts at {begin!r} s, but the last IMU interval integrated "
+                    f"ended at nav_time = {self.nav_time!r} s ({skipped} IMU intervals "
+                    "skipped or overlapping); step the filter at least as often as the IMU "
+                    "delivers samples")
+            self.imu_dt = imu_dt
             dtheta = np.array([inputs["imu_dtheta_x"], inputs["imu_dtheta_y"],
                                inputs["imu_dtheta_z"]])
             dvel = np.array([inputs["imu_dvel_x"], inputs["imu_dvel_y"], inputs["imu_dvel_z"]])
-            self.engine.propagate(dtheta, dvel, imu_dt)
-            self.nav_time = imu_time
+            self._integrate((imu_time, dtheta, dvel, imu_dt))
+            while self.pending and self.pending[0][0] <= self.nav_time + self._half_interval():
+                self._apply(self.pending.pop(0))
         epoch = inputs["gnss_epoch"]
         if epoch != self.last_epoch:
             self.last_epoch = epoch
             if inputs["gnss_valid"]:
-                self._update(inputs)
+                self._receive_fix(inputs)
         self._write_solution()
         return out
 
-    def _update(self, inputs):
+    def _integrate(self, increment):
+        imu_time, dtheta, dvel, imu_dt = increment
+        self.engine.propagate(dtheta, dvel, imu_dt)
+        self.nav_time = imu_time
+        if self.applies_fixes:
+            self.history.record(increment, self.engine, self.max_fix_age + imu_dt,
+                                self.late_fixes)
+
+    def _half_interval(self):
+        """A fix within this of an IMU epoch is applied at that epoch."""
+        return 0.5 * self.imu_dt + time_tolerance(self.imu_dt, self.nav_time)
+
+    def _receive_fix(self, inputs):
+        """A new valid fix: apply it now, later (from the future) or in the past (rollback),
+        or count it as stale when it is outside the latency bound."""
         self.check_inputs(inputs, _GNSS_VALUE_NAMES)
-        age = self.nav_time - inputs["gnss_time"]
-        if abs(age) > self.params["max_fix_age"]:
-            return
+        fix = (inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
+               np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]))
+        age = self.nav_time - fix[0]
+        self.out["fix_age"] = age
+        half = self._half_interval()
+        bound = self.max_fix_age + time_tolerance(self.imu_dt, self.nav_time)
+        too_far = abs(age) > bound
+        # (within the bound the history reaches back far enough unless a fix was applied)
+        before_applied = not too_far and fix[0] < self.history.oldest_time() - half
+        if too_far or before_applied:
+            self._stale(fix[0], age, before_applied)
+        elif fix[0] > self.nav_time + half:
+            self.pending.append(fix)
+        elif fix[0] >= self.nav_time - half:
+            self._apply(fix)
+        else:
+            self._apply_in_the_past(fix, half)
+
+    def _stale(self, gnss_time, age, before_applied):
+        self.n_stale += 1
+        self.out["n_stale_fixes"] = self.n_stale
+        if self.n_stale == 1:
+            why = ("is older than the epoch of a fix already applied" if before_applied else
+                   f"is {abs(age):.6g} s {'old' if age > 0 else 'ahead'}, beyond parameter "
+                   f"'max_fix_age' = {self.max_fix_age} s")
+            self.notify(f"{self.model_name}: at nav_time = {self.nav_time:.6g} s the fix taken at "
+                        f"gnss_time = {gnss_time:.6g} s {why}: not applied (counted in "
+                        "n_stale_fixes; later stale fixes are only counted)")
+
+    def _apply_in_the_past(self, fix, half):
+        """Roll back to the checkpoint before the fix's epoch, re-propagate to it, apply the
+        fix, re-propagate to the present (module :mod:`navcore.latency`)."""
+        self.late_fixes = True
+        self.nav_time, tree, replay = self.history.rollback(fix[0] + half)
+        self.engine = self.fresh_engine()
+        _state.restore(self.engine, tree, f"{self.model_name} checkpoint")
+        applied = self.nav_time >= fix[0] - half
+        if applied:
+            self._apply(fix)
+        for increment in replay:
+            self._integrate(increment)
+            if not applied and self.nav_time >= fix[0] - half:
+                self._apply(fix)
+                applied = True
+
+    def _apply(self, fix):
+        """Measurement update with ``fix`` at the current IMU epoch (its gnss_time within
+        half an interval); the history restarts here."""
+        gnss_time, lat, lon, h, v = fix
         engine = self.engine
-        z = engine.measurement(inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
-                               np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]),
-                               age)
+        z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
         result = engine.update(z)
+        self.history.restart(self.nav_time, engine)
         out = self.out
         out["updated"] = True
         out["nis"] = result.nis
@@ -531,8 +650,9 @@ class InsOnly(InsGnssFilter):
     description = ("Free strapdown inertial navigation (no GNSS update), same inputs and "
                    "outputs as the INS/GNSS filters; the covariance only propagates.")
     engine_class = InsOnlyKf
+    applies_fixes = False
 
-    def _update(self, inputs):
+    def _receive_fix(self, inputs):
         """No measurement update: the GNSS fix is ignored."""
 
 

@@ -14,8 +14,10 @@ Stepping rule (time tags decide, never call order): a step ``(t, t + h]`` output
 * the latest truth line with ``time <= t + h`` (``truth_*``), when the log has a truth file;
   without one the truth outputs stay 0 and ``truth_time`` stays at the start time.
 
-Times are compared with the tolerance ``TIME_TOLERANCE * max(1, |t|)`` of the other
-components.  At initialization the outputs are the log's state at the start time (no IMU
+Any communication step works: a step reaching several IMU lines outputs the last of them
+(a filter downstream then sees the skipped intervals and stops with an error naming
+``imu_time``), a step reaching none holds the outputs.  Times are compared with
+:func:`navcore.timing.time_tolerance` on the log's IMU period, as in the other components.  At initialization the outputs are the log's state at the start time (no IMU
 interval yet, ``imu_dt`` = 0).  Everything the component needs comes from its ``log``
 parameter (a folder in the format of :mod:`navcore.sensorlog`), read once at initialization.
 """
@@ -28,9 +30,7 @@ import numpy as np
 from . import signals
 from .component import Component, InputError, ParameterError, string
 from .sensorlog import read_log
-
-#: tolerance on times, relative to max(1, |t|) (the components' TIME_TOLERANCE)
-TIME_TOLERANCE = 1e-9
+from .timing import time_tolerance
 
 _TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
@@ -84,9 +84,8 @@ class ImuGnssReplay(Component):
         self._advance(self.start_time)
         return dict(self.out)
 
-    @staticmethod
-    def _limit(t):
-        return t + TIME_TOLERANCE * max(1.0, abs(t))
+    def _limit(self, t):
+        return t + time_tolerance(self.period, t)
 
     def _advance(self, t_end):
         """GNSS and truth lines up to t_end."""
@@ -112,24 +111,18 @@ class ImuGnssReplay(Component):
                     out["truth_" + name] = value
 
     def step(self, t, h, inputs):
-        if not h > 0:
-            raise InputError(f"{self.model_name}: step size {h} s must be > 0")
         t_end = t + h
-        if abs(h - self.period) > 1e-6 * self.period:
-            raise ParameterError(
-                f"{self.model_name}: the log {self.log_folder} has IMU intervals of "
-                f"{self.period} s but the component is stepped with {h} s; step it at the "
-                "log's IMU period")
-        k = self.next_imu
-        if k >= len(self.imu):
-            raise InputError(f"{self.model_name}: the log {self.log_folder} ends at "
-                             f"{float(self.imu[-1, 0])!r} s; no IMU interval in ({float(t)!r}, {float(t_end)!r}] s")
-        row = self.imu[k].tolist()
-        if abs(row[0] - t_end) > 1e-6 * h + TIME_TOLERANCE * max(1.0, abs(t_end)):
-            raise InputError(f"{self.model_name}: the log's IMU interval ending at {float(row[0])!r} s "
-                             f"does not fall in the step ({float(t)!r}, {float(t_end)!r}] s; the simulation "
-                             "time must follow the log's IMU intervals")
-        self.next_imu = k + 1
+        n = int(np.searchsorted(self.imu[:, 0], self._limit(t_end), side="right"))
+        if n == self.next_imu:
+            due = float(self.imu[-1, 0]) + self.period          # the next line, were there one
+            if n == len(self.imu) and self._limit(t_end) >= due:
+                raise InputError(f"{self.model_name}: the log {self.log_folder} ends at "
+                                 f"{float(self.imu[-1, 0])!r} s; no IMU interval in "
+                                 f"({float(t)!r}, {float(t_end)!r}] s")
+            self._advance(t_end)
+            return self.out        # no IMU line reached: the outputs hold
+        self.next_imu = n
+        row = self.imu[n - 1].tolist()
         out = self.out
         dt = row[1]
         out["imu_time"] = row[0]

@@ -107,6 +107,10 @@ _DIAGNOSTICS = (
     real("r_scale", "", "adaptive measurement-noise scale, trace(R_used)/trace(R0)", 1.0),
     real("fading_factor", "", "fading-memory factor lambda of the latest update (1 = none)", 1.0),
     boolean("outlier", "the latest measurement was judged an outlier"),
+    real("fix_age", "s", "age of the latest fix when it reached the filter: nav_time - "
+         "gnss_time (negative for a fix from the future, applied when the INS reaches it)"),
+    integer("n_stale_fixes", "fixes not applied because their gnss_time was more than "
+            "max_fix_age from nav_time, or before the epoch of a fix already applied"),
 )
 
 #: outputs every INS/GNSS filter has (filters may add their own diagnostics)
