@@ -161,9 +161,9 @@ FMU_SIDE = {
     "unknown_profile": ("trajectory.profile=no_such_profile",
                         "component 'trajectory' (TrajectoryImu.fmu): profile 'no_such_profile' "
                         "is neither a built-in profile"),
-    "imu_period_not_the_step": ("trajectory.imu_period=0.02",
-                                "component 'trajectory' (TrajectoryImu.fmu): parameter "
-                                "'imu_period' = 0.02 s but the component is stepped with 0.01 s"),
+    "imu_faster_than_the_filter": ("trajectory.imu_period=0.005",
+                                   "component 'filter' (Kf.fmu): input 'imu_time' = 0.01 s with "
+                                   "'imu_dt' = 0.005 s starts at 0.005 s"),
     "negative_seed": ("gnss.seed=-3", "component 'gnss' (GnssReceiver.fmu): parameter 'seed' = "
                                       "-3 is outside the accepted range [0, 2.14748e+09]"),
 }
@@ -192,7 +192,7 @@ PRE_RUN = {
     "stop_before_start": (["--stop", "-5"], "navfmu: error: --stop: the stop time -5 s must be "
                                             "after the start time 0 s"),
     "recording_too_large": (["--stop", "1e7"], "navfmu: error: --stop: the run would record "
-                                               "1000000001 rows x 72 variables"),
+                                               "1000000001 rows x 74 variables"),
     "stop_beyond_the_profile": (["--stop", "600"],
                                 "navfmu: error: component 'trajectory' (TrajectoryImu.fmu): the run "
                                 "ends at 600 s, after the end of profile 'aircraft_500s' at 500 s; "
