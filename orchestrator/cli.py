@@ -1,4 +1,5 @@
-"""The ``navfmu`` command line: build, validate, run, compare, bench, convert.
+"""The ``navfmu`` command line: build, validate, run, compare, bench, convert, montecarlo,
+report.
 
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
@@ -372,6 +373,77 @@ def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
                    f"{out['fmu']['do_step_us'][c]:10.1f} {out['fmu']['exchange_us'][c]:17.1f}")
     click.echo(f"  master overhead per base step: direct {out['direct']['master_overhead_us']:.1f}"
                f" us, FMU {out['fmu']['master_overhead_us']:.1f} us")
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--runs", type=int, required=True, help="Number of seeds (runs per filter).")
+@click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Local worker processes (1: in this process).")
+@click.option("--out", "out", type=click.Path(file_okay=False),
+              help="Campaign folder (default: navfmu-results/<scenario>-montecarlo).")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.option("--seed", type=int, default=1, show_default=True,
+              help="Campaign seed: run i uses seed + i (+ each random component's offset).")
+@click.option("--seed-offset", "seed_offsets", multiple=True, metavar="COMP=K",
+              help="Seed offset of a random component (default 1000 x its position).")
+@click.option("--backend", type=click.Choice(["direct", "fmu"]), default="direct",
+              show_default=True, help="navcore objects directly (same numbers), or the FMUs.")
+@click.option("--stop", type=float, help="Stop time [s] (default: the SSD's).")
+@click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")
+@click.option("--samples", type=click.Choice(["all", "fixes"]), default="all",
+              show_default=True, help="Metric samples: every row, or the GNSS fix epochs.")
+@click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
+              help="Override a parameter (repeatable).")
+@click.option("--series", type=click.Choice(["parquet", "csv"]),
+              help="Also keep every run's time series in this format.")
+def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
+               seed_offsets, backend, stop, window, samples, sets, series):
+    """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
+    command again to finish a killed campaign)."""
+    from . import campaign, campaign_summary, scenarios
+
+    names = tuple(f.strip() for f in filters.split(",") if f.strip())
+    offsets = []
+    for item in seed_offsets:
+        comp, sep, value = item.partition("=")
+        try:
+            offsets.append((comp, int(value)))
+        except ValueError:
+            sep = ""
+        if not sep or not comp:
+            raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
+    spec = campaign.CampaignSpec(
+        scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
+        stop_time=stop, window=_parse_window(window), samples=samples,
+        seed_offsets=tuple(offsets), parameters=tuple(_parse_sets(sets).items()), series=series)
+    model_name = scenarios.load_scenario(scenario).name
+    out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
+    summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
+                                    local_cluster=local_cluster, progress=_runs_bar(),
+                                    log=lambda m: click.echo(m, err=True))
+    counts = summary["counts"]
+    click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
+               f"{counts['total']} in all; results in {out}/")
+    click.echo(campaign_summary.format_summary(summary))
+
+
+def _runs_bar():
+    from tqdm import tqdm
+
+    bar = {}
+
+    def progress(done, total):
+        if "bar" not in bar:
+            bar["bar"] = tqdm(total=total, desc="runs", unit="run", file=sys.stderr,
+                              mininterval=0.5)
+        bar["bar"].update(done - bar["bar"].n)
+        if done >= total:
+            bar["bar"].close()
+
+    return progress
 
 
 def _print_filter_bench(out):

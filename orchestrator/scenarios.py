@@ -94,8 +94,7 @@ def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
         raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
 
 
-def filters_in(results: Results) -> List[str]:
-    return [c for c in results.components if results.has(c, "nav_time")]
+filters_in = nav_metrics.filters_of
 
 
 def has_truth(results: Results) -> bool:
