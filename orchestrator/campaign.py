@@ -227,7 +227,7 @@ class Campaign:
         if spec.backend == "fmu":      # build once here, never in the workers
             for m in models:
                 ensure_fmus(m, log=self.log)
-        self.offsets = seed_offsets(spec, random_components(self.model, spec.backend))
+        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend))
         self.identity = {
             "scenario": self.model.name, "ssd": str(Path(self.model.path).resolve()),
             "scenario_sha256": scenario_hash(self.model), "filters": list(spec.filters),

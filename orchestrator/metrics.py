@@ -28,7 +28,8 @@ Definitions (errors are estimate - truth):
   ``updated``), against the ``gnss_outlier`` flag of the receiver (the component recording
   it) on the same rows: detection rate = injected epochs with n_rejected > 0 / injected
   epochs; false-alarm rate = clean epochs with n_rejected > 0 / clean epochs, and per
-  observation = sum of n_rejected / sum of nis_dof over the clean epochs.
+  observation = sum of n_rejected / sum of nis_dof over the clean epochs (the same sums
+  over the injected epochs: detected and injected observations).
 * Chi-square gates drawn with the statistics: ``chi2_threshold`` of a filter with
   ``chi2_max`` (default 6.635 = chi2(1) 99 %), ``ctfa_t1``/``ctfa_t2`` of a filter with
   ``chi2`` (0 or unset: 6.25/11.35 for a 3-dimensional measurement, else the 90 %/99 %
@@ -412,6 +413,8 @@ def rejection_statistics(injected, n_rejected, n_observations):
     hits, alarms = int((detected & injected).sum()), int((detected & clean).sum())
     obs_clean = float(n_observations[clean].sum())
     rejected_clean = float(n_rejected[clean].sum())
+    obs_injected = float(n_observations[injected].sum())
+    rejected_injected = float(n_rejected[injected].sum())
     ratio = lambda a, b: float(a / b) if b > 0 else float("nan")  # noqa: E731
     return {"epochs": int(injected.size), "injected_epochs": n_inj, "detected_epochs": hits,
             "detection_rate": ratio(hits, n_inj),
@@ -419,7 +422,9 @@ def rejection_statistics(injected, n_rejected, n_observations):
             "false_alarm_rate": ratio(alarms, n_clean),
             "clean_observations": int(obs_clean),
             "false_alarm_observations": int(rejected_clean),
-            "false_alarm_rate_per_observation": ratio(rejected_clean, obs_clean)}
+            "false_alarm_rate_per_observation": ratio(rejected_clean, obs_clean),
+            "injected_observations": int(obs_injected),
+            "detected_observations": int(rejected_injected)}
 
 
 def outlier_detection(results, filter_name, window=None, receiver_name=None):
