@@ -16,10 +16,11 @@ Files in the campaign folder (every file written atomically):
 
 * ``campaign.json`` -- the manifest: the campaign's identity (scenario and the hash of its
   .ssd/.ssv/paper.json files, filters, campaign seed and seed rule, backend, stop time,
-  window, samples, overrides, series format, code commit) and the largest run count asked.
+  window, samples, overrides, series format, hash of the code that decides the numbers,
+  :data:`NUMERIC_CODE`) and the largest run count asked.
   Starting a campaign in a folder whose manifest has another identity is an error; the same
   identity resumes (a larger ``--runs`` adds runs).
-* ``runs/<filter>/run-<iiii>.json`` -- one run: its seeds and metrics
+* ``runs/<filter>/run-<iiii>.json`` -- one run: its seeds, the git commit it ran on, metrics
   (:func:`~orchestrator.metrics.filter_metrics`, accumulated while the run streams), wall time.
   The worker writes it as soon as the run ends (when it sees the folder; otherwise the driver
   does), so a killed campaign loses only the runs in flight; a restart runs only the
@@ -96,6 +97,22 @@ def scenario_hash(model) -> str:
     h = hashlib.sha256()
     for p in _scenario_files(model):
         h.update(p.name.encode() + b"\0" + p.read_bytes())
+    return h.hexdigest()
+
+
+#: the files whose code decides a run's numbers (a change in any refuses a resume)
+NUMERIC_CODE = ("fmus/*.py", "fmus/navcore/*.py", "orchestrator/backends.py",
+                "orchestrator/master.py", "orchestrator/metrics.py", "orchestrator/recorder.py",
+                "orchestrator/ssp.py", "orchestrator/campaign.py", "orchestrator/results.py")
+
+
+def code_hash() -> str:
+    """sha256 over the names and bytes of the :data:`NUMERIC_CODE` files."""
+    root = fmu_build.ROOT
+    h = hashlib.sha256()
+    for pattern in NUMERIC_CODE:
+        for p in sorted(root.glob(pattern)):
+            h.update(p.relative_to(root).as_posix().encode() + b"\0" + p.read_bytes())
     return h.hexdigest()
 
 
@@ -178,7 +195,7 @@ def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
     record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
               "metrics": metrics_sink.metrics[FILTER_COMPONENT],
               "stop_time": header.metadata["stop_time"], "wall_time_s": time.perf_counter() - t0,
-              "pid": os.getpid()}
+              "pid": os.getpid(), "commit": job.get("commit", "")}
     if visible:
         write_run(out, record)
     return record
@@ -217,6 +234,7 @@ class Campaign:
     model: Any = field(default=None, init=False)
     offsets: Dict[str, int] = field(default_factory=dict, init=False)
     identity: Dict[str, Any] = field(default_factory=dict, init=False)
+    commit: str = field(default="", init=False)
 
     def prepare(self) -> None:
         from .scenarios import ensure_fmus, load_scenario, swap_filter
@@ -234,7 +252,8 @@ class Campaign:
             "seed": spec.seed, "seed_offsets": self.offsets, "backend": spec.backend,
             "stop_time": spec.stop_time, "window": list(spec.window) if spec.window else None,
             "samples": spec.samples, "parameters": [list(p) for p in spec.parameters],
-            "series": spec.series, "commit": code_commit()}
+            "series": spec.series, "code_sha256": code_hash()}
+        self.commit = code_commit()
         self.out.mkdir(parents=True, exist_ok=True)
         self._check_manifest()
 
@@ -264,7 +283,7 @@ class Campaign:
                 "index": index, "seeds": run_seeds(s, self.offsets, index),
                 "parameters": list(s.parameters), "backend": s.backend,
                 "stop_time": s.stop_time, "window": s.window, "samples": s.samples,
-                "series": s.series, "out": str(self.out.resolve())}
+                "series": s.series, "out": str(self.out.resolve()), "commit": self.commit}
 
     def missing(self) -> List[Tuple[str, int]]:
         return [(f, i) for i in range(self.spec.runs) for f in self.spec.filters
@@ -308,10 +327,13 @@ def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[
         counts = campaign.run(ex, progress=progress)
     first, last = run_seeds(spec, campaign.offsets, 0), run_seeds(spec, campaign.offsets,
                                                                   spec.runs - 1)
+    records = campaign.records()
+    commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
     provenance = {**campaign.identity, "runs": spec.runs, "mode": ex.mode,
+                  "commit": ", ".join(commits),
                   "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
                   or "no random component"}
-    summary = summarize(campaign.records(), paper_reference(campaign.model), provenance)
+    summary = summarize(records, paper_reference(campaign.model), provenance)
     atomic_write(campaign.out / "summary.json",
                  lambda f: f.write(json.dumps(_jsonable(summary), indent=1)))
     summary["counts"] = counts

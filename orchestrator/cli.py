@@ -175,8 +175,10 @@ def _common_run_options(f):
     f = click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")(f)
     f = click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
                      help="Override a parameter (repeatable).")(f)
-    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz"]), default="csv",
-                     show_default=True, help="Result file format.")(f)
+    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz", "parquet"]),
+                     default="csv", show_default=True,
+                     help="Result file format; parquet streams the rows to disk while the run "
+                     "goes (memory flat in the flight length).")(f)
     f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
     f = click.option("--replay", "replay", type=click.Path(),
                      help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
@@ -198,14 +200,24 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = []
+    stream_dir = None
+    if fmt == "parquet":
+        if log_sensors:
+            raise NavfmuError("--log-sensors needs the run's rows in memory: use --format csv "
+                              "or npz with it")
+        stream_dir = outputs.stream_folder(out)
     with _progress_bars() as progress_bar:
         for f in filters:
             label = f or "scenario"
+            stream_to = None
+            if stream_dir is not None:
+                stream_to = stream_dir / ("results.parquet" if len(filters) == 1 else
+                                          f"results_{scenarios.filter_label(model, f)}.parquet")
             runs.append(scenarios.simulate_scenario(
                 model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
                 window=window, progress=progress_bar(label),
                 algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
-                log=lambda m: click.echo(m, err=True), replay=replay))
+                log=lambda m: click.echo(m, err=True), replay=replay, stream_to=stream_to))
     if log_sensors:
         from .replay import write_sensor_log
 
@@ -428,6 +440,30 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
                f"{counts['total']} in all; results in {out}/")
     click.echo(campaign_summary.format_summary(summary))
+
+
+@cli.command()
+@click.option("--out", "out", type=click.Path(file_okay=False), default="navfmu-report",
+              show_default=True, help="Report folder (report.md, figures/, campaigns/).")
+@click.option("--runs", type=int, default=None,
+              help="Runs per filter and scenario (default 5; more: narrower intervals).")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.option("--stop", type=float, help="Stop time of every run [s] (default: each SSD's; "
+              "shorter for a quick look, the papers' tables need the full runs).")
+def report(out, runs, workers, scheduler, local_cluster, stop):
+    """Campaigns of every scenario of models/ with every filter that fits it, and one
+    Markdown report: the papers' tables with our numbers and intervals, figures,
+    NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
+    from . import report as report_module
+
+    path = report_module.build_report(
+        out, runs=runs or report_module.DEFAULT_RUNS, workers=workers, scheduler=scheduler,
+        local_cluster=local_cluster, stop_time=stop, progress_factory=lambda name: _runs_bar(),
+        log=lambda m: click.echo(m, err=True))
+    click.echo(f"wrote {path}")
 
 
 def _runs_bar():

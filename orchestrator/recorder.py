@@ -195,10 +195,11 @@ class MetricsSink:
     def write(self, chunk: Results) -> None:
         from . import metrics as nav_metrics
 
-        if self._acc is None:
+        if self._acc is None:         # no truth recorded (a replayed log without one): none
+            truth = any(chunk.has(c, "truth_time") for c in chunk.components)
             self._acc = {f: nav_metrics.MetricAccumulator(chunk, f, window=self.window,
                                                           samples=self.samples)
-                         for f in nav_metrics.filters_of(chunk)}
+                         for f in (nav_metrics.filters_of(chunk) if truth else ())}
         joined, skip = (chunk, 0) if self._tail is None else (_concat(self._tail, chunk),
                                                                len(self._tail.time))
         for acc in self._acc.values():
@@ -297,5 +298,41 @@ def read_parquet(path, columns: Optional[Sequence[str]] = None) -> Results:
                    metadata={**doc.get("metadata", {}), "source_file": str(path)})
 
 
-__all__ = ["Recording", "ParquetSink", "CsvSink", "MetricsSink", "Tee", "read_parquet",
+def plot_view(path, max_rows: int = 20000) -> Results:
+    """A bounded part of a long Parquet run for plots: every ``k``-th row (``k`` so that at
+    most about ``max_rows`` rows remain) plus every row where a component's ``updated``
+    output is set (NIS, chi-square and outlier plots need every update), read one row group
+    at a time."""
+    import pyarrow.parquet as pq
+
+    full = read_parquet(path, columns=[])          # checks the file; gives the layout
+    pf = pq.ParquetFile(path)
+    n = pf.metadata.num_rows
+    stride = max(1, -(-n // max_rows))
+    doc = json.loads(pf.metadata.metadata[PARQUET_METADATA_KEY])
+    titles = [TIME_HEADER] + Results(time=np.zeros(0), data={
+        c: np.zeros((0, len(doc["columns"][c]))) for c in doc["components"]},
+        columns=doc["columns"], units=doc["units"]).header()[1:]
+    flags = [i for i, t in enumerate(titles) if t.split(" [")[0].endswith(".updated")]
+    kept, first = [], 0
+    for batch in pf.iter_batches(batch_size=DEFAULT_CHUNK_ROWS):
+        table = np.column_stack([c.to_numpy(zero_copy_only=False) for c in batch.columns])
+        rows = (first + np.arange(len(table))) % stride == 0
+        for i in flags:
+            rows |= table[:, i] > 0.5
+        kept.append(table[rows])
+        first += len(table)
+    table = np.concatenate(kept) if kept else np.zeros((0, len(titles)))
+    data, j = {}, 1
+    for comp in doc["components"]:
+        width = len(doc["columns"][comp])
+        data[comp] = np.ascontiguousarray(table[:, j:j + width])
+        j += width
+    return Results(time=table[:, 0].copy(), data=data, columns=doc["columns"],
+                   units=doc["units"], step_time_s=full.step_time_s,
+                   exchange_step_time_s=full.exchange_step_time_s,
+                   metadata={**full.metadata, "plot_stride": stride})
+
+
+__all__ = ["plot_view", "Recording", "ParquetSink", "CsvSink", "MetricsSink", "Tee", "read_parquet",
            "DEFAULT_CHUNK_ROWS"]
