@@ -3,7 +3,8 @@
 The master fills the rows of a :class:`Recording` (one buffer per FMI type, rule 6 of
 :mod:`orchestrator.master`).  Without a sink the buffers hold every row of the run and become
 the :class:`~orchestrator.results.Results` the master returns (the default).  With a *sink*
-the buffers hold ``chunk_rows`` rows; every full buffer is handed over as one chunk (a
+the buffers hold ``chunk_rows`` rows (the sink's ``chunk_rows`` attribute when it has one,
+else :data:`DEFAULT_CHUNK_ROWS`); every full buffer is handed over as one chunk (a
 :class:`Results` of those rows, same columns and units) and then reused, so memory does not
 grow with the flight length.  A sink has ``write(chunk)`` and ``close(header)`` (``header``:
 the run's Results with zero rows and the complete metadata and step times) and ``abort()``
@@ -56,6 +57,7 @@ class Recording:
                  to_chunk: ChunkBuilder, sink=None, chunk_rows: int = DEFAULT_CHUNK_ROWS):
         self.n_rows = int(n_rows)
         self.sink = sink
+        chunk_rows = getattr(sink, "chunk_rows", chunk_rows)
         self.size = self.n_rows if sink is None else max(1, min(self.n_rows, int(chunk_rows)))
         self.buffers = {t: np.zeros((self.size, w), dtype=dtypes[t]) for t, w in widths.items()}
         self.first_row = 0
@@ -219,6 +221,8 @@ class Tee:
 
     def __init__(self, sinks: Sequence[Any]):
         self.sinks = [s for s in sinks if s is not None]
+        self.chunk_rows = min([getattr(s, "chunk_rows", DEFAULT_CHUNK_ROWS) for s in self.sinks]
+                              or [DEFAULT_CHUNK_ROWS])
 
     def write(self, chunk: Results) -> None:
         for s in self.sinks:
