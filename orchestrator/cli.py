@@ -331,8 +331,15 @@ def convert_kf_gins(imu_file, gnss_file, rest):
               "FMU and direct paths.")
 @click.option("--libcosim", "against_libcosim", is_flag=True, help="Time our master (Jacobi) "
               "against libcosim on the same SSP and base step instead.")
+@click.option("--executors", is_flag=True, help="Time a small campaign (--runs runs of the "
+              "filters, default Kf) serially, on --workers pool processes and on a Dask "
+              "LocalCluster: speed-up and Dask's per-run overhead.")
+@click.option("--runs", type=int, default=8, show_default=True, help="Runs per filter "
+              "(--executors).")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Worker processes (--executors).")
 @click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
-def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
+def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, workers, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
     time ratio and the per-step cost of each component.  With --filters: run it through the
     FMUs once per filter instead and print each filter's time per cycle and the ratios to the
@@ -341,7 +348,11 @@ def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
     from . import build as fmu_build
     from . import scenarios
 
-    model = scenarios.load_scenario(scenario or fmu_build.ROOT / "models" / "aircraft_500s")
+    scenario = scenario or fmu_build.ROOT / "models" / "aircraft_500s"
+    if executors:
+        _bench_executors(str(scenario), filters, runs, stop, workers, as_json)
+        return
+    model = scenarios.load_scenario(scenario)
     if against_libcosim:
         from .libcosim_run import bench_against_libcosim
 
@@ -480,6 +491,29 @@ def _runs_bar():
             bar["bar"].close()
 
     return progress
+
+
+def _bench_executors(scenario, filters, runs, stop, workers, as_json):
+    from .campaign_bench import bench_executors
+
+    names = [f.strip() for f in (filters or "Kf").split(",") if f.strip()]
+    out = bench_executors(scenario, names, runs=runs, stop_time=stop, workers=workers,
+                          log=lambda m: click.echo(m, err=True))
+    if as_json:
+        click.echo(json.dumps(out, indent=2))
+        return
+    w = out["wall_s"]
+    click.echo(f"{out['scenario']}: {runs * len(names)} runs of {stop:g} s "
+               f"({', '.join(names)}), workers started before the clock; load average "
+               + "/".join(f"{x:.1f}" for x in out["load_average"]) + f" on {out['cores']} cores")
+    click.echo("  wall time: " + ", ".join(f"{m} {t:.2f} s" for m, t in w.items()))
+    click.echo(f"  speed-up of {workers} pool workers over serial: "
+               f"{out['speedup_pool_over_serial']:.2f}")
+    click.echo("  one-step runs, wall time per run: " + ", ".join(
+        f"{m} {1e3 * t:.1f} ms" for m, t in out["one_step_run_s"].items()))
+    if "dask_overhead_per_run_s" in out:
+        click.echo(f"  Dask's overhead per run over the pool: "
+                   f"{1e3 * out['dask_overhead_per_run_s']:.1f} ms")
 
 
 def _print_filter_bench(out):

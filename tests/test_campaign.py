@@ -174,3 +174,23 @@ def test_killed_worker_then_killed_driver_then_restart_completes(tmp_path):
     assert len(final) == TOTAL
     _check_resumed(second, final)
     assert not list(out.rglob("*.tmp"))
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--runs", "0", "--filters", "Kf"], ["--runs", "got 0"]),
+    (["--runs", "2", "--filters", "Kf,Nope"], ["--filter", "Nope"]),
+    (["--runs", "2", "--filters", "Kf,Kf"], ["listed twice"]),
+    (["--runs", "2", "--filters", "Kf", "--seed-offset", "gnss"], ["--seed-offset", "'gnss'"]),
+    (["--runs", "2", "--filters", "Kf", "--seed-offset", "radar=3"], ["radar", "trajectory"]),
+])
+def test_bad_campaign_options_one_error_line(capsys, tmp_path, args, words):
+    from orchestrator.cli import main
+
+    out = tmp_path / "mc"
+    with pytest.raises(SystemExit) as exc:
+        main(["montecarlo", SCENARIO, "--out", str(out), "--stop", "1"] + args)
+    _, err = capsys.readouterr()
+    assert exc.value.code == 2
+    assert err.count("navfmu: error:") == 1 and "Traceback" not in err
+    assert all(w in err for w in words), err
+    assert not out.exists()
