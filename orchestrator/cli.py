@@ -457,7 +457,7 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
 @click.option("--out", "out", type=click.Path(file_okay=False), default="navfmu-report",
               show_default=True, help="Report folder (report.md, figures/, campaigns/).")
 @click.option("--runs", type=int, default=None,
-              help="Runs per filter and scenario (default 5; more: narrower intervals).")
+              help="Runs per filter and scenario (default 3; more: narrower intervals).")
 @click.option("--workers", type=int, default=2, show_default=True,
               help="Local worker processes.")
 @click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")

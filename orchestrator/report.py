@@ -33,8 +33,8 @@ from .errors import NavfmuError, WiringError
 from .results import atomic_write
 
 MODELS = fmu_build.ROOT / "models"
-#: runs per filter and scenario by default (about 20 minutes on 2 idle cores)
-DEFAULT_RUNS = 5
+#: runs per filter and scenario by default (README: how long it takes)
+DEFAULT_RUNS = 3
 
 
 def fitting_filters(model) -> List[str]:
@@ -124,17 +124,33 @@ def _figures(plan, out: Path, log) -> Dict[str, Path]:
     entries = []
     (out / "series").mkdir(exist_ok=True)
     for f in shown:
-        log(f"{name}: run 0 of {f} for the figures")
-        run = simulate_scenario(plan["model"], filter=f, backend="direct",
-                                stop_time=plan["spec"].stop_time,
-                                parameters={f"{c}.seed": s for c, s in seeds.items()},
-                                stream_to=out / "series" / f"{name}_{f}_run0.parquet", log=log)
-        view = recorder.plot_view(run.series_file, max_rows=6000)
+        path = out / "series" / f"{name}_{f}_run0.parquet"
+        if not _same_run(path, seeds, plan["spec"].stop_time or plan["model"].stop_time):
+            log(f"{name}: run 0 of {f} for the figures")
+            simulate_scenario(plan["model"], filter=f, backend="direct",
+                              stop_time=plan["spec"].stop_time,
+                              parameters={f"{c}.seed": s for c, s in seeds.items()},
+                              stream_to=path, log=log)
+        view = recorder.plot_view(path, max_rows=6000)
         entries.append((f, view, "filter", nav_metrics.navigation_errors(view, "filter")))
     title = f"{name}, run 0 ({', '.join(f'{c}.seed {s}' for c, s in seeds.items())})"
     figures["errors"] = plots.plot_errors(entries, out / "figures" / f"{name}_errors.png", title)
     figures["nis"] = plots.plot_nis(entries, out / "figures" / f"{name}_nis.png", title)
     return figures
+
+
+def _same_run(path: Path, seeds: Dict[str, int], stop_time: float) -> bool:
+    """True if ``path`` holds a finished run with these seeds and stop time (a resumed
+    report reuses it)."""
+    if not path.is_file():
+        return False
+    try:
+        meta = recorder.read_parquet(path, columns=[]).metadata
+    except NavfmuError:
+        return False
+    params = meta.get("parameters", {})
+    return (abs(float(meta.get("stop_time", -1.0)) - float(stop_time)) < 1e-9 and all(
+        params.get(c, {}).get("seed") == s for c, s in seeds.items()))
 
 
 # ----------------------------------------------------------------------------------------
@@ -154,7 +170,8 @@ def _provenance(plan) -> str:
     p = plan["summary"]["provenance"]
     return (f"scenario `{p['scenario']}`, {plan['summary']['runs']} runs ({p['seeds']}), "
             f"backend {p['backend']}, samples {p['samples']}, window "
-            f"{p['window'] or 'whole run'}, stop {p['stop_time'] or 'the SSD'}'s, commit "
+            f"{p['window'] or 'whole run'}, stop time "
+            f"{str(p['stop_time']) + ' s' if p['stop_time'] else 'of the SSD'}, commit "
             f"`{str(p['commit'])[:12]}`")
 
 
@@ -269,7 +286,7 @@ def _detection(plan) -> List[str]:
     lines = []
     for f, rows in plan["records"].items():
         dets = [r["metrics"].get("outlier_detection") for r in rows]
-        if not all(dets):
+        if not all(dets) or not sum(d["injected_epochs"] for d in dets):
             continue
         total = {k: sum(d[k] for d in dets) for k in (
             "injected_epochs", "detected_epochs", "clean_observations",

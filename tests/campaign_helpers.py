@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 from orchestrator.campaign import Campaign, CampaignSpec, run_campaign
 from scenario_runner import MODELS
@@ -16,6 +17,6 @@ def run_paper_campaign(scenario, filters, runs, out, seed_offsets, stop_time=Non
                         stop_time=stop_time)
     workers = int(os.environ.get("NAVFMU_MC_WORKERS", "2"))
     summary = run_campaign(spec, out, workers=workers, log=print)
-    campaign = Campaign(spec, out)
+    campaign = Campaign(spec, Path(out))
     campaign.prepare()
     return campaign.records(), summary
