@@ -193,7 +193,7 @@ def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
                        else recorder.CsvSink(path))
     header = sim.run(stop_time=job["stop_time"], sink=recorder.Tee([metrics_sink, series_sink]))
     record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
-              "metrics": metrics_sink.metrics[FILTER_COMPONENT],
+              "metrics": metrics_sink.metrics.get(FILTER_COMPONENT, {}),
               "stop_time": header.metadata["stop_time"], "wall_time_s": time.perf_counter() - t0,
               "pid": os.getpid(), "commit": job.get("commit", "")}
     if visible:

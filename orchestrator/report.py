@@ -63,8 +63,9 @@ def fitting_filters(model) -> List[str]:
 
 def discover(models: Path = MODELS) -> List[Dict[str, Any]]:
     """Scenarios of ``models/`` (sorted by name): dict ``path``, ``model``, ``reference``
-    (paper.json or None), ``filters`` (fitting, the paper's first, in its table's order)."""
-    from .scenarios import load_scenario, paper_reference
+    (paper.json or None), ``filters`` (fitting, the paper's first, in its table's order),
+    ``random`` (its components with a ``seed``)."""
+    from .scenarios import load_scenario, paper_reference, swap_filter
 
     plans = []
     for folder in sorted(p for p in Path(models).iterdir() if (p / "SystemStructure.ssd").is_file()):
@@ -74,8 +75,9 @@ def discover(models: Path = MODELS) -> List[Dict[str, Any]]:
         paper = [r.get("filter") for r in (reference or {}).get("table", ())]
         ordered = [f for f in paper if f in fitting] + [f for f in fitting if f not in paper]
         if ordered:
+            random = camp.random_components(swap_filter(model, ordered[0]), "direct")
             plans.append({"path": folder, "model": model, "reference": reference,
-                          "filters": ordered})
+                          "filters": ordered, "random": random})
     if not plans:
         raise NavfmuError(f"{models}: no scenario with a filter the FMU scripts provide")
     return plans
@@ -91,8 +93,9 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
     sections = []
     for plan in discover(models):
         name = plan["model"].name
+        # a scenario without a random source (a replayed log) gives the same run every time
         spec = camp.CampaignSpec(scenario=str(plan["path"]), filters=tuple(plan["filters"]),
-                                 runs=runs, stop_time=stop_time)
+                                 runs=runs if plan["random"] else 1, stop_time=stop_time)
         log(f"{name}: {runs} runs x {len(spec.filters)} filters ({', '.join(spec.filters)})")
         summary = camp.run_campaign(spec, out / "campaigns" / name, workers=workers,
                                     scheduler=scheduler, local_cluster=local_cluster,
@@ -176,7 +179,7 @@ def _provenance(plan) -> str:
 
 
 def _per_run(plan, f, fn) -> Optional[Dict[str, float]]:
-    values = [fn(r["metrics"]) for r in plan["records"][f]]
+    values = [fn(r["metrics"]) for r in plan["records"][f] if r["metrics"]]
     values = [v for v in values if v is not None and math.isfinite(v)]
     return st.t_interval(values) if values else None
 
