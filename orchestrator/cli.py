@@ -464,7 +464,9 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
 @click.option("--stop", type=float, help="Stop time of every run [s] (default: each SSD's; "
               "shorter for a quick look, the papers' tables need the full runs).")
-def report(out, runs, workers, scheduler, local_cluster, stop):
+@click.option("--only-finished", is_flag=True, help="Run nothing: report the runs the "
+              "campaigns in --out have finished (the first runs every filter has).")
+def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
     """Campaigns of every scenario of models/ with every filter that fits it, and one
     Markdown report: the papers' tables with our numbers and intervals, figures,
     NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
@@ -473,7 +475,7 @@ def report(out, runs, workers, scheduler, local_cluster, stop):
     path = report_module.build_report(
         out, runs=runs or report_module.DEFAULT_RUNS, workers=workers, scheduler=scheduler,
         local_cluster=local_cluster, stop_time=stop, progress_factory=lambda name: _runs_bar(),
-        log=lambda m: click.echo(m, err=True))
+        log=lambda m: click.echo(m, err=True), only_finished=only_finished)
     click.echo(f"wrote {path}")
 
 

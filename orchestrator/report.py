@@ -13,6 +13,7 @@ re-running the report only runs what is missing.  Figures of the papers' kind (e
 """
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import math
 import os
@@ -85,8 +86,12 @@ def discover(models: Path = MODELS) -> List[Dict[str, Any]]:
 
 def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None,
                  local_cluster=False, stop_time: Optional[float] = None, models: Path = MODELS,
-                 progress_factory=None, log=print) -> Path:
-    """Run (or resume) the campaigns and write ``out/report.md`` with ``out/figures/``."""
+                 progress_factory=None, log=print, only_finished: bool = False) -> Path:
+    """Run (or resume) the campaigns and write ``out/report.md`` with ``out/figures/``.
+
+    ``only_finished``: run nothing; report, per scenario, the first runs every filter of its
+    campaign in ``out`` has finished (a campaign cut short or still running), and the
+    figures whose run-0 series exist."""
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -96,22 +101,56 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
         # a scenario without a random source (a replayed log) gives the same run every time
         spec = camp.CampaignSpec(scenario=str(plan["path"]), filters=tuple(plan["filters"]),
                                  runs=runs if plan["random"] else 1, stop_time=stop_time)
-        log(f"{name}: {runs} runs x {len(spec.filters)} filters ({', '.join(spec.filters)})")
-        summary = camp.run_campaign(spec, out / "campaigns" / name, workers=workers,
-                                    scheduler=scheduler, local_cluster=local_cluster,
-                                    progress=progress_factory(name) if progress_factory else None,
-                                    log=log)
-        records = camp.Campaign(spec, out / "campaigns" / name, log=log)
-        records.prepare()
-        plan.update(summary=summary, records=records.records(), offsets=records.offsets,
-                    spec=spec)
-        plan["figures"] = _figures(plan, out, log)
+        folder = out / "campaigns" / name
+        if only_finished:
+            spec = _finished(spec, folder)
+            if spec is None:
+                log(f"{name}: no finished run of every filter in {folder}: left out")
+                continue
+        else:
+            log(f"{name}: {spec.runs} runs x {len(spec.filters)} filters "
+                f"({', '.join(spec.filters)})")
+            camp.run_campaign(spec, folder, workers=workers, scheduler=scheduler,
+                              local_cluster=local_cluster,
+                              progress=progress_factory(name) if progress_factory else None,
+                              log=log)
+        campaign = camp.Campaign(spec, folder, log=log)
+        campaign.prepare()
+        records = campaign.records()
+        plan.update(summary=_summary(campaign, records, plan), records=records,
+                    offsets=campaign.offsets, spec=spec)
+        plan["figures"] = _figures(plan, out, log, run=not only_finished)
         sections.append(plan)
-    text = _markdown(sections, runs, time.perf_counter() - t0, workers, scheduler, local_cluster)
+    if not sections:
+        raise NavfmuError(f"{out}: no scenario to report")
+    command = f"navfmu report --runs {runs}" + (" --only-finished" if only_finished else "")
+    text = _markdown(sections, command, time.perf_counter() - t0, workers, scheduler,
+                     local_cluster)
     return atomic_write(out / "report.md", lambda f: f.write(text))
 
 
-def _figures(plan, out: Path, log) -> Dict[str, Path]:
+def _finished(spec, folder: Path):
+    """``spec`` with ``runs`` = the number of leading runs every filter has, or None."""
+    n = 0
+    while n < spec.runs and all(camp.read_run(folder, f, n) for f in spec.filters):
+        n += 1
+    return dataclasses.replace(spec, runs=n) if n else None
+
+
+def _summary(campaign, records, plan):
+    from .campaign_summary import summarize
+
+    s = campaign.spec
+    first = camp.run_seeds(s, campaign.offsets, 0)
+    last = camp.run_seeds(s, campaign.offsets, s.runs - 1)
+    commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
+    return summarize(records, plan["reference"], {
+        **campaign.identity, "runs": s.runs, "commit": ", ".join(commits),
+        "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
+        or "no random component"})
+
+
+def _figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
     """RMS intervals of every filter; errors and NIS over time of run 0 of the paper's
     filters (all filters when there is no paper)."""
     from .scenarios import simulate_scenario
@@ -129,6 +168,8 @@ def _figures(plan, out: Path, log) -> Dict[str, Path]:
     for f in shown:
         path = out / "series" / f"{name}_{f}_run0.parquet"
         if not _same_run(path, seeds, plan["spec"].stop_time or plan["model"].stop_time):
+            if not run:
+                continue
             log(f"{name}: run 0 of {f} for the figures")
             simulate_scenario(plan["model"], filter=f, backend="direct",
                               stop_time=plan["spec"].stop_time,
@@ -136,6 +177,8 @@ def _figures(plan, out: Path, log) -> Dict[str, Path]:
                               stream_to=path, log=log)
         view = recorder.plot_view(path, max_rows=6000)
         entries.append((f, view, "filter", nav_metrics.navigation_errors(view, "filter")))
+    if not entries:
+        return figures
     title = f"{name}, run 0 ({', '.join(f'{c}.seed {s}' for c, s in seeds.items())})"
     figures["errors"] = plots.plot_errors(entries, out / "figures" / f"{name}_errors.png", title)
     figures["nis"] = plots.plot_nis(entries, out / "figures" / f"{name}_nis.png", title)
@@ -348,14 +391,14 @@ def _cross_matrix(sections) -> List[str]:
     return lines
 
 
-def _markdown(sections, runs, seconds, workers, scheduler, local_cluster) -> str:
+def _markdown(sections, command, seconds, workers, scheduler, local_cluster) -> str:
     commit = camp.code_commit()
     where = (f"Dask scheduler {scheduler}" if scheduler else
              f"Dask LocalCluster of {workers}" if local_cluster else
              f"{workers} local worker process(es)")
     lines = ["# navfmu: the papers' tables from Monte Carlo campaigns", "",
              f"Generated {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC by "
-             f"`navfmu report --runs {runs}` at commit `{commit}` in {seconds / 60:.1f} min on "
+             f"`{command}` at commit `{commit}` in {seconds / 60:.1f} min on "
              f"{where} ({platform.machine()}, {os.cpu_count()} cores, load average "
              f"{os.getloadavg()[0]:.1f}).", "",
              "Every run of a scenario uses the seeds of its run index (same seeds for every "
@@ -372,10 +415,12 @@ def _markdown(sections, runs, seconds, workers, scheduler, local_cluster) -> str
             lines += [ref.get("paper", ""), ""] + _paper_table(plan)
         figs = plan["figures"]
         lines += [f"![RMS of every filter on {plan['model'].name}](figures/{figs['rms'].name})",
-                  "", f"Errors with the filters' own +-3 sigma and NIS of run 0 "
-                  f"({_provenance(plan).split(', backend')[0]}):", "",
-                  f"![errors](figures/{figs['errors'].name})", "",
-                  f"![NIS](figures/{figs['nis'].name})", ""]
+                  ""]
+        if "errors" in figs:
+            lines += [f"Errors with the filters' own +-3 sigma and NIS of run 0 "
+                      f"({_provenance(plan).split(', backend')[0]}):", "",
+                      f"![errors](figures/{figs['errors'].name})", "",
+                      f"![NIS](figures/{figs['nis'].name})", ""]
     lines += _consistency(sections) + _cross_matrix(sections)
     return "\n".join(lines) + "\n"
 
