@@ -325,19 +325,25 @@ def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[
     campaign.prepare()
     with Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster) as ex:
         counts = campaign.run(ex, progress=progress)
-    first, last = run_seeds(spec, campaign.offsets, 0), run_seeds(spec, campaign.offsets,
-                                                                  spec.runs - 1)
     records = campaign.records()
-    commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
-    provenance = {**campaign.identity, "runs": spec.runs, "mode": ex.mode,
-                  "commit": ", ".join(commits),
-                  "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
-                  or "no random component"}
-    summary = summarize(records, paper_reference(campaign.model), provenance)
+    summary = summarize(records, paper_reference(campaign.model),
+                        {**provenance(campaign, records), "mode": ex.mode})
     atomic_write(campaign.out / "summary.json",
                  lambda f: f.write(json.dumps(_jsonable(summary), indent=1)))
     summary["counts"] = counts
     return summary
+
+
+def provenance(campaign: Campaign, records: Dict[str, List[Dict[str, Any]]]) -> Dict[str, Any]:
+    """How the numbers of ``records`` were made: the campaign's identity, runs, the commits
+    the runs ran on, the seed ranges."""
+    spec = campaign.spec
+    first = run_seeds(spec, campaign.offsets, 0)
+    last = run_seeds(spec, campaign.offsets, spec.runs - 1)
+    commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
+    return {**campaign.identity, "runs": spec.runs, "commit": ", ".join(commits),
+            "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
+            or "no random component"}
 
 
 def _remove_stale_temporaries(out: Path) -> None:

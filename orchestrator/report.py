@@ -140,14 +140,7 @@ def _finished(spec, folder: Path):
 def _summary(campaign, records, plan):
     from .campaign_summary import summarize
 
-    s = campaign.spec
-    first = camp.run_seeds(s, campaign.offsets, 0)
-    last = camp.run_seeds(s, campaign.offsets, s.runs - 1)
-    commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
-    return summarize(records, plan["reference"], {
-        **campaign.identity, "runs": s.runs, "commit": ", ".join(commits),
-        "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
-        or "no random component"})
+    return summarize(records, plan["reference"], camp.provenance(campaign, records))
 
 
 def _figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
