@@ -152,6 +152,20 @@ def seed_offsets(spec: CampaignSpec, components: List[str]) -> Dict[str, int]:
     return {c: int(given.get(c, SEED_STRIDE * j)) for j, c in enumerate(components)}
 
 
+def parse_seed_offsets(items) -> Tuple[Tuple[str, int], ...]:
+    """``["gnss=100", ...]`` (``--seed-offset``) as ``(("gnss", 100), ...)``."""
+    offsets = []
+    for item in items:
+        comp, sep, value = item.partition("=")
+        try:
+            offsets.append((comp, int(value)))
+        except ValueError:
+            sep = ""
+        if not sep or not comp:
+            raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
+    return tuple(offsets)
+
+
 def run_seeds(spec: CampaignSpec, offsets: Dict[str, int], index: int) -> Dict[str, int]:
     return {c: spec.seed + index + off for c, off in offsets.items()}
 

@@ -71,4 +71,22 @@ def bench_executors(scenario: str, filters: Sequence[str] = ("Kf",), runs: int =
     return out
 
 
-__all__ = ["bench_executors"]
+def format_bench(out: Dict[str, Any]) -> str:
+    """The text ``navfmu bench --executors`` prints."""
+    w = out["wall_s"]
+    lines = [f"{out['scenario']}: {out['runs'] * len(out['filters'])} runs of "
+             f"{out['stop_time']:g} s ({', '.join(out['filters'])}), workers started before "
+             "the clock; load average " + "/".join(f"{x:.1f}" for x in out["load_average"])
+             + f" on {out['cores']} cores",
+             "  wall time: " + ", ".join(f"{m} {t:.2f} s" for m, t in w.items()),
+             f"  speed-up of {out['workers']} pool workers over serial: "
+             f"{out['speedup_pool_over_serial']:.2f}",
+             "  one-step runs, wall time per run: " + ", ".join(
+                 f"{m} {1e3 * t:.1f} ms" for m, t in out["one_step_run_s"].items())]
+    if "dask_overhead_per_run_s" in out:
+        lines.append(f"  Dask's overhead per run over the pool: "
+                     f"{1e3 * out['dask_overhead_per_run_s']:.1f} ms")
+    return "\n".join(lines)
+
+
+__all__ = ["bench_executors", "format_bench"]

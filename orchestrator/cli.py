@@ -33,13 +33,13 @@ def _progress_bars():
 
     bars = []
 
-    def factory(label):
+    def factory(label, unit="step"):
         bar = {}
 
         def progress(done, total):
             interrupts.check()
             if "bar" not in bar:
-                bar["bar"] = tqdm(total=total, desc=label, unit="step", leave=False,
+                bar["bar"] = tqdm(total=total, desc=label, unit=unit, leave=False,
                                   mininterval=0.5, file=sys.stderr, disable=None)
                 bars.append(bar["bar"])
             bar["bar"].update(done - bar["bar"].n)
@@ -429,24 +429,18 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     from . import campaign, campaign_summary, scenarios
 
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
-    offsets = []
-    for item in seed_offsets:
-        comp, sep, value = item.partition("=")
-        try:
-            offsets.append((comp, int(value)))
-        except ValueError:
-            sep = ""
-        if not sep or not comp:
-            raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
     spec = campaign.CampaignSpec(
         scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
         stop_time=stop, window=_parse_window(window), samples=samples,
-        seed_offsets=tuple(offsets), parameters=tuple(_parse_sets(sets).items()), series=series)
+        seed_offsets=campaign.parse_seed_offsets(seed_offsets),
+        parameters=tuple(_parse_sets(sets).items()), series=series)
     model_name = scenarios.load_scenario(scenario).name
     out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
-    summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
-                                    local_cluster=local_cluster, progress=_runs_bar(),
-                                    log=lambda m: click.echo(m, err=True))
+    with _progress_bars() as progress_bar:
+        summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
+                                        local_cluster=local_cluster,
+                                        progress=progress_bar("runs", unit="run"),
+                                        log=lambda m: click.echo(m, err=True))
     counts = summary["counts"]
     click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
                f"{counts['total']} in all; results in {out}/")
@@ -472,50 +466,22 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
     NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
     from . import report as report_module
 
-    path = report_module.build_report(
-        out, runs=runs or report_module.DEFAULT_RUNS, workers=workers, scheduler=scheduler,
-        local_cluster=local_cluster, stop_time=stop, progress_factory=lambda name: _runs_bar(),
-        log=lambda m: click.echo(m, err=True), only_finished=only_finished)
+    with _progress_bars() as progress_bar:
+        path = report_module.build_report(
+            out, runs=runs or report_module.DEFAULT_RUNS, workers=workers,
+            scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
+            progress_factory=lambda name: progress_bar(name, unit="run"),
+            log=lambda m: click.echo(m, err=True), only_finished=only_finished)
     click.echo(f"wrote {path}")
 
 
-def _runs_bar():
-    from tqdm import tqdm
-
-    bar = {}
-
-    def progress(done, total):
-        if "bar" not in bar:
-            bar["bar"] = tqdm(total=total, desc="runs", unit="run", file=sys.stderr,
-                              mininterval=0.5)
-        bar["bar"].update(done - bar["bar"].n)
-        if done >= total:
-            bar["bar"].close()
-
-    return progress
-
-
 def _bench_executors(scenario, filters, runs, stop, workers, as_json):
-    from .campaign_bench import bench_executors
+    from .campaign_bench import bench_executors, format_bench
 
     names = [f.strip() for f in (filters or "Kf").split(",") if f.strip()]
     out = bench_executors(scenario, names, runs=runs, stop_time=stop, workers=workers,
                           log=lambda m: click.echo(m, err=True))
-    if as_json:
-        click.echo(json.dumps(out, indent=2))
-        return
-    w = out["wall_s"]
-    click.echo(f"{out['scenario']}: {runs * len(names)} runs of {stop:g} s "
-               f"({', '.join(names)}), workers started before the clock; load average "
-               + "/".join(f"{x:.1f}" for x in out["load_average"]) + f" on {out['cores']} cores")
-    click.echo("  wall time: " + ", ".join(f"{m} {t:.2f} s" for m, t in w.items()))
-    click.echo(f"  speed-up of {workers} pool workers over serial: "
-               f"{out['speedup_pool_over_serial']:.2f}")
-    click.echo("  one-step runs, wall time per run: " + ", ".join(
-        f"{m} {1e3 * t:.1f} ms" for m, t in out["one_step_run_s"].items()))
-    if "dask_overhead_per_run_s" in out:
-        click.echo(f"  Dask's overhead per run over the pool: "
-                   f"{1e3 * out['dask_overhead_per_run_s']:.1f} ms")
+    click.echo(json.dumps(out, indent=2) if as_json else format_bench(out))
 
 
 def _print_filter_bench(out):

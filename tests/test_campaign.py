@@ -92,11 +92,23 @@ def test_fmu_and_direct_backends_give_identical_runs(tmp_path):
     assert _numbers(tmp_path / "direct", direct) == _numbers(tmp_path / "fmu", fmu)
 
 
-def test_seeds_follow_campaign_seed_and_run_index(tmp_path):
-    spec = _spec(runs=2, filters=("Kf",), seed=7, seed_offsets=(("gnss", 100),))
+def test_seeds_follow_campaign_seed_and_run_index_and_series_on_request(tmp_path):
+    spec = _spec(runs=2, filters=("Kf",), seed=7, seed_offsets=(("gnss", 100),),
+                 series="parquet")
     run_campaign(spec, tmp_path, log=print)
     assert [read_run(tmp_path, "Kf", i)["seeds"] for i in range(2)] == [
         {"trajectory": 7, "gnss": 107}, {"trajectory": 8, "gnss": 108}]
+    import pandas as pd
+
+    frame = pd.read_parquet(tmp_path / "series" / "Kf" / "run-0001.parquet")
+    assert len(frame) == 401 and "filter.nav_lat [rad]" in frame.columns
+    # the metrics of the run are those of its kept series
+    from orchestrator.metrics import filter_metrics
+    from orchestrator.recorder import read_parquet
+
+    again = filter_metrics(read_parquet(tmp_path / "series" / "Kf" / "run-0001.parquet"), "filter")
+    assert again["position_rms_m"] == pytest.approx(
+        read_run(tmp_path, "Kf", 1)["metrics"]["position_rms_m"], rel=1e-12)
 
 
 def test_other_campaign_in_the_same_folder_is_refused(tmp_path):
