@@ -86,7 +86,10 @@ class Recording:
 # sinks
 # ----------------------------------------------------------------------------------------
 class _FileSink:
-    """A file written under a temporary name next to ``path`` and renamed by ``close``."""
+    """A file written under a temporary name next to ``path`` and renamed by ``close``;
+    ``_handle`` is the open writer once the first chunk came."""
+
+    _handle: Any = None
 
     def __init__(self, path):
         self.path = Path(path)
@@ -96,11 +99,17 @@ class _FileSink:
         fd, self.tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=folder)
         os.close(fd)
 
-    def _commit(self) -> None:
+    def close(self, header: Results) -> Path:
+        if self._handle is None:            # a run without rows: still a readable file
+            self.write(header)
+        self._finish(header)
         os.chmod(self.tmp, 0o666 & ~_umask())
         os.replace(self.tmp, self.path)
+        return self.path
 
     def abort(self) -> None:
+        if self._handle is not None:
+            self._handle.close()
         try:
             os.unlink(self.tmp)
         except FileNotFoundError:
@@ -113,7 +122,6 @@ class ParquetSink(_FileSink):
     def __init__(self, path, compression: str = "zstd"):
         super().__init__(path)
         self.compression = compression
-        self._writer = None
 
     def _table(self, chunk: Results):
         import pyarrow as pa
@@ -128,24 +136,15 @@ class ParquetSink(_FileSink):
         import pyarrow.parquet as pq
 
         table = self._table(chunk)
-        if self._writer is None:
-            self._writer = pq.ParquetWriter(self.tmp, table.schema, compression=self.compression,
+        if self._handle is None:
+            self._handle = pq.ParquetWriter(self.tmp, table.schema, compression=self.compression,
                                             use_byte_stream_split=True, use_dictionary=False)
-        self._writer.write_table(table)
+        self._handle.write_table(table)
 
-    def close(self, header: Results) -> Path:
-        if self._writer is None:            # a run without rows: still a readable file
-            self.write(header)
-        self._writer.add_key_value_metadata({PARQUET_METADATA_KEY: json.dumps(
+    def _finish(self, header: Results) -> None:
+        self._handle.add_key_value_metadata({PARQUET_METADATA_KEY: json.dumps(
             _metadata_document(header), default=str)})
-        self._writer.close()
-        self._commit()
-        return self.path
-
-    def abort(self) -> None:
-        if self._writer is not None:
-            self._writer.close()
-        super().abort()
+        self._handle.close()
 
 
 class CsvSink(_FileSink):
@@ -154,27 +153,17 @@ class CsvSink(_FileSink):
     def __init__(self, path, fmt: str = "%.17g"):
         super().__init__(path)
         self.fmt = fmt
-        self._file = None
 
     def write(self, chunk: Results) -> None:
-        if self._file is None:
-            self._file = open(self.tmp, "w", newline="")
-            csv.writer(self._file, lineterminator="\n").writerow(chunk.header())
-        np.savetxt(self._file, chunk.table(), fmt=self.fmt, delimiter=",")
+        if self._handle is None:
+            self._handle = open(self.tmp, "w", newline="")
+            csv.writer(self._handle, lineterminator="\n").writerow(chunk.header())
+        np.savetxt(self._handle, chunk.table(), fmt=self.fmt, delimiter=",")
 
-    def close(self, header: Results) -> Path:
-        if self._file is None:
-            self.write(header)
-        self._file.flush()
-        os.fsync(self._file.fileno())
-        self._file.close()
-        self._commit()
-        return self.path
-
-    def abort(self) -> None:
-        if self._file is not None:
-            self._file.close()
-        super().abort()
+    def _finish(self, header: Results) -> None:
+        self._handle.flush()
+        os.fsync(self._handle.fileno())
+        self._handle.close()
 
 
 class MetricsSink:
