@@ -143,3 +143,19 @@ def test_uav_60_min_three_filters_memory_flat_and_files_small(tmp_path):
     assert full < 400.0
     assert written < 250.0
     assert abs(full - short) < 0.2 * short
+
+
+def test_compare_streams_parquet_into_the_output_folder(tmp_path, capsys):
+    from orchestrator.cli import main
+
+    out = tmp_path / "cmp"
+    with pytest.raises(SystemExit) as exc:
+        main(["compare", str(SCENARIO), "--filters", "Kf,NewtonRobustKf", "--stop", "5",
+              "--backend", "direct", "--format", "parquet", "--out", str(out)])
+    assert exc.value.code == 0, capsys.readouterr().err
+    frame = pd.read_parquet(out / "results_NewtonRobustKf.parquet")
+    assert len(frame) == 501
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["Kf"]["metrics"]["filter"]["samples"] == 501
+    assert (out / "errors.png").is_file()
+    assert [p.name for p in tmp_path.iterdir()] == ["cmp"]      # no stream folder left
