@@ -1,4 +1,5 @@
-"""The ``navfmu`` command line: build, validate, run, compare, bench, convert.
+"""The ``navfmu`` command line: build, validate, run, compare, bench, convert, montecarlo,
+report.
 
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
@@ -32,13 +33,13 @@ def _progress_bars():
 
     bars = []
 
-    def factory(label):
+    def factory(label, unit="step"):
         bar = {}
 
         def progress(done, total):
             interrupts.check()
             if "bar" not in bar:
-                bar["bar"] = tqdm(total=total, desc=label, unit="step", leave=False,
+                bar["bar"] = tqdm(total=total, desc=label, unit=unit, leave=False,
                                   mininterval=0.5, file=sys.stderr, disable=None)
                 bars.append(bar["bar"])
             bar["bar"].update(done - bar["bar"].n)
@@ -174,8 +175,10 @@ def _common_run_options(f):
     f = click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")(f)
     f = click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
                      help="Override a parameter (repeatable).")(f)
-    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz"]), default="csv",
-                     show_default=True, help="Result file format.")(f)
+    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz", "parquet"]),
+                     default="csv", show_default=True,
+                     help="Result file format; parquet streams the rows to disk while the run "
+                     "goes (memory flat in the flight length).")(f)
     f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
     f = click.option("--replay", "replay", type=click.Path(),
                      help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
@@ -197,14 +200,24 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = []
+    stream_dir = None
+    if fmt == "parquet":
+        if log_sensors:
+            raise NavfmuError("--log-sensors needs the run's rows in memory: use --format csv "
+                              "or npz with it")
+        stream_dir = outputs.stream_folder(out)
     with _progress_bars() as progress_bar:
         for f in filters:
             label = f or "scenario"
+            stream_to = None
+            if stream_dir is not None:
+                stream_to = stream_dir / ("results.parquet" if len(filters) == 1 else
+                                          f"results_{scenarios.filter_label(model, f)}.parquet")
             runs.append(scenarios.simulate_scenario(
                 model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
                 window=window, progress=progress_bar(label),
                 algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
-                log=lambda m: click.echo(m, err=True), replay=replay))
+                log=lambda m: click.echo(m, err=True), replay=replay, stream_to=stream_to))
     if log_sensors:
         from .replay import write_sensor_log
 
@@ -318,8 +331,15 @@ def convert_kf_gins(imu_file, gnss_file, rest):
               "FMU and direct paths.")
 @click.option("--libcosim", "against_libcosim", is_flag=True, help="Time our master (Jacobi) "
               "against libcosim on the same SSP and base step instead.")
+@click.option("--executors", is_flag=True, help="Time a small campaign (--runs runs of the "
+              "filters, default Kf) serially, on --workers pool processes and on a Dask "
+              "LocalCluster: speed-up and Dask's per-run overhead.")
+@click.option("--runs", type=int, default=8, show_default=True, help="Runs per filter "
+              "(--executors).")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Worker processes (--executors).")
 @click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
-def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
+def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, workers, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
     time ratio and the per-step cost of each component.  With --filters: run it through the
     FMUs once per filter instead and print each filter's time per cycle and the ratios to the
@@ -328,7 +348,11 @@ def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
     from . import build as fmu_build
     from . import scenarios
 
-    model = scenarios.load_scenario(scenario or fmu_build.ROOT / "models" / "aircraft_500s")
+    scenario = scenario or fmu_build.ROOT / "models" / "aircraft_500s"
+    if executors:
+        _bench_executors(str(scenario), filters, runs, stop, workers, as_json)
+        return
+    model = scenarios.load_scenario(scenario)
     if against_libcosim:
         from .libcosim_run import bench_against_libcosim
 
@@ -372,6 +396,92 @@ def bench(scenario, stop, repeat, filters, against_libcosim, as_json):
                    f"{out['fmu']['do_step_us'][c]:10.1f} {out['fmu']['exchange_us'][c]:17.1f}")
     click.echo(f"  master overhead per base step: direct {out['direct']['master_overhead_us']:.1f}"
                f" us, FMU {out['fmu']['master_overhead_us']:.1f} us")
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--runs", type=int, required=True, help="Number of seeds (runs per filter).")
+@click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Local worker processes (1: in this process).")
+@click.option("--out", "out", type=click.Path(file_okay=False),
+              help="Campaign folder (default: navfmu-results/<scenario>-montecarlo).")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.option("--seed", type=int, default=1, show_default=True,
+              help="Campaign seed: run i uses seed + i (+ each random component's offset).")
+@click.option("--seed-offset", "seed_offsets", multiple=True, metavar="COMP=K",
+              help="Seed offset of a random component (default 1000 x its position).")
+@click.option("--backend", type=click.Choice(["direct", "fmu"]), default="direct",
+              show_default=True, help="navcore objects directly (same numbers), or the FMUs.")
+@click.option("--stop", type=float, help="Stop time [s] (default: the SSD's).")
+@click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")
+@click.option("--samples", type=click.Choice(["all", "fixes"]), default="all",
+              show_default=True, help="Metric samples: every row, or the GNSS fix epochs.")
+@click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
+              help="Override a parameter (repeatable).")
+@click.option("--series", type=click.Choice(["parquet", "csv"]),
+              help="Also keep every run's time series in this format.")
+def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
+               seed_offsets, backend, stop, window, samples, sets, series):
+    """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
+    command again to finish a killed campaign)."""
+    from . import campaign, campaign_summary, scenarios
+
+    names = tuple(f.strip() for f in filters.split(",") if f.strip())
+    spec = campaign.CampaignSpec(
+        scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
+        stop_time=stop, window=_parse_window(window), samples=samples,
+        seed_offsets=campaign.parse_seed_offsets(seed_offsets),
+        parameters=tuple(_parse_sets(sets).items()), series=series)
+    model_name = scenarios.load_scenario(scenario).name
+    out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
+    with _progress_bars() as progress_bar:
+        summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
+                                        local_cluster=local_cluster,
+                                        progress=progress_bar("runs", unit="run"),
+                                        log=lambda m: click.echo(m, err=True))
+    counts = summary["counts"]
+    click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
+               f"{counts['total']} in all; results in {out}/")
+    click.echo(campaign_summary.format_summary(summary))
+
+
+@cli.command()
+@click.option("--out", "out", type=click.Path(file_okay=False), default="navfmu-report",
+              show_default=True, help="Report folder (report.md, figures/, campaigns/).")
+@click.option("--runs", type=int, default=None,
+              help="Runs per filter and scenario (default 3; more: narrower intervals).")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.option("--stop", type=float, help="Stop time of every run [s] (default: each SSD's; "
+              "shorter for a quick look, the papers' tables need the full runs).")
+@click.option("--only-finished", is_flag=True, help="Run nothing: report the runs the "
+              "campaigns in --out have finished (the first runs every filter has).")
+def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
+    """Campaigns of every scenario of models/ with every filter that fits it, and one
+    Markdown report: the papers' tables with our numbers and intervals, figures,
+    NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
+    from . import report as report_module
+
+    with _progress_bars() as progress_bar:
+        path = report_module.build_report(
+            out, runs=runs or report_module.DEFAULT_RUNS, workers=workers,
+            scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
+            progress_factory=lambda name: progress_bar(name, unit="run"),
+            log=lambda m: click.echo(m, err=True), only_finished=only_finished)
+    click.echo(f"wrote {path}")
+
+
+def _bench_executors(scenario, filters, runs, stop, workers, as_json):
+    from .campaign_bench import bench_executors, format_bench
+
+    names = [f.strip() for f in (filters or "Kf").split(",") if f.strip()]
+    out = bench_executors(scenario, names, runs=runs, stop_time=stop, workers=workers,
+                          log=lambda m: click.echo(m, err=True))
+    click.echo(json.dumps(out, indent=2) if as_json else format_bench(out))
 
 
 def _print_filter_bench(out):

@@ -11,7 +11,8 @@ Where tasks run
   numbers as any other mode, tracebacks unchanged).
 * ``workers=K > 1``: a :class:`concurrent.futures.ProcessPoolExecutor` of ``K`` processes
   started with ``spawn`` (never ``fork``: a forked copy of a process that has loaded FMU
-  binaries and their embedded interpreter is not safe).  All instances of pythonfmu FMUs in
+  binaries and their embedded interpreter is not safe).  A worker ends itself when the
+  process that started it disappears (a driver killed with SIGKILL leaves no worker behind).  All instances of pythonfmu FMUs in
   one process share one interpreter and its GIL, so processes, not threads, give parallelism.
 * ``scheduler="tcp://HOST:PORT"``: the tasks go to that ``dask.distributed`` scheduler; its
   workers must be able to import navfmu and reach the FMU files.
@@ -64,6 +65,21 @@ class TaskError(NavfmuError):
 
 def _run_task(task: Task):
     return task()
+
+
+def _exit_with_parent(parent_pid: int, interval_s: float = 0.2) -> None:
+    """Pool worker initializer: end this worker when the process that started it is gone
+    (a killed driver must not leave workers behind, nor let them write results later)."""
+    import os
+    import threading
+    import time
+
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(interval_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="navfmu-parent-watch", daemon=True).start()
 
 
 @dataclass
@@ -135,8 +151,12 @@ class Executor:
 
     def _process_pool(self):
         if self._pool is None:
+            import os
+
             self._pool = ProcessPoolExecutor(max_workers=self.workers,
-                                             mp_context=multiprocessing.get_context("spawn"))
+                                             mp_context=multiprocessing.get_context("spawn"),
+                                             initializer=_exit_with_parent,
+                                             initargs=(os.getpid(),))
         return self._pool
 
     # -- running ----------------------------------------------------------------------------

@@ -81,7 +81,9 @@ These rules are exact; the tests check them with numbers.
    component names and/or ``"Component.variable"``) is recorded in preallocated arrays,
    Real/Integer/Boolean as float; row 0 holds the initial outputs, row ``j`` the outputs after
    macro step ``j*record_every - 1`` (time ``start + j*record_every*h``).  String variables
-   are never recorded.
+   are never recorded.  The rows stay in memory, or, given a sink, are streamed to it in
+   chunks of :data:`~orchestrator.recorder.DEFAULT_CHUNK_ROWS` rows
+   (:mod:`orchestrator.recorder`).
 
 7. **Timing.**  For every component the master measures (``perf_counter_ns``) the wall time
    of each ``do_step`` call alone, and of the whole set-inputs/do-step/get-outputs sequence.
@@ -122,6 +124,7 @@ import numpy as np
 from .backends import NUMERIC_TYPES, DirectInstance, FmuInstance, Instance, VarInfo
 from .errors import NavfmuError, WiringError
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
+from .recorder import Recording
 from .results import Results
 from .fmu_path import searched_places
 from .ssp import ComponentSpec, Connection, SystemModel
@@ -378,10 +381,13 @@ class Simulation:
             inst.prepare(list(source_of[n]), out_names[n], *views)
 
     def run(self, stop_time: Optional[float] = None,
-            progress: Optional[Callable[[int, int], None]] = None) -> Results:
+            progress: Optional[Callable[[int, int], None]] = None, sink=None) -> Results:
         """Run from the model's start time to ``stop_time`` (default: the model's).
 
         ``progress(steps_done, n_steps)`` is called about every 1 % of the run and at the end.
+        ``sink`` (see :mod:`orchestrator.recorder`): stream the recorded rows to it in chunks
+        instead of keeping them; the Results returned then have no rows (columns, units,
+        step times and metadata only) and ``sink.close`` has received them.
         """
         start = self.model.start_time
         stop = float(stop_time) if stop_time is not None else self.model.stop_time
@@ -392,8 +398,11 @@ class Simulation:
         rec_index = {t: np.array([position[(n, v)][1] for n in self.names
                                   for v in self.recorded[n] if position[(n, v)][0] == t],
                                  dtype=np.intp) for t in NUMERIC_TYPES}
-        recordings = {t: np.zeros((n_rows, len(rec_index[t])), dtype=_DTYPES[t])
-                      for t in NUMERIC_TYPES}
+        recording = Recording(n_rows, {t: len(rec_index[t]) for t in NUMERIC_TYPES}, _DTYPES,
+                              lambda first, n, bufs: self._chunk(first, n, bufs, rec_index,
+                                                                 position),
+                              sink=sink)
+        recordings = recording.buffers
 
         # recording everything in vector order: one row copy per type
         whole = [t for t in NUMERIC_TYPES if np.array_equal(rec_index[t], np.arange(len(vectors[t])))]
@@ -418,7 +427,7 @@ class Simulation:
             for d, inst in zip(self.components, instances):
                 inst.set_parameters(self.parameter_values[d.spec.name])
             exchange.initialize(start, stop)
-            record(0)
+            record(recording.slot(0))
             step = exchange.step
             progress_every = max(1, n_steps // 100)
             next_progress = progress_every if progress is not None else n_steps + 1
@@ -427,25 +436,33 @@ class Simulation:
                 step(k)
                 kp1 = k + 1
                 if kp1 % record_every == 0:
-                    record(kp1 // record_every)
+                    record(recording.slot(kp1 // record_every))
                 if kp1 == next_progress:
                     progress(kp1, n_steps)
                     next_progress = kp1 + progress_every
             loop_ns = _time.perf_counter_ns() - loop_start
             if progress is not None and n_steps % progress_every:
                 progress(n_steps, n_steps)
+            recording.finish()
+        except BaseException:
+            if sink is not None:
+                sink.abort()
+            raise
         finally:
             for inst in instances:
                 inst.terminate()
 
-        return self._results(start, stop, n_steps, n_rows, recordings, rec_index, position,
-                             timing, loop_ns)
+        results = self._results(start, stop, n_steps, recording.size if sink is None else 0,
+                                recordings, rec_index, position, timing, loop_ns)
+        if sink is not None:
+            sink.close(results)
+        return results
 
     # -- results ------------------------------------------------------------------------
-    def _results(self, start, stop, n_steps, n_rows, recordings, rec_index, position,
-                 timing, loop_ns) -> Results:
-        h = self.base_step
-        time_column = start + np.arange(n_rows, dtype=np.float64) * (self.record_every * h)
+    def _chunk(self, first_row, n_rows, recordings, rec_index, position) -> Results:
+        """Rows ``first_row ..`` of the recording from the first ``n_rows`` buffer rows."""
+        time_column = (self.model.start_time + (first_row + np.arange(n_rows, dtype=np.float64))
+                       * (self.record_every * self.base_step))
         # column of each recorded (component, variable) inside its type's recording
         rec_col = {t: {int(g): j for j, g in enumerate(rec_index[t])} for t in NUMERIC_TYPES}
         data, columns, units = {}, {}, {}
@@ -455,10 +472,17 @@ class Simulation:
             arr = np.empty((n_rows, len(names)), dtype=np.float64)
             for j, v in enumerate(names):
                 t, g = position[(n, v)]
-                arr[:, j] = recordings[t][:, rec_col[t][g]]
+                arr[:, j] = recordings[t][:n_rows, rec_col[t][g]]
             data[n] = arr
             columns[n] = list(names)
             units[n] = [d.variables[v].unit or d.spec.units.get(v, "") for v in names]
+        return Results(time=time_column, data=data, columns=columns, units=units)
+
+    def _results(self, start, stop, n_steps, n_rows, recordings, rec_index, position,
+                 timing, loop_ns) -> Results:
+        h = self.base_step
+        chunk = self._chunk(0, n_rows, recordings, rec_index, position)
+        time_column, data, columns, units = chunk.time, chunk.data, chunk.columns, chunk.units
         do_ns, all_ns, calls = timing.do_ns, timing.all_ns, timing.calls
         step_time = {}
         exchange_time = {}

@@ -13,7 +13,10 @@ Definitions (errors are estimate - truth):
 * velocity error per NED axis [m/s] (reported east/north/up as in paper 001).
 * attitude error: roll, pitch, yaw differences wrapped to (-pi, pi] [deg], and the error angle
   phi (NED) with C_bn_est = (I - [phi x]) C_bn_true for NEES.
-* RMS per axis over the window ``[t0, t1]`` of nav_time; max |error| per axis.
+* RMS per axis over the window ``[t0, t1]`` of nav_time (every recorded row, or only the
+  rows where a new GNSS fix arrived: ``samples="fixes"``); max |error| per axis.  Computed
+  by :class:`MetricAccumulator` over one or several consecutive chunks of rows (streamed
+  runs): root of (sum of squares / number of samples).
 * NEES per group (position, velocity, attitude) from the filter's 1-sigma outputs (diagonal):
   mean over the window of sum_i (e_i / sigma_i)^2, to compare with the group's dimension 3.
 * NIS: mean of ``nis`` over the update epochs, with the two-sided 95 % band of the mean of
@@ -25,7 +28,8 @@ Definitions (errors are estimate - truth):
   ``updated``), against the ``gnss_outlier`` flag of the receiver (the component recording
   it) on the same rows: detection rate = injected epochs with n_rejected > 0 / injected
   epochs; false-alarm rate = clean epochs with n_rejected > 0 / clean epochs, and per
-  observation = sum of n_rejected / sum of nis_dof over the clean epochs.
+  observation = sum of n_rejected / sum of nis_dof over the clean epochs (the same sums
+  over the injected epochs: detected and injected observations).
 * Chi-square gates drawn with the statistics: ``chi2_threshold`` of a filter with
   ``chi2_max`` (default 6.635 = chi2(1) 99 %), ``ctfa_t1``/``ctfa_t2`` of a filter with
   ``chi2`` (0 or unset: 6.25/11.35 for a 3-dimensional measurement, else the 90 %/99 %
@@ -118,61 +122,155 @@ def navigation_errors(results, filter_name, truth_name=None):
     return e
 
 
-def _window_mask(e, window):
+def filters_of(results):
+    """The recorded components that are filters (every one with a ``nav_time`` output)."""
+    return [c for c in results.components if results.has(c, "nav_time")]
+
+
+#: which rows of a filter's output the metrics use
+SAMPLES = ("all", "fixes")
+
+
+def _sample_mask(results, e, window, samples):
     t = e["time"]
     mask = e["valid"].copy()
     if window is not None:
         t0, t1 = window
         mask &= (t >= t0 - 1e-9) & (t <= t1 + 1e-9)
-    if not mask.any():
-        raise NavfmuError(f"the metric window {window} contains no sample of the filter output")
+    if samples == "fixes":
+        receiver = find_component(results, "gnss_", ("epoch",))
+        epoch = results.column(receiver, "gnss_epoch")
+        mask[0] = False
+        mask[1:] &= np.diff(epoch) != 0
     return mask
 
 
-def filter_metrics(results, filter_name, window=None, truth_name=None):
-    """All metrics of one filter as a JSON-ready dict (see the module docstring)."""
-    e = navigation_errors(results, filter_name, truth_name)
-    mask = _window_mask(e, window)
-    t = e["time"][mask]
-    out = {"window_s": [float(t[0]), float(t[-1])], "samples": int(mask.sum())}
-    rms = lambda x: float(np.sqrt(np.mean(x[mask] ** 2)))  # noqa: E731
-    peak = lambda x: float(np.max(np.abs(x[mask])))  # noqa: E731
-    out["position_rms_m"] = {a: rms(e["pos_" + a]) for a in AXES}
-    out["velocity_rms_mps"] = {a: rms(e["vel_" + a]) for a in AXES}
-    out["attitude_rms_deg"] = {a: math.degrees(rms(e["att_" + a]))
-                               for a in ("roll", "pitch", "yaw")}
-    out["position_max_m"] = {a: peak(e["pos_" + a]) for a in AXES}
-    out["velocity_max_mps"] = {a: peak(e["vel_" + a]) for a in AXES}
-    out["attitude_max_deg"] = {a: math.degrees(peak(e["att_" + a]))
-                               for a in ("roll", "pitch", "yaw")}
-    col = results.column
-    names = results.columns[filter_name]
-    if all(f"std_p{a}" in names for a in AXES):
-        groups = {"position": ("pos_", "std_p"), "velocity": ("vel_", "std_v"),
-                  "attitude": ("phi_", "std_att_")}
-        nees = {}
-        for g, (err, std) in groups.items():
-            sig = np.stack([col(filter_name, std + a)[mask] for a in AXES])
-            err_ = np.stack([e[err + a][mask] for a in AXES])
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio2 = np.where(sig > 0, (err_ / sig) ** 2, np.nan)
-            nees[g] = float(np.nanmean(ratio2.sum(axis=0)))
-        out["nees"] = nees
-    if "nis" in names and "updated" in names:
-        upd = (col(filter_name, "updated") > 0.5) & mask
-        if upd.any():
-            nis = col(filter_name, "nis")[upd]
-            dof = int(round(float(np.median(col(filter_name, "nis_dof")[upd]))))
-            n = int(upd.sum())
-            out["nis"] = {"mean": float(nis.mean()), "dof": dof, "updates": n,
+class MetricAccumulator:
+    """The metrics of one filter (see the module docstring), accumulated over consecutive
+    chunks of a run's rows, so a long run never needs its whole series in memory.
+
+    ``samples``: ``"all"`` (every recorded row, the default) or ``"fixes"`` (the rows where
+    a new GNSS fix arrived, i.e. the receiver's ``gnss_epoch`` changed: the solution right
+    after each update under Gauss-Seidel stepping).  :meth:`add` takes a chunk as a Results;
+    its rows before ``first_row`` only give context (truth to interpolate, the previous
+    epoch count) and are not counted.  :meth:`result` returns the dict of
+    :func:`filter_metrics`; ``header`` supplies step times and parameters.
+    """
+
+    def __init__(self, results, filter_name, window=None, samples="all", truth_name=None):
+        if samples not in SAMPLES:
+            raise NavfmuError(f"samples: expected one of {', '.join(SAMPLES)}, got {samples!r}")
+        self.filter_name, self.window, self.samples = filter_name, window, samples
+        self.truth_name = truth_name or find_component(results, "truth_",
+                                                       ("time", "lat", "lon", "h"))
+        names = results.columns[filter_name]
+        self.has_std = all(f"std_p{a}" in names for a in AXES)
+        self.has_nis = "nis" in names and "updated" in names
+        self.n = 0
+        self.t_first = self.t_last = None
+        self.sq = {}
+        self.peak = {}
+        self.nees_sum = {g: 0.0 for g in _NEES_GROUPS}
+        self.nees_n = {g: 0 for g in _NEES_GROUPS}
+        self.nis_sum, self.nis_n, self.dof_counts = 0.0, 0, {}
+        self.epochs = {"injected": [], "n_rejected": [], "dof": []}
+
+    def add(self, results, first_row=0):
+        e = navigation_errors(results, self.filter_name, self.truth_name)
+        mask = _sample_mask(results, e, self.window, self.samples)
+        mask[:first_row] = False
+        if not mask.any():
+            return
+        t = e["time"][mask]
+        self.t_first = float(t[0]) if self.t_first is None else self.t_first
+        self.t_last = float(t[-1])
+        self.n += int(mask.sum())
+        for key in [f"{g}_{a}" for g in ("pos", "vel") for a in AXES] + [
+                "att_" + a for a in ATTITUDE]:
+            x = e[key][mask]
+            self.sq[key] = self.sq.get(key, 0.0) + float(np.dot(x, x))
+            self.peak[key] = max(self.peak.get(key, 0.0), float(np.max(np.abs(x))))
+        col = results.column
+        if self.has_std:
+            for g, (err, std) in _NEES_GROUPS.items():
+                sig = np.stack([col(self.filter_name, std + a)[mask] for a in AXES])
+                err_ = np.stack([e[err + a][mask] for a in AXES])
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    ratio2 = np.where(sig > 0, (err_ / sig) ** 2, np.nan).sum(axis=0)
+                finite = ~np.isnan(ratio2)
+                self.nees_sum[g] += float(ratio2[finite].sum())
+                self.nees_n[g] += int(finite.sum())
+        if self.has_nis:
+            upd = (col(self.filter_name, "updated") > 0.5) & mask
+            if upd.any():
+                self.nis_sum += float(col(self.filter_name, "nis")[upd].sum())
+                self.nis_n += int(upd.sum())
+                for d in np.round(col(self.filter_name, "nis_dof")[upd]).astype(int).tolist():
+                    self.dof_counts[d] = self.dof_counts.get(d, 0) + 1
+        epochs = update_epochs(results, self.filter_name, self.window, first_row=first_row)
+        if epochs is not None and "n_rejected" in epochs and "injected" in epochs:
+            for key in self.epochs:
+                self.epochs[key].append(epochs[key])
+
+    def _rms(self, key):
+        return math.sqrt(self.sq[key] / self.n)
+
+    def result(self, header=None):
+        if self.n == 0:
+            raise NavfmuError(f"the metric window {self.window} contains no sample of the "
+                              f"filter output ({self.filter_name}, samples '{self.samples}')")
+        out = {"window_s": [self.t_first, self.t_last], "samples": self.n}
+        if self.samples != "all":
+            out["sampled_at"] = self.samples
+        out["position_rms_m"] = {a: self._rms("pos_" + a) for a in AXES}
+        out["velocity_rms_mps"] = {a: self._rms("vel_" + a) for a in AXES}
+        out["attitude_rms_deg"] = {a: math.degrees(self._rms("att_" + a)) for a in ATTITUDE}
+        out["position_max_m"] = {a: self.peak["pos_" + a] for a in AXES}
+        out["velocity_max_mps"] = {a: self.peak["vel_" + a] for a in AXES}
+        out["attitude_max_deg"] = {a: math.degrees(self.peak["att_" + a]) for a in ATTITUDE}
+        if self.has_std:
+            out["nees"] = {g: (self.nees_sum[g] / self.nees_n[g] if self.nees_n[g]
+                               else float("nan")) for g in _NEES_GROUPS}
+        if self.nis_n:
+            dof = _median_of_counts(self.dof_counts)
+            n = self.nis_n
+            out["nis"] = {"mean": self.nis_sum / n, "dof": dof, "updates": n,
                           "band95": [float(stats.chi2.ppf(0.025, n * dof) / n),
                                      float(stats.chi2.ppf(0.975, n * dof) / n)]}
-    if filter_name in getattr(results, "step_time_s", {}):
-        out["time_per_step_ms"] = 1e3 * float(results.step_time_s[filter_name])
-    detection = outlier_detection(results, filter_name, window=window)
-    if detection is not None:
-        out["outlier_detection"] = detection
-    return out
+        if header is not None and self.filter_name in getattr(header, "step_time_s", {}):
+            out["time_per_step_ms"] = 1e3 * float(header.step_time_s[self.filter_name])
+        if self.epochs["dof"]:
+            cat = {k: np.concatenate(v) for k, v in self.epochs.items()}
+            detection = rejection_statistics(cat["injected"], cat["n_rejected"], cat["dof"])
+            detection["receiver"] = find_receiver(header) if header is not None else None
+            _add_gate(detection, header, self.filter_name)
+            out["outlier_detection"] = detection
+        return out
+
+
+_NEES_GROUPS = {"position": ("pos_", "std_p"), "velocity": ("vel_", "std_v"),
+                "attitude": ("phi_", "std_att_")}
+
+
+def _median_of_counts(counts):
+    """Median (lower middle for an even count, as ``int(round(median))`` of the values for
+    the usual single dof) of values given as value -> count."""
+    values = sorted(counts)
+    total = sum(counts.values())
+    seen = 0
+    for v in values:
+        seen += counts[v]
+        if 2 * seen >= total:
+            return int(v)
+    return int(values[-1])
+
+
+def filter_metrics(results, filter_name, window=None, truth_name=None, samples="all"):
+    """All metrics of one filter as a JSON-ready dict (see the module docstring)."""
+    acc = MetricAccumulator(results, filter_name, window=window, samples=samples,
+                            truth_name=truth_name)
+    acc.add(results)
+    return acc.result(results)
 
 
 def reference_metrics(position_enu=None, velocity_enu=None, attitude_deg=None):
@@ -236,6 +334,13 @@ def rms_3d(metrics, group):
     return float(math.sqrt(sum(v * v for v in values)))
 
 
+def pooled_rms(per_run_rms):
+    """RMS over several runs of equal length: the root of the mean of the per-run mean
+    squares (the README's and the slow tests' "RMS over the Monte Carlo runs")."""
+    x = np.asarray(per_run_rms, dtype=float)
+    return float(np.sqrt(np.mean(x * x)))
+
+
 def improvement_percent(baseline, value):
     """Reduction of ``value`` against ``baseline`` in percent of the baseline (nan if the
     baseline is 0)."""
@@ -264,7 +369,7 @@ def find_receiver(results):
         return None
 
 
-def update_epochs(results, filter_name, window=None, receiver_name=None):
+def update_epochs(results, filter_name, window=None, receiver_name=None, first_row=0):
     """The rows where ``filter_name`` updated (``updated`` output), within ``window`` of its
     nav_time: dict of arrays ``time``, ``dof`` (nis_dof) and, when recorded, ``chi2_max``,
     ``chi2``, ``nis``, ``n_rejected`` of the filter and ``injected`` (the receiver's
@@ -275,6 +380,7 @@ def update_epochs(results, filter_name, window=None, receiver_name=None):
         return None
     col = results.column
     rows = col(filter_name, "updated") > 0.5
+    rows[:first_row] = False
     t = col(filter_name, "nav_time")
     if window is not None:
         rows &= (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
@@ -307,6 +413,8 @@ def rejection_statistics(injected, n_rejected, n_observations):
     hits, alarms = int((detected & injected).sum()), int((detected & clean).sum())
     obs_clean = float(n_observations[clean].sum())
     rejected_clean = float(n_rejected[clean].sum())
+    obs_injected = float(n_observations[injected].sum())
+    rejected_injected = float(n_rejected[injected].sum())
     ratio = lambda a, b: float(a / b) if b > 0 else float("nan")  # noqa: E731
     return {"epochs": int(injected.size), "injected_epochs": n_inj, "detected_epochs": hits,
             "detection_rate": ratio(hits, n_inj),
@@ -314,7 +422,9 @@ def rejection_statistics(injected, n_rejected, n_observations):
             "false_alarm_rate": ratio(alarms, n_clean),
             "clean_observations": int(obs_clean),
             "false_alarm_observations": int(rejected_clean),
-            "false_alarm_rate_per_observation": ratio(rejected_clean, obs_clean)}
+            "false_alarm_rate_per_observation": ratio(rejected_clean, obs_clean),
+            "injected_observations": int(obs_injected),
+            "detected_observations": int(rejected_injected)}
 
 
 def outlier_detection(results, filter_name, window=None, receiver_name=None):
@@ -327,11 +437,18 @@ def outlier_detection(results, filter_name, window=None, receiver_name=None):
         return None
     out = rejection_statistics(epochs["injected"], epochs["n_rejected"], epochs["dof"])
     out["receiver"] = receiver_name or find_receiver(results)
+    _add_gate(out, results, filter_name)
+    return out
+
+
+def _add_gate(detection, results, filter_name):
+    """The chi2_threshold gate and its chi2(1) false-alarm probability, when there is one."""
+    if results is None:
+        return
     gates = [g for g in chi2_thresholds(results, filter_name) if g["name"] == "chi2_threshold"]
     if gates:
-        out["chi2_threshold"] = gates[0]
-        out["expected_false_alarm_rate_chi2_1"] = float(stats.chi2.sf(gates[0]["value"], 1))
-    return out
+        detection["chi2_threshold"] = gates[0]
+        detection["expected_false_alarm_rate_chi2_1"] = float(stats.chi2.sf(gates[0]["value"], 1))
 
 
 def _parameter(results, component, name):

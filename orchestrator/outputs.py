@@ -1,7 +1,8 @@
 """A run's output folder: written whole in a staging folder beside it, then moved into place.
 
 The files of one command (results, metrics, report, plots) are written into a hidden staging
-folder ``.<name>.<random>.partial`` next to the target folder.  Only when every file is there
+folder ``.<name>.<random>.partial`` next to the target folder (a Parquet file streamed while
+the run goes is written into another such folder and moved in, :func:`move_into`).  Only when every file is there
 is the staging folder moved onto the target: under an exclusive lock (``fcntl.flock`` on the
 parent folder) the previous folder is renamed aside, the staging folder renamed to the
 target, and the previous folder deleted.  So
@@ -32,7 +33,7 @@ from .errors import NavfmuError
 #: marker file listing the outputs of the command that wrote the folder
 MARKER = ".navfmu-outputs"
 #: file kinds an output folder written before the marker existed may hold
-OUTPUT_SUFFIXES = (".csv", ".npz", ".json", ".png")
+OUTPUT_SUFFIXES = (".csv", ".npz", ".json", ".png", ".parquet")
 
 
 def _umask() -> int:
@@ -110,4 +111,25 @@ def staged(target) -> Iterator[Path]:
             shutil.rmtree(stage, ignore_errors=True)
 
 
-__all__ = ["MARKER", "check_target", "staged"]
+def stream_folder(target) -> Path:
+    """A hidden folder beside ``target`` (``.<name>.<random>.partial``, like a staging
+    folder) for files a command streams while it runs; :func:`move_into` moves each into the
+    staging folder and removes this folder with the last one."""
+    target = check_target(target).absolute()
+    return Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial",
+                                 dir=target.parent))
+
+
+def move_into(path, stage: Path) -> Path:
+    """Move the streamed file ``path`` into the staging folder ``stage``; returns its path."""
+    path = Path(path)
+    dest = Path(stage) / path.name
+    os.replace(path, dest)
+    try:
+        os.rmdir(path.parent)       # the stream folder, once empty
+    except OSError:
+        pass
+    return dest
+
+
+__all__ = ["MARKER", "check_target", "staged", "stream_folder", "move_into"]

@@ -398,3 +398,35 @@ def plot_trajectory(results, truth_name, path, title=""):
     fig.suptitle(title or "truth trajectory")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def plot_rms_intervals(summary, path, title=""):
+    """A campaign's RMS per axis (panels, the papers' table order, log scale): per filter the
+    mean over the runs with its confidence interval (bar), and the paper's number (cross)
+    when it has one; ``summary`` from :func:`orchestrator.campaign_summary.summarize`."""
+    axes_items = list(summary["axes"].items())
+    filters = summary["filters"]
+    fig, axes = plt.subplots(3, 3, figsize=(max(9.0, 1.1 * len(filters) + 6), 9))
+    x = np.arange(len(filters))
+    for ax, (key, entry) in zip(axes.flat, axes_items):
+        stats_ = [entry["filters"][f] for f in filters]
+        mean = np.array([s["mean"] for s in stats_])
+        # log scale (RMS spans decades between filters): a lower bound <= 0 is drawn at mean/100
+        low = np.array([s["low"] if s["low"] > 0 else s["mean"] / 100 for s in stats_])
+        err = np.array([mean - low, [s["high"] - s["mean"] for s in stats_]])
+        ax.bar(x, mean, color=[f"C{i}" for i in range(len(filters))], alpha=0.6)
+        ax.errorbar(x, mean, yerr=np.nan_to_num(err), fmt="none", ecolor="k", capsize=3, lw=1)
+        ax.set_yscale("log")
+        paper = [entry["filters"][f].get("paper") for f in filters]
+        if any(p is not None for p in paper):
+            ax.plot(x, [np.nan if p is None else p for p in paper], "kx", ms=8,
+                    label="paper")
+            ax.legend(fontsize=7)
+        ax.set_xticks(x)
+        ax.set_xticklabels(filters, rotation=45, ha="right", fontsize=7)
+        ax.set_title(f"{entry['label']} RMS [{entry['unit']}]", fontsize=9)
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(title or f"RMS per run: mean and {100 * summary['level']:.0f} % interval over "
+                 f"{summary['runs']} runs")
+    fig.tight_layout()
+    return _save(fig, path)

@@ -19,6 +19,7 @@ from . import metrics as nav_metrics
 from . import outputs
 from . import plots
 from . import prechecks
+from . import recorder
 from .errors import NavfmuError
 from .master import Simulation
 from .results import Results, atomic_write
@@ -94,8 +95,7 @@ def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
         raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
 
 
-def filters_in(results: Results) -> List[str]:
-    return [c for c in results.components if results.has(c, "nav_time")]
+filters_in = nav_metrics.filters_of
 
 
 def has_truth(results: Results) -> bool:
@@ -110,16 +110,30 @@ class Run:
     model: SystemModel
     results: Results
     metrics: Dict[str, Dict[str, Any]] = field(default_factory=dict)
+    #: the Parquet file the run was streamed to (then ``results`` has no rows)
+    series_file: Optional[Path] = None
+
+
+def filter_label(model: SystemModel, filter: Optional[str] = None) -> str:
+    """The name a run of ``model`` (with ``filter`` swapped in) is reported under: the
+    filter FMU's name, or the model's name when it has no ``filter`` component."""
+    if FILTER_COMPONENT not in [c.name for c in model.components]:
+        return model.name
+    return Path(resolve_filter(filter) if filter
+                else model.component(FILTER_COMPONENT).source).stem
 
 
 def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend: str = "fmu",
                       stop_time: Optional[float] = None, parameters=None, window=None,
                       progress=None, build=True, log=print, replay=None,
-                      algorithm="gauss-seidel") -> Run:
+                      algorithm="gauss-seidel", stream_to=None) -> Run:
     """Run one scenario (optionally with the filter component swapped, and with its sensor
     components replaced by a replay of the sensor log in folder ``replay``, see
-    :func:`orchestrator.replay.replay_model`) and compute metrics (not without a truth)."""
-    names = [c.name for c in model.components]
+    :func:`orchestrator.replay.replay_model`) and compute metrics (not without a truth).
+
+    ``stream_to``: a ``.parquet`` path; the rows then go to that file and to the metrics in
+    chunks (memory flat in the flight length) instead of staying in ``results``."""
+    label = filter_label(model, filter)
     if filter:
         model = swap_filter(model, filter)
     record = None
@@ -130,13 +144,16 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
         stop_time = None
         parameters = {**log_replay.parameter_overrides(model, notes), **(parameters or {})}
         record = log_replay.recorded_signals(model, notes)
-    label = (Path(model.component(FILTER_COMPONENT).source).stem
-             if FILTER_COMPONENT in names else model.name)
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
                      parameters=parameters, record=record, algorithm=algorithm)
     prechecks.check_simulation(sim, stop_time)
+    if stream_to is not None:
+        sink = recorder.MetricsSink(window=window, overlap=max(sim.decimation.values()) + 1)
+        header = sim.run(stop_time=stop_time, progress=progress,
+                         sink=recorder.Tee([sink, recorder.ParquetSink(stream_to)]))
+        return Run(label, model, header, dict(sink.metrics), Path(stream_to))
     results = sim.run(stop_time=stop_time, progress=progress)
     run = Run(label, model, results)
     if not has_truth(results):
@@ -344,8 +361,10 @@ def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, titl
 
 
 def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]:
-    """Write every output file into the folder ``out``; a pending Ctrl-C stops between files."""
+    """Write every output file into the folder ``out``; a pending Ctrl-C stops between files.
+    A run streamed to a Parquet file (:attr:`Run.series_file`) has its file moved in."""
     written = []
+    streamed = {}
 
     def add(path):
         if path:
@@ -354,7 +373,10 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
 
     for run in runs:
         stem = "results" if len(runs) == 1 else f"results_{run.label}"
-        if fmt == "npz":
+        if run.series_file is not None:     # streamed while it ran: move it into place
+            streamed[id(run)] = outputs.move_into(run.series_file, out)
+            add(streamed[id(run)])
+        elif fmt == "npz":
             add(run.results.to_npz(out / f"{stem}.npz"))
         else:
             add(run.results.to_csv(out / f"{stem}.csv"))
@@ -371,10 +393,11 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
     if plots_on and all(has_truth(run.results) for run in runs):
         entries = []
         for run in runs:
-            for f in filters_in(run.results):
+            results = (run.results if run.series_file is None
+                       else recorder.plot_view(streamed[id(run)]))
+            for f in filters_in(results):
                 label = run.label if f == FILTER_COMPONENT else f"{run.label}:{f}"
-                entries.append((label, run.results, f,
-                                nav_metrics.navigation_errors(run.results, f)))
+                entries.append((label, results, f, nav_metrics.navigation_errors(results, f)))
         if entries:
             add(plots.plot_errors(entries, out / "errors.png", title))
             if len(entries) > 1:  # errors.png compares RMS; each filter's +-3 sigma apart
@@ -387,8 +410,9 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
             add(plots.plot_r_estimate(entries, out / "r_estimate.png", title))
             add(plots.plot_chi2(entries, out / "chi2.png", title))
             add(plots.plot_outliers(entries, out / "outliers.png", title))
-        truth = nav_metrics.find_component(runs[0].results, "truth_", ("time", "lat", "lon", "h"))
-        add(plots.plot_trajectory(runs[0].results, truth, out / "trajectory.png", title))
+        first = entries[0][1] if entries else runs[0].results
+        truth = nav_metrics.find_component(first, "truth_", ("time", "lat", "lon", "h"))
+        add(plots.plot_trajectory(first, truth, out / "trajectory.png", title))
     return written
 
 

@@ -8,7 +8,6 @@ campaigns of the issue are marked ``slow`` (run with ``pytest -m slow``).
 from __future__ import annotations
 
 import copy
-import functools
 
 import numpy as np
 import pytest
@@ -291,68 +290,58 @@ def test_same_seed_same_result(outliers_120s):
 
 
 # ------------------------------------------------------------------------------------------
-# acceptance Monte Carlo (slow)
+# acceptance Monte Carlo (slow): thin calls of the campaign runner
 # ------------------------------------------------------------------------------------------
-SEEDS = range(1, 21)
+N_SEEDS = 20
 
 
-def _campaign(scenario, classes, seeds=SEEDS):
-    """Per seed and filter: position and velocity RMS (N/E/D) over the whole run, plus the
-    NewtonRobustKf detection counts.  The truth/IMU/GNSS of a seed are shared by the filters."""
-    rows = {cls.model_name: [] for cls in classes}
-    detection = np.zeros(4)   # injected components, detected, clean components, false alarms
-    for seed in seeds:
-        sensors = simulate_sensors(MODELS / scenario,
-                                   overrides={"trajectory": {"seed": seed}, "gnss": {"seed": seed}})
-        for cls in classes:
-            run = run_filter(sensors, cls)
-            table = rms_table(run)
-            print(f"seed {seed} {cls.model_name:15s} pos {np.round(table['position_ned_m'], 3)}"
-                  f" vel {np.round(table['velocity_ned_mps'], 4)}"
-                  f" {run.seconds_per_step * 1e6:.0f} us/step", flush=True)
-            rows[cls.model_name].append(np.r_[table["position_ned_m"], table["velocity_ned_mps"]])
-            if cls is components.NewtonRobustKf:
-                injected = sensors.gnss_outlier[run.rows]
-                n_rej = run.outputs["n_rejected"]
-                m = run.outputs["nis_dof"][0]
-                detection += [m * injected.sum(), n_rej[injected].sum(),
-                              m * (~injected).sum(), n_rej[~injected].sum()]
-    # RMS over the campaign (root of the mean of the per-run mean squares)
-    summary = {k: np.sqrt(np.mean(np.square(v), axis=0)) for k, v in rows.items()}
-    return summary, rows, detection
+def _campaign(scenario, filters, out):
+    """Per filter: the campaign records of seeds 1..20 (trajectory.seed = gnss.seed = run
+    index + 1), RMS at the GNSS fix epochs over the whole run, the truth/IMU/GNSS of a seed
+    shared by the filters (same seeds as the earlier hand-written loop, same per-run numbers:
+    tests/test_campaign.py checks one run against tests/scenario_runner.py)."""
+    from campaign_helpers import run_paper_campaign
+
+    return run_paper_campaign(scenario, filters, N_SEEDS, out,
+                              seed_offsets=(("trajectory", 0), ("gnss", 0)))
 
 
-@functools.lru_cache(maxsize=None)
-def _paper001_summary():
-    summary, rows, _ = _campaign("aircraft_500s", [components.Kf, components.SageHusaFading,
-                                                   components.Iakf])
-    for k, v in summary.items():
-        print(f"{k:15s} RMS pos N/E/D {np.round(v[:3], 4)} m, vel N/E/D {np.round(v[3:], 4)} m/s")
-    kf, iakf = summary["Kf"], summary["Iakf"]
-    print("Kf / Iakf RMS ratio, position N/E/D", np.round(kf[:3] / iakf[:3], 2),
-          "velocity", np.round(kf[3:] / iakf[3:], 2))
-    return summary
+def _pooled(records):
+    """filter -> pooled RMS position N/E/D and velocity N/E/D over the runs."""
+    from orchestrator.metrics import pooled_rms
+
+    return {f: np.array([pooled_rms([r["metrics"][g][a] for r in rows])
+                         for g in ("position_rms_m", "velocity_rms_mps") for a in "ned"])
+            for f, rows in records.items()}
 
 
 @pytest.mark.slow
-def test_paper001_ordering_monte_carlo():
+def test_paper001_ordering_monte_carlo(tmp_path):
     """aircraft_500s, 20 seeds: Iakf < SageHusaFading < Kf in RMS on every position and
-    every velocity axis (paper 001, Table 1)."""
-    summary = _paper001_summary()
-    kf, shf, iakf = summary["Kf"], summary["SageHusaFading"], summary["Iakf"]
+    every velocity axis (paper 001, Table 1), pooled over the runs and as orderings the
+    paired intervals support."""
+    records, summary = _campaign("aircraft_500s", ("Kf", "SageHusaFading", "Iakf"), tmp_path)
+    pooled = _pooled(records)
+    kf, shf, iakf = pooled["Kf"], pooled["SageHusaFading"], pooled["Iakf"]
+    print("Kf / Iakf RMS ratio, position N/E/D", np.round(kf[:3] / iakf[:3], 2),
+          "velocity", np.round(kf[3:] / iakf[3:], 2))
     assert np.all(shf < kf), (shf, kf)
     assert np.all(iakf < shf), (iakf, shf)
 
 
 @pytest.mark.slow
-def test_paper004_newton_monte_carlo():
+def test_paper004_newton_monte_carlo(tmp_path):
     """aircraft_outliers, 20 seeds: NewtonRobustKf cuts the 3-D position and velocity RMS of
     the Kf by >= 50 % each; detects >= 95 % of the injected outlier components; false alarms
     on clean components within a factor 2 of alpha = 0.01."""
-    summary, _, det = _campaign("aircraft_outliers", [components.Kf, components.NewtonRobustKf])
-    kf, nk = summary["Kf"], summary["NewtonRobustKf"]
+    records, _ = _campaign("aircraft_outliers", ("Kf", "NewtonRobustKf"), tmp_path)
+    pooled = _pooled(records)
+    kf, nk = pooled["Kf"], pooled["NewtonRobustKf"]
     pos_cut = 1.0 - np.linalg.norm(nk[:3]) / np.linalg.norm(kf[:3])
     vel_cut = 1.0 - np.linalg.norm(nk[3:]) / np.linalg.norm(kf[3:])
+    det = [sum(r["metrics"]["outlier_detection"][k] for r in records["NewtonRobustKf"])
+           for k in ("injected_observations", "detected_observations", "clean_observations",
+                     "false_alarm_observations")]
     detection_rate = det[1] / det[0]
     false_alarm_rate = det[3] / det[2]
     print(f"Kf {np.round(kf, 4)} NewtonRobustKf {np.round(nk, 4)} position -{pos_cut:.1%} "

@@ -1,0 +1,45 @@
+"""navfmu report: scenario and filter discovery from models/ and paper.json; a tiny report."""
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+
+from orchestrator import report
+
+ROOT = Path(__file__).resolve().parent.parent
+INS_GNSS_FILTERS = {"Kf", "SageHusaFading", "Iakf", "NewtonRobustKf", "Igg3RobustKf", "InsOnly",
+                    "Ukf", "CtfaUkf", "ImmUkf"}
+
+
+def test_discovery_finds_every_scenario_and_the_filters_that_fit():
+    plans = {p["model"].name: p for p in report.discover(ROOT / "models")}
+    assert {"aircraft_500s", "aircraft_outliers", "uav_maneuver"} <= set(plans)
+    for name in ("aircraft_500s", "aircraft_outliers", "uav_maneuver"):
+        assert INS_GNSS_FILTERS <= set(plans[name]["filters"])
+        assert "TrajectoryImu" not in plans[name]["filters"]
+    # the paper's filters first, in the order of its table
+    assert plans["uav_maneuver"]["filters"][:3] == ["Ukf", "ImmUkf", "CtfaUkf"]
+    assert plans["aircraft_500s"]["reference"]["table"][0]["filter"] == "Kf"
+
+
+def test_tiny_report_has_the_papers_table_figures_and_cross_matrix(tmp_path, monkeypatch):
+    """aircraft_500s alone, 2 runs of 2 s, the paper's three filters and Ukf (to keep the
+    test short; discovery is tested above)."""
+    shown = ["Kf", "SageHusaFading", "Iakf", "Ukf"]
+    monkeypatch.setattr(report, "fitting_filters", lambda model: shown)
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models" / "aircraft_500s", models / "aircraft_500s")
+    out = tmp_path / "report"
+    path = report.build_report(out, runs=2, stop_time=2.0, models=models, log=print)
+    text = path.read_text()
+    assert "## aircraft_500s: paper 001" in text
+    # the paper's row printed with its number, ours with an interval
+    assert "| standard Kalman filter | paper | 8.600 | 9.414 | 3.284 |" in text
+    assert re.search(r"\| Iakf \| ours \| \d+\.\d{3} \[-?\d+\.\d{3}, \d+\.\d{3}\] \|", text)
+    assert "2 runs (trajectory.seed 1..2, gnss.seed 1001..1002)" in text
+    for fig in re.findall(r"\]\(figures/([^)]+)\)", text):
+        assert (out / "figures" / fig).stat().st_size > 10_000
+    matrix = text.split("## Cross matrix")[1]
+    assert all(f"| {f} |" in matrix for f in shown)
+    assert "## Consistency: NEES and NIS" in text
