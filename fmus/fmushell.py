@@ -23,6 +23,10 @@ does the FMI side once for all of them:
   A bug's traceback follows in a second message (category ``traceback``).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.
+* works around two defects of pythonfmu 0.7's native binary that corrupted the heap at
+  process exit: its loader's extra ``Py_DECREF`` of the script's globals
+  (:func:`_balance_loader_decref`) and its interpreter teardown running after the C++ static
+  destructors (:func:`_finalize_python_at_exit`).
 """
 from __future__ import annotations
 
@@ -359,12 +363,14 @@ def _balance_loader_decref(script_frame):
 
     pythonfmu 0.7's native loader (``findClass`` in ``PySlaveInstance.cpp``), at every
     ``fmi2Instantiate``, executes the script once more with the module's dict as globals and a
-    fresh dict as locals, then ``Py_DECREF``s the module dict, a borrowed reference.  Each
-    instance so leaves the dict one reference short; at interpreter shutdown it is freed while
-    functions still point to it, corrupting the heap (glibc "corrupted double-linked list",
-    segfaults in ``Py_FinalizeEx``).  That re-execution is the only time the script's top level
-    runs with locals that are not its globals; there we add the missing reference, for good
-    (the dict lives until the process ends, as a module's should).
+    fresh dict as locals, then ``Py_DECREF``s the module dict, a borrowed reference: each
+    instance leaves the dict one reference short.  What hides the deficit is another leak of
+    the loader (the re-executed class, kept alive by an MRO list it never releases, whose
+    methods defined in the script hold the dict); the crash of a second instance of a script
+    without an ``__init__`` of its own (module docstring) fits this.  That re-execution is the
+    only time the script's top level runs with locals that are not its globals; there we add
+    the missing reference, for good (the dict lives until the process ends, as a module's
+    should).
     """
     if script_frame.f_locals is not script_frame.f_globals:
         ctypes.pythonapi.Py_IncRef(ctypes.py_object(script_frame.f_globals))
@@ -388,8 +394,8 @@ def _finalize_python_at_exit(slave):
     binary's own ``finalizePythonInterpreter`` with ``__cxa_atexit`` once per binary, after
     the imports, runs it before all of those: the interpreter ends while everything it uses is
     alive, and the later resets find an empty pointer.  The binary is pinned (RTLD_NODELETE;
-    pythonfmu binaries are not unloadable anyway), so the hook never outlives its code.  A
-    slave instantiated from Python without the binary (the FMU builder) is left alone.
+    its STB_GNU_UNIQUE symbols make it unloadable anyway), so the hook never outlives its
+    code.  A slave instantiated from Python without the binary (the FMU builder) is left alone.
     """
     resources = getattr(slave, "resources", None)
     if not resources or not sys.platform.startswith("linux"):

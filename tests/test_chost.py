@@ -174,6 +174,8 @@ def test_navfmu_env_names_this_interpreter():
     for package in (numpy, scipy):
         assert str(Path(package.__file__).resolve().parent.parent) in folders
     # the library the interpreter itself runs on, as the dynamic linker resolves it
+    if shutil.which("ldd") is None:
+        pytest.skip("no ldd on PATH: cannot ask the dynamic linker which libpython runs")
     ldd = subprocess.run(["ldd", sys.executable], capture_output=True, text=True)
     linked = re.findall(r"(libpython\S+) => (\S+)", ldd.stdout)
     if not linked:
