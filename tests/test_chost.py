@@ -34,6 +34,8 @@ N_STEPS = 5
 RUNS_DEFAULT = 10
 RUNS_SLOW = 100
 WORKERS = max(2, min(4, os.cpu_count() or 1))
+#: String parameters an FMU cannot run without
+STRING_PARAMETERS = {"ImuGnssReplay": {"log": str(ROOT / "models" / "replay_gnss_ins_sim" / "log")}}
 
 
 def _navfmu(*args):
@@ -76,12 +78,16 @@ class Case:
 def _prepare(name, folder):
     """Extract the FMU, choose its inputs (time tags follow the step, the rest constants)
     and read the Real outputs through fmpy after the calls the C host makes."""
+    strings = STRING_PARAMETERS.get(name, {})
     fmu = fmu_build.fmu_path(name)
     md = read_model_description(str(fmu))
     unzipped = extract(str(fmu), unzipdir=str(folder))
     h = float(md.defaultExperiment.stepSize)
-    inputs, input_args, outputs = [], [], []
+    inputs, input_args, outputs, string_params = [], [], [], []
     for v in md.modelVariables:
+        if v.type == "String" and v.name in strings:
+            string_params.append((v.valueReference, strings[v.name]))
+            input_args.append(f"{v.valueReference}=s:{strings[v.name]}")
         if v.type != "Real":
             continue
         if v.causality == "output":
@@ -95,6 +101,8 @@ def _prepare(name, folder):
                       modelIdentifier=md.coSimulation.modelIdentifier, instanceName="host")
     slave.instantiate()
     slave.setupExperiment(startTime=0.0)
+    if string_params:
+        slave.setString([vr for vr, _ in string_params], [text for _, text in string_params])
     slave.enterInitializationMode()
     slave.exitInitializationMode()
     for k in range(N_STEPS):

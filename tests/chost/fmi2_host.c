@@ -2,10 +2,11 @@
  *
  * Usage: fmi2_host SHARED_LIBRARY GUID RESOURCE_URI STEP_SIZE N_STEPS ARG [ARG ...]
  *
- * Each ARG is a Real value reference: "VR" reads an output at the end, "VR=VALUE" sets an
- * input to VALUE before every step, "VR=t" to the end time of the step, "VR=h" to STEP_SIZE.
- * Loads the FMU's binary with dlopen, instantiates it, runs setupExperiment (start 0),
- * enter/exitInitializationMode, N_STEPS times fmi2SetReal (the inputs) and fmi2DoStep from
+ * Each ARG is a value reference: "VR" reads a Real output at the end, "VR=VALUE" sets a Real
+ * input to VALUE before every step, "VR=t" to the end time of the step, "VR=h" to STEP_SIZE,
+ * and "VR=s:TEXT" sets a String parameter to TEXT before initialization.
+ * Loads the FMU's binary with dlopen, instantiates it, runs setupExperiment (start 0), sets
+ * the String parameters, enter/exitInitializationMode, N_STEPS times fmi2SetReal (the inputs) and fmi2DoStep from
  * k * STEP_SIZE, then reads the outputs in one fmi2GetReal call and prints them, one "%.17g"
  * per line, calls fmi2Terminate and fmi2FreeInstance and returns from main without unloading
  * the library (as most simulators end).  Exit status: 0 on success, 1 on a usage or load
@@ -66,11 +67,17 @@ int main(int argc, char **argv)
     fmi2Real *values = calloc((size_t)n_args, sizeof *values);
     fmi2Real *in_values = calloc((size_t)n_args, sizeof *in_values);
     char *in_kind = calloc((size_t)n_args, 1); /* 'v' constant, 't' step end time, 'h' step */
+    fmi2ValueReference *str_vr = calloc((size_t)n_args, sizeof *str_vr);
+    fmi2String *str_values = calloc((size_t)n_args, sizeof *str_values);
+    int n_str = 0;
     for (int i = 0; i < n_args; ++i) {
         char *rest;
         fmi2ValueReference r = (fmi2ValueReference)strtoul(argv[6 + i], &rest, 10);
         if (*rest == '\0') {
             out_vr[n_out++] = r;
+        } else if (strncmp(rest, "=s:", 3) == 0) {
+            str_vr[n_str] = r;
+            str_values[n_str++] = rest + 3;
         } else if (*rest == '=') {
             in_vr[n_in] = r;
             in_kind[n_in] = strcmp(rest + 1, "t") == 0 ? 't' : strcmp(rest + 1, "h") == 0 ? 'h' : 'v';
@@ -93,6 +100,7 @@ int main(int argc, char **argv)
     fmi2DoStepTYPE *do_step = load(lib, "fmi2DoStep");
     fmi2GetRealTYPE *get_real = load(lib, "fmi2GetReal");
     fmi2SetRealTYPE *set_real = load(lib, "fmi2SetReal");
+    fmi2SetStringTYPE *set_string = load(lib, "fmi2SetString");
     fmi2TerminateTYPE *terminate = load(lib, "fmi2Terminate");
     fmi2FreeInstanceTYPE *free_instance = load(lib, "fmi2FreeInstance");
 
@@ -104,6 +112,7 @@ int main(int argc, char **argv)
         return 2;
     }
     CHECK(setup(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), "fmi2SetupExperiment");
+    if (n_str > 0) CHECK(set_string(c, str_vr, (size_t)n_str, str_values), "fmi2SetString");
     CHECK(enter(c), "fmi2EnterInitializationMode");
     CHECK(exit_init(c), "fmi2ExitInitializationMode");
     for (int k = 0; k < n_steps; ++k) {
@@ -128,5 +137,7 @@ int main(int argc, char **argv)
     free(values);
     free(in_values);
     free(in_kind);
+    free(str_vr);
+    free(str_values);
     return 0;
 }
