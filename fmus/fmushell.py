@@ -23,6 +23,10 @@ does the FMI side once for all of them:
   A bug's traceback follows in a second message (category ``traceback``).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.
+* works around two defects of pythonfmu 0.7's native binary that corrupted the heap at
+  process exit: its loader's extra ``Py_DECREF`` of the script's globals
+  (:func:`_balance_loader_decref`) and its interpreter teardown running after the C++ static
+  destructors (:func:`_finalize_python_at_exit`).
 
 Hostile or careless host calls (FMI rules checked here and in
 :meth:`navcore.component.Component.advance`):
@@ -45,6 +49,8 @@ fmi2OK with the fmi2Error message in the log and the refusal of the next doStep.
 """
 from __future__ import annotations
 
+import ctypes
+import os
 import sys
 import traceback
 from pathlib import Path
@@ -117,6 +123,7 @@ def setup(slave, component_class):
     # the FMU's identity hashes its sources: read them now, while the folder pythonfmu loaded
     # them from exists (a host may delete it once the first instance is freed)
     _identity(type(slave))
+    _finalize_python_at_exit(slave)
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
     for port in cls.inputs:
@@ -425,6 +432,7 @@ def _fmu_state_from_bytes(slave_class, blob):
 def bind_methods(slave_class):
     """Give an FMU script's slave class the FMI methods of this module (called right after
     the class statement in every script)."""
+    _balance_loader_decref(sys._getframe(1))
     slave_class.setup_experiment = setup_experiment
     slave_class.exit_initialization_mode = exit_initialization_mode
     slave_class._get_fmu_state = get_fmu_state
@@ -436,6 +444,63 @@ def bind_methods(slave_class):
         setattr(slave_class, f"get_{type_name.lower()}", _getter(type_name))
         setattr(slave_class, f"set_{type_name.lower()}", _setter(type_name))
     return slave_class
+
+
+def _balance_loader_decref(script_frame):
+    """Give back the reference to the script's module dict that pythonfmu's loader takes.
+
+    pythonfmu 0.7's native loader (``findClass`` in ``PySlaveInstance.cpp``), at every
+    ``fmi2Instantiate``, executes the script once more with the module's dict as globals and a
+    fresh dict as locals, then ``Py_DECREF``s the module dict, a borrowed reference: each
+    instance leaves the dict one reference short.  What hides the deficit is another leak of
+    the loader (the re-executed class, kept alive by an MRO list it never releases, whose
+    methods defined in the script hold the dict); the crash of a second instance of a script
+    without an ``__init__`` of its own (module docstring) fits this.  That re-execution is the
+    only time the script's top level runs with locals that are not its globals; there we add
+    the missing reference, for good (the dict lives until the process ends, as a module's
+    should).
+    """
+    if script_frame.f_locals is not script_frame.f_globals:
+        ctypes.pythonapi.Py_IncRef(ctypes.py_object(script_frame.f_globals))
+
+
+#: dlopen flags to take hold of an already loaded library for good
+_RTLD_HOLD = os.RTLD_NOW | getattr(os, "RTLD_NOLOAD", 0) | getattr(os, "RTLD_NODELETE", 0)
+_EXIT_HOOKED = set()
+
+
+def _finalize_python_at_exit(slave):
+    """Have pythonfmu tear the interpreter down first thing at ``exit()``, not last.
+
+    pythonfmu 0.7's binary keeps its interpreter owner in a C++ static ``shared_ptr`` and
+    also resets that pointer from an ``__attribute__((destructor))`` (``PySlaveInstance.cpp``).
+    At ``exit()`` the static destructors run first, in reverse order of loading: those of every
+    C++ extension module imported since (scipy's ``_uarray``), then the ``shared_ptr``'s, whose
+    ``Py_FinalizeEx`` then meets the already destroyed objects of those extensions; afterwards
+    the destructor function resets the destroyed ``shared_ptr`` again, a write into freed
+    memory (glibc "corrupted double-linked list", in Python hosts too).  Registering the
+    binary's own ``finalizePythonInterpreter`` with ``__cxa_atexit`` once per binary, after
+    the imports, runs it before all of those: the interpreter ends while everything it uses is
+    alive, and the later resets find an empty pointer.  The binary is pinned (RTLD_NODELETE;
+    its STB_GNU_UNIQUE symbols make it unloadable anyway), so the hook never outlives its
+    code.  A slave instantiated from Python without the binary (the FMU builder) is left alone.
+    """
+    resources = getattr(slave, "resources", None)
+    if not resources or not sys.platform.startswith("linux"):
+        return
+    library = os.path.join(os.path.dirname(os.path.abspath(resources)), "binaries", "linux64",
+                           f"{type(slave).__name__}.so")
+    if library in _EXIT_HOOKED:
+        return
+    try:
+        finalize = ctypes.CDLL(library, mode=_RTLD_HOLD).finalizePythonInterpreter
+        register = ctypes.CDLL(None).__cxa_atexit
+    except (OSError, AttributeError):
+        return
+    register.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p)
+    register.restype = ctypes.c_int
+    if register(ctypes.cast(finalize, ctypes.c_void_p), None, None) == 0:
+        _EXIT_HOOKED.add(library)
 
 
 # -- model description: units, legal attributes -------------------------------------------

@@ -1,5 +1,5 @@
-"""The ``navfmu`` command line: build, validate, run, compare, bench, convert, montecarlo,
-report.
+"""The ``navfmu`` command line: build, validate, env, run, compare, bench, convert,
+montecarlo, report.
 
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
@@ -164,6 +164,16 @@ def validate(fmus):
             click.echo(f"{f}: no problems found")
     if bad:
         raise NavfmuError(f"{bad} FMU(s) failed validation")
+
+
+@cli.command("env")
+@click.option("--format", "fmt", type=click.Choice(["sh", "json"]), default="sh",
+              show_default=True, help="Shell 'export' lines or a JSON object.")
+def env_(fmt):
+    """Print the environment a native (non-Python) FMI host needs to load the FMUs."""
+    from . import hostenv
+
+    click.echo(hostenv.render(hostenv.host_environment(), fmt))
 
 
 def _common_run_options(f):

@@ -68,7 +68,7 @@ from functools import lru_cache
 from typing import Optional, Tuple, Union
 
 import numpy as np
-from scipy.stats import chi2 as _chi2
+from navcore.chisquare import chi2 as _chi2
 
 from navcore.component import InputError, ParameterError
 

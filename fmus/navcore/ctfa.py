@@ -32,7 +32,7 @@ import math
 from typing import Optional, Tuple
 
 import numpy as np
-from scipy.stats import chi2
+from navcore.chisquare import chi2
 
 from navcore.component import InputError, ParameterError
 
