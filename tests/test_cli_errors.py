@@ -66,7 +66,7 @@ SSD_EDITS = {
                          ["/nonexistent/NoSuchFilter.fmu", "NAVFMU_FMU_PATH"]),
     "zero_base_step": ('baseStepSize="0.01"', 'baseStepSize="0"', ["baseStepSize"]),
     "negative_base_step": ('baseStepSize="0.01"', 'baseStepSize="-0.01"', ["baseStepSize"]),
-    "step_hint_not_a_multiple_of_the_base_step": ('<osp:StepSizeHint value="1.0"/>',
+    "step_hint_not_a_multiple_of_the_base_step": ('<osp:StepSizeHint value="0.1"/>',
                                                   '<osp:StepSizeHint value="0.015"/>',
                                                   ["0.015", "gnss"]),
 }
