@@ -21,6 +21,13 @@ does the FMI side once for all of them:
   Error-level message of the instance: a master reports it as the cause) and reported as
   fmi2Discard from ``do_step``; after such an error every further ``do_step`` is refused too.
   A bug's traceback follows in a second message (category ``traceback``).
+* answers a refused call (a parameter the component refuses at fmi2ExitInitializationMode,
+  a state fmi2SetFMUstate or fmi2DeSerializeFMUstate refuses) with fmi2Error on the call
+  itself, by raising :class:`FmiCallRefused`, where the FMU's binary is the patched pythonfmu
+  library (``native/pythonfmu-export``, built into the Linux binary of every FMU when a C++
+  compiler is there); with pythonfmu's own library (Windows, macOS, no compiler) such an
+  exception would be fmi2Fatal, so the call then returns fmi2OK, logs the refusal at Error and
+  the next ``do_step`` returns fmi2Discard (see :func:`refusals_return_error`).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.
 * works around two defects of pythonfmu 0.7's native binary that corrupted the heap at
@@ -173,9 +180,10 @@ def exit_initialization_mode(slave):
         if slave._stop_time is not None:
             slave._component.check_stop_time(slave._stop_time)
     except NavcoreError as exc:
-        _fail(slave, str(exc))
+        _fail(slave, str(exc), refuse=True)
     except Exception as exc:  # a bug, not a user error: still never crash the host
-        _fail(slave, f"internal error during initialization: {exc!r}", traceback.format_exc())
+        _fail(slave, f"internal error during initialization: {exc!r}", traceback.format_exc(),
+              refuse=True)
 
 
 def do_step(slave, current_time, step_size):
@@ -222,11 +230,32 @@ def do_step(slave, current_time, step_size):
     return True
 
 
-def _fail(slave, message, details=None):
+def _fail(slave, message, details=None, refuse=False):
+    """Record the instance's first error and log it; with ``refuse``, where the binary allows
+    it, the message is the fmi2Error of the call instead (the traceback is logged before it)."""
     slave._failed = message
-    slave.log(f"{slave.instance_name}: {message}", Fmi2Status.error)
+    text = f"{slave.instance_name}: {message}"
+    if refuse and refusals_return_error(slave):
+        if details:
+            slave.log(details, Fmi2Status.error, "traceback")
+        raise FmiCallRefused(text)
+    slave.log(text, Fmi2Status.error)
     if details:
         slave.log(details, Fmi2Status.error, "traceback")
+
+
+class FmiCallRefused(Exception):
+    """A refused FMI call.  The patched pythonfmu library (``native/pythonfmu-export``)
+    recognizes it by ``fmi2_status``, logs its message at fmi2Error, returns fmi2Error and
+    keeps the instance; pythonfmu's own library would return fmi2Fatal and drop the
+    instance, so it is raised only where :func:`refusals_return_error` is true."""
+
+    fmi2_status = "error"
+
+
+def refusals_return_error(slave_or_class) -> bool:
+    """True if the FMU's binary is the patched library: it marks the slave class."""
+    return getattr(slave_or_class, "fmi2_error_on_refused_call", False) is True
 
 
 # -- batched value access ------------------------------------------------------------------
@@ -300,14 +329,15 @@ def _refuse(slave, message):
 
 
 # -- FMU state: declared data only, never code ---------------------------------------------
-# pythonfmu 0.7.0 (PySlaveInstance.cpp) turns a Python exception in any of these calls into
-# fmi2Fatal after releasing the instance's Python objects, and has no way to return fmi2Error
-# from fmi2SetFMUstate / fmi2DeSerializeFMUstate.  So nothing here raises: a blob that is
-# refused deserializes into a RefusedState carrying the reason, and fmi2SetFMUstate with it
-# (or with a state that fails the checks) logs the reason at status fmi2Error, keeps the
-# previous state, and makes the next fmi2DoStep return fmi2Discard without stepping, so a
-# host that ignores the log still learns that the state was not restored; the steps after
-# that continue from the previous state.
+# A state that cannot be taken, a blob fmi2DeSerializeFMUstate refuses and a state
+# fmi2SetFMUstate refuses give fmi2Error on that call (FmiCallRefused), the instance keeping
+# its previous state.  With pythonfmu's own library (refusals_return_error false), which turns
+# any exception into fmi2Fatal, nothing here raises: a refused blob deserializes into a
+# RefusedState carrying the reason, and fmi2SetFMUstate with it (or with a state that fails
+# the checks) logs the reason at status fmi2Error, keeps the previous state, and makes the
+# next fmi2DoStep return fmi2Discard without stepping, so a host that ignores the log still
+# learns that the state was not restored; the steps after that continue from the previous
+# state.
 class FmuState:
     """What fmi2GetFMUstate hands out: the state tree of an instance and its FMU identity."""
 
@@ -354,7 +384,10 @@ def get_fmu_state(slave):
         return FmuState(_identity(type(slave)), tree)
     except Exception as exc:  # a bug (an undeclared attribute): report, never crash the host
         reason = f"the state could not be taken: {exc}"
-        slave.log(f"{slave.instance_name}: fmi2GetFMUstate: {reason}", Fmi2Status.error)
+        message = f"{slave.instance_name}: fmi2GetFMUstate: {reason}"
+        if refusals_return_error(slave):
+            raise FmiCallRefused(message) from None
+        slave.log(message, Fmi2Status.error)
         return RefusedState(reason)
 
 
@@ -372,9 +405,12 @@ def set_fmu_state(slave, state):
             restored["failed"], restored["start_time"], restored["component"])
         slave._refused_state = None
         return
+    message = (f"{slave.instance_name}: fmi2SetFMUstate refused the state, the instance keeps "
+               f"its previous state: {reason}")
+    if refusals_return_error(slave):
+        raise FmiCallRefused(message)
     slave._refused_state = reason
-    slave.log(f"{slave.instance_name}: fmi2SetFMUstate refused the state, the instance keeps "
-              f"its previous state: {reason}", Fmi2Status.error)
+    slave.log(message, Fmi2Status.error)
 
 
 def _restored(slave, state):
@@ -424,9 +460,12 @@ def _fmu_state_from_bytes(slave_class, blob):
     try:
         return FmuState(_identity(slave_class), state_format.decode(blob, _identity(slave_class)))
     except StateFormatError as exc:
-        return RefusedState(str(exc))
+        reason = str(exc)
     except Exception as exc:
-        return RefusedState(f"the blob could not be read: {exc!r}")
+        reason = f"the blob could not be read: {exc!r}"
+    if refusals_return_error(slave_class):
+        raise FmiCallRefused(f"fmi2DeSerializeFMUstate refused the blob: {reason}")
+    return RefusedState(reason)
 
 
 def bind_methods(slave_class):

@@ -1,9 +1,11 @@
 """Build the FMUs of ``fmus/`` into ``fmus/dist/`` with pythonfmu, only when stale.
 
-An FMU is stale when it is missing, has no platform binaries, or when the hash of its inputs
-(its slave script, ``fmushell.py`` and every file of ``navcore``) differs from the one
-recorded beside it in ``fmus/dist/<Model>.fmu.sha256``.  Each FMU is written to a temporary name and renamed, so an
-interrupted build never leaves a broken ``.fmu`` behind.
+An FMU is stale when it is missing, has no platform binaries, or when its build stamp
+differs from the one recorded beside it in ``fmus/dist/<Model>.fmu.sha256``: the hash of its
+Python inputs (its slave script, ``fmushell.py`` and every file of ``navcore``) and which Linux
+library it carries (the patched pythonfmu library of :mod:`orchestrator.native_library` with the
+hash of its sources, or the wheel's when that cannot be built here).  Each FMU is written to a
+temporary name and renamed, so an interrupted build never leaves a broken ``.fmu`` behind.
 """
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ from pathlib import Path
 
 from navcore.state_format import build_hash
 
+from . import native_library
 from .errors import NavfmuError
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -38,6 +41,12 @@ def source_hash(script: Path) -> str:
     return build_hash(script, SHELL, LIBRARY)
 
 
+def build_stamp(script: Path, patched: bool) -> str:
+    """What ``<Model>.fmu.sha256`` records: the Python sources' hash and the Linux library."""
+    library = f"patched {native_library.sources_hash()}" if patched else "wheel"
+    return f"{source_hash(script)}\nlinux64 library: {library}"
+
+
 def fmu_path(name: str, dist: Path = DIST) -> Path:
     return dist / f"{name}.fmu"
 
@@ -47,7 +56,8 @@ def is_stale(script: Path, dist: Path = DIST) -> bool:
     stamp = fmu.with_suffix(".fmu.sha256")
     if not fmu.exists() or not stamp.exists():
         return True
-    if stamp.read_text().strip() != source_hash(script):
+    patched = native_library.unavailable_reason() is None
+    if stamp.read_text().strip() != build_stamp(script, patched):
         return True
     return not has_binaries(fmu)
 
@@ -62,8 +72,9 @@ def has_binaries(fmu: Path) -> bool:
         return False
 
 
-def build_one(script: Path, dist: Path = DIST) -> Path:
-    """Build one FMU (always) and return its path."""
+def build_one(script: Path, dist: Path = DIST, library: Path = None) -> Path:
+    """Build one FMU (always), with ``library`` as its Linux binary if given (else the
+    wheel's), and return its path."""
     from pythonfmu.builder import FmuBuilder
 
     dist.mkdir(parents=True, exist_ok=True)
@@ -80,11 +91,13 @@ def build_one(script: Path, dist: Path = DIST) -> Path:
         if not has_binaries(built):
             raise NavfmuError(f"{script}: pythonfmu built {built.name} without binaries "
                                   "(its installation lacks the FMI wrapper libraries)")
+        if library is not None:
+            native_library.replace_in_fmu(built, script.stem, library)
         fd, partial = tempfile.mkstemp(dir=dist, prefix=f".{script.stem}.", suffix=".part")
         os.close(fd)
         shutil.copyfile(built, partial)
         os.replace(partial, target)
-    target.with_suffix(".fmu.sha256").write_text(source_hash(script) + "\n")
+    target.with_suffix(".fmu.sha256").write_text(build_stamp(script, library is not None) + "\n")
     return target
 
 
@@ -98,14 +111,33 @@ def build(names=None, force=False, dist: Path = DIST, log=print):
             raise NavfmuError(f"unknown FMU {', '.join(unknown)}; known: {', '.join(known)}")
         scripts = [known[n] for n in names]
     todo = [s for s in scripts if force or is_stale(s, dist)]
-    if todo and not builder_usable():
+    if not todo:
+        return []
+    library = patched_library(log)
+    if not builder_usable():
         return _build_in_subprocess(todo, dist, log)
     built = []
     for script in todo:
         if log:
             log(f"building {script.stem}.fmu")
-        built.append(build_one(script, dist))
+        built.append(build_one(script, dist, library))
     return built
+
+
+def patched_library(log=print):
+    """The patched pythonfmu library (built once and cached), or None after one line on
+    ``log`` saying why the FMUs keep the wheel's."""
+    reason = native_library.unavailable_reason()
+    if reason is None:
+        if log and not native_library.cached_library().is_file():
+            log(f"building the patched pythonfmu library ({native_library.SOURCES.name})")
+        try:
+            return native_library.library()
+        except native_library.NativeBuildError as exc:
+            reason = str(exc)
+    if log:
+        log(native_library.fallback_note(reason))
+    return None
 
 
 def builder_usable() -> bool:

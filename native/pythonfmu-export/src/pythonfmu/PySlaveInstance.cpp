@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -119,6 +120,36 @@ PyObject* findClass(const std::string& resources, const std::string& moduleName)
     return pyClass;
 }
 
+// navfmu patch: a pending exception whose fmi2_status attribute is "error" is a refused FMI
+// call.  Takes it (clearing the error indicator) and returns its message; any other exception
+// stays pending and nullopt is returned.
+std::optional<std::string> take_refused_call()
+{
+    PyObject *type, *value, *traceback;
+    PyErr_Fetch(&type, &value, &traceback);
+    PyErr_NormalizeException(&type, &value, &traceback);
+    PyObject* status = value != nullptr ? PyObject_GetAttrString(value, "fmi2_status") : nullptr;
+    PyErr_Clear();
+    const bool refused = status != nullptr && PyUnicode_Check(status) &&
+        PyUnicode_CompareWithASCIIString(status, "error") == 0;
+    Py_XDECREF(status);
+    if (!refused) {
+        PyErr_Restore(type, value, traceback);
+        return std::nullopt;
+    }
+    std::string message = "refused FMI call";
+    PyObject* text = PyObject_Str(value);
+    PyObject* bytes = text != nullptr ? PyUnicode_AsEncodedString(text, "utf-8", "replace") : nullptr;
+    if (bytes != nullptr) message = PyBytes_AsString(bytes);
+    PyErr_Clear();
+    Py_XDECREF(bytes);
+    Py_XDECREF(text);
+    Py_XDECREF(type);
+    Py_XDECREF(value);
+    Py_XDECREF(traceback);
+    return message;
+}
+
 void py_safe_run(const std::function<void(PyGILState_STATE gilState)>& f)
 {
     PyGILState_STATE gil_state = PyGILState_Ensure();
@@ -158,6 +189,8 @@ public:
             if (pClass_ == nullptr) {
                 handle_py_exception("[ctor] findClass", gilState);
             }
+            // navfmu patch: the slave class learns that a refused call returns fmi2Error
+            if (PyObject_SetAttrString(pClass_, "fmi2_error_on_refused_call", Py_True) != 0) PyErr_Clear();
 
             initialize(gilState);
         });
@@ -553,11 +586,11 @@ public:
                 handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState);
             }
             PyObject* pyState = PyObject_CallMethod(pClass_, "_fmu_state_from_bytes", "(O)", pyStateBytes);
+            Py_DECREF(pyStateBytes); // navfmu patch: released before a refusal returns too
             if (pyState == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState);
             }
             state = reinterpret_cast<fmi2FMUstate*>(pyState);
-            Py_DECREF(pyStateBytes);
             clearLogBuffer();
         });
     }
@@ -628,6 +661,13 @@ private:
     void handle_py_exception(const std::string& what, PyGILState_STATE gilState) const
     {
         const auto err = PyErr_Occurred();
+        if (err != nullptr && pInstance_ != nullptr) { // navfmu patch: a refused call
+            if (auto refusal = take_refused_call()) {
+                clearLogBuffer();
+                PyGILState_Release(gilState);
+                throw std::runtime_error(*refusal); // fmi2Error, the instance stays usable
+            }
+        }
         if (err != nullptr) {
             cleanPyObject();
 
