@@ -10,8 +10,8 @@ This module compiles those sources with CMake and the system C++ compiler agains
 interpreter's headers, caches the library in ``fmus/dist/native/<key>/`` (the key hashes the
 sources, the Python version and the platform) and puts it into a built FMU in place of the
 wheel's ``binaries/linux64`` library.  Without a compiler or CMake, or off Linux, the FMUs keep
-the wheel's library (its refused calls report as before: see fmushell); the Windows and macOS
-binaries are always the wheel's.
+the wheel's library (its refused calls report as before: see fmushell), as they do with
+``NAVFMU_PYTHONFMU_LIBRARY=wheel``; the Windows and macOS binaries are always the wheel's.
 """
 from __future__ import annotations
 
@@ -39,10 +39,15 @@ MARKER = b"fmi2_error_on_refused_call"
 MEMBER_DIR = "binaries/linux64"
 
 
+#: set to "wheel" to build the FMUs with pythonfmu's own library
+CHOICE_VARIABLE = "NAVFMU_PYTHONFMU_LIBRARY"
+
+
 def sources_hash() -> str:
-    """SHA-256 of every file of the vendored library (paths and contents)."""
+    """SHA-256 of the vendored library's build inputs (CMakeLists.txt and src/)."""
     h = hashlib.sha256()
-    for f in sorted(p for p in SOURCES.rglob("*") if p.is_file()):
+    files = [SOURCES / "CMakeLists.txt", *(p for p in (SOURCES / "src").rglob("*") if p.is_file())]
+    for f in sorted(files):
         h.update(f.relative_to(SOURCES).as_posix().encode())
         h.update(f.read_bytes())
     return h.hexdigest()
@@ -78,6 +83,8 @@ def _compiler() -> Optional[str]:
 
 def unavailable_reason() -> Optional[str]:
     """Why the patched library cannot be used on this machine, or None."""
+    if os.environ.get(CHOICE_VARIABLE, "") == "wheel":
+        return f"{CHOICE_VARIABLE}=wheel is set"
     if cached_library().is_file():
         return None
     if not sys.platform.startswith("linux"):

@@ -6,6 +6,7 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from orchestrator import build as fmu_build
+from test_native_library import require_patched
 
 FMU_NAMES = [s.stem for s in fmu_build.slave_scripts()]
 
@@ -57,7 +59,8 @@ def test_model_description_units_and_attributes(dist, name):
 class _Fmu:
     """A bare fmpy instance for FMI-level checks."""
 
-    def __init__(self, path, name, params=None, logs=None):
+    def __init__(self, path, name, params=None, logs=None, exit_init=True):
+        self.path = Path(path)
         self.md = read_model_description(str(path))
         self.dir = extract(str(path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -89,7 +92,8 @@ class _Fmu:
         self.fmu.enterInitializationMode()
         for k, v in (params or {}).items():
             self.set(k, v)
-        self.fmu.exitInitializationMode()
+        if exit_init:
+            self.fmu.exitInitializationMode()
 
     def set(self, name, value):
         t = self.type[name]
@@ -245,15 +249,25 @@ def test_nan_reaching_a_filter_input_is_a_clear_fmi_error(dist):
     assert any("imu_dvel_x" in m and "nan" in m.lower() for m in logs), logs
 
 
-def test_bad_parameter_is_reported_through_the_logger(dist):
-    logs = []
-    f = _Fmu(dist / "GnssReceiver.fmu", "gnss", {"pos_sigma_n": -1.0}, logs=logs)
+def test_bad_parameter_is_fmi2error_at_exit_initialization(dist):
+    """A parameter the component refuses: fmi2Error from fmi2ExitInitializationMode, one
+    Error-status message naming it; the instance stays usable: its values are read, doStep
+    is refused (Discard) naming the same error, terminate and free work."""
+    require_patched(dist / "GnssReceiver.fmu")
+    f = _Fmu(dist / "GnssReceiver.fmu", "gnss", {"pos_sigma_n": -1.0}, exit_init=False)
     try:
-        with pytest.raises(FMICallException):
+        with pytest.raises(FMICallException) as info:
+            f.fmu.exitInitializationMode()
+        assert info.value.status == 3
+        (message,) = [m for s, m in f.records if s == 3]
+        assert message.startswith("gnss: ") and "pos_sigma_n" in message
+        assert f.reals(["pos_sigma_n"]).tolist() == [-1.0]
+        with pytest.raises(FMICallException) as info:
             f.fmu.doStep(0.0, 1.0)
+        assert info.value.status == 2
+        assert "earlier error" in f.records[-1][1] and "pos_sigma_n" in f.records[-1][1]
     finally:
         f.close()
-    assert any("pos_sigma_n" in m for m in logs), logs
 
 
 def test_build_after_an_fmu_ran_in_the_process(dist, tmp_path):
