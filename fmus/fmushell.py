@@ -253,9 +253,10 @@ class FmiCallRefused(Exception):
     fmi2_status = "error"
 
 
-def refusals_return_error(slave_or_class) -> bool:
-    """True if the FMU's binary is the patched library: it marks the slave class."""
-    return getattr(slave_or_class, "fmi2_error_on_refused_call", False) is True
+def refusals_return_error(slave) -> bool:
+    """True if the instance's binary is the patched library: it marks each instance it
+    creates (not the class: the FMUs of one script share it, whatever their binary)."""
+    return getattr(slave, "fmi2_error_on_refused_call", False) is True
 
 
 # -- batched value access ------------------------------------------------------------------
@@ -456,14 +457,16 @@ def _fmu_state_to_bytes(state):
         return b""
 
 
-def _fmu_state_from_bytes(slave_class, blob):
+def _fmu_state_from_bytes(slave_class, blob, refusal_returns_error=False):
+    """The state in ``blob``.  The patched library passes ``refusal_returns_error`` (the
+    class, shared by every FMU of this script loaded in the process, cannot tell)."""
     try:
         return FmuState(_identity(slave_class), state_format.decode(blob, _identity(slave_class)))
     except StateFormatError as exc:
         reason = str(exc)
     except Exception as exc:
         reason = f"the blob could not be read: {exc!r}"
-    if refusals_return_error(slave_class):
+    if refusal_returns_error is True:
         raise FmiCallRefused(f"fmi2DeSerializeFMUstate refused the blob: {reason}")
     return RefusedState(reason)
 

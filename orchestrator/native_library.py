@@ -33,7 +33,7 @@ CACHE = ROOT / "fmus" / "dist" / "native"
 LIBRARY_NAME = "libpythonfmu-export.so"
 #: the pythonfmu release whose C++ sources are vendored (its Python side calls them)
 UPSTREAM_VERSION = "0.7."
-#: the attribute the patched library sets on the slave class (fmushell.refusals_return_error)
+#: the attribute the patched library sets on each slave instance (fmushell.refusals_return_error)
 MARKER = b"fmi2_error_on_refused_call"
 #: where FmuBuilder puts the Linux library inside an FMU
 MEMBER_DIR = "binaries/linux64"

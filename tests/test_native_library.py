@@ -123,10 +123,13 @@ def wheel_kf(tmp_path_factory):
 
 def test_wheel_library_reports_refusals_at_the_next_step(wheel_kf):
     """pythonfmu's own library: a refused blob and a refused parameter return fmi2OK with an
-    Error-status message, and the next doStep is fmi2Discard."""
+    Error-status message, and the next doStep is fmi2Discard; also while a Kf.fmu with the
+    patched library is instantiated in the process (both share the script's class)."""
     from test_fmus import _Fmu
 
     assert not native_library.fmu_has_patched_library(wheel_kf)
+    fmu_build.build(["Kf"], log=None)
+    patched = _Fmu(fmu_build.DIST / "Kf.fmu", "kf_patched")
     f = _Fmu(wheel_kf, "kf_wheel")
     try:
         blob = f.fmu.serializeFMUstate(f.fmu.getFMUstate())
@@ -138,6 +141,7 @@ def test_wheel_library_reports_refusals_at_the_next_step(wheel_kf):
         assert info.value.status == FMI2_DISCARD
     finally:
         f.close()
+        patched.close()
     bad = _Fmu(wheel_kf, "kf_wheel_bad", {"init_lat": 7.0})   # exit initialization: fmi2OK
     try:
         assert [s for s, m in bad.records if "init_lat" in m] == [FMI2_ERROR]

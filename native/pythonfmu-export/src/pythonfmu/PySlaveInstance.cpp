@@ -189,8 +189,6 @@ public:
             if (pClass_ == nullptr) {
                 handle_py_exception("[ctor] findClass", gilState);
             }
-            // navfmu patch: the slave class learns that a refused call returns fmi2Error
-            if (PyObject_SetAttrString(pClass_, "fmi2_error_on_refused_call", Py_True) != 0) PyErr_Clear();
 
             initialize(gilState);
         });
@@ -255,6 +253,8 @@ public:
             handle_py_exception("[initialize] PyObject_Call", gilState);
         }
         pMessages_ = PyObject_CallMethod(pInstance_, "_get_log_queue", nullptr);
+        // navfmu patch: the instance learns that a refused call returns fmi2Error
+        if (PyObject_SetAttrString(pInstance_, "fmi2_error_on_refused_call", Py_True) != 0) PyErr_Clear();
     }
 
     void SetupExperiment(double startTime, std::optional<double> stop, std::optional<double> tolerance) override
@@ -585,7 +585,8 @@ public:
             if (pyStateBytes == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState);
             }
-            PyObject* pyState = PyObject_CallMethod(pClass_, "_fmu_state_from_bytes", "(O)", pyStateBytes);
+            // navfmu patch: the second argument says that a refused blob returns fmi2Error
+            PyObject* pyState = PyObject_CallMethod(pClass_, "_fmu_state_from_bytes", "(OO)", pyStateBytes, Py_True);
             Py_DECREF(pyStateBytes); // navfmu patch: released before a refusal returns too
             if (pyState == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState);
