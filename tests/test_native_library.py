@@ -33,10 +33,12 @@ def require_patched(fmu: Path):
 
 
 def wheel_library() -> Path:
-    import pythonfmu
+    """The installed pythonfmu's Linux library (``import pythonfmu`` may resolve to the copy
+    inside an FMU that ran in this process, which has none)."""
+    from importlib.metadata import distribution
 
-    return (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
-            / native_library.LIBRARY_NAME)
+    return Path(distribution("pythonfmu").locate_file(
+        f"pythonfmu/resources/binaries/linux64/{native_library.LIBRARY_NAME}"))
 
 
 def dynamic_symbols(library: Path, undefined: bool):
