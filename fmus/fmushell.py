@@ -21,13 +21,6 @@ does the FMI side once for all of them:
   Error-level message of the instance: a master reports it as the cause) and reported as
   fmi2Discard from ``do_step``; after such an error every further ``do_step`` is refused too.
   A bug's traceback follows in a second message (category ``traceback``).
-* answers a refused call (a parameter the component refuses at fmi2ExitInitializationMode,
-  a state fmi2SetFMUstate or fmi2DeSerializeFMUstate refuses) with fmi2Error on the call
-  itself, by raising :class:`FmiCallRefused`, where the FMU's binary is the patched pythonfmu
-  library (``native/pythonfmu-export``, built into the Linux binary of every FMU when a C++
-  compiler is there); with pythonfmu's own library (Windows, macOS, no compiler) such an
-  exception would be fmi2Fatal, so the call then returns fmi2OK, logs the refusal at Error and
-  the next ``do_step`` returns fmi2Discard (see :func:`refusals_return_error`).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.
 * works around two defects of pythonfmu 0.7's native binary that corrupted the heap at
@@ -41,18 +34,20 @@ Hostile or careless host calls (FMI rules checked here and in
 * ``doStep`` whose communication point is not where the previous step ended (back or ahead),
   or whose step size is not > 0: refused, nothing changes, a following legal step works;
 * get/set of an unknown value reference or one of another type, set of an output, set of a
-  (fixed) parameter after ``fmi2ExitInitializationMode``: refused (nothing is written; a get
-  returns NaN / 0 / false / "" for the bad references), logged at once with fmi2Error naming
-  the value reference or variable, and reported again by the next ``doStep``, which is
-  refused once.
+  (fixed) parameter after ``fmi2ExitInitializationMode``: refused, nothing is written, the
+  message names the value reference or variable;
+* a parameter the component refuses at ``fmi2ExitInitializationMode``; a state
+  ``fmi2SetFMUstate`` or ``fmi2DeSerializeFMUstate`` refuses (see the state section).
 
-Statuses: pythonfmu 0.7.0 (its C++ side, ``PySlaveInstance.cpp`` / ``fmi2.cpp``) turns a
-Python exception in *any* call into fmi2Fatal and releases the Python instance, so the
-host's next call on it reads freed memory (the segfault seen with a wrong value reference);
-a ``do_step`` returning False becomes fmi2Discard, and there is no way for Python code to
-make a get/set return anything but fmi2OK or fmi2Fatal.  So no exception may leave these
-functions: a refused doStep returns fmi2Discard (not fmi2Error), a refused get/set returns
-fmi2OK with the fmi2Error message in the log and the refusal of the next doStep.
+Statuses: each such call returns fmi2Error with its message logged at fmi2Error, and the
+instance stays usable (:func:`_refuse` raises :class:`FmiCallRefused`), where the FMU's binary
+is the patched pythonfmu library (``native/pythonfmu-export``, the Linux binary of every FMU
+built where a C++ compiler is found; :func:`refusals_return_error`).  pythonfmu's own library
+(Windows, macOS, no compiler) turns a Python exception in *any* call into fmi2Fatal and
+releases the Python instance, so the host's next call on it reads freed memory; there nothing
+may raise: a refused doStep returns fmi2Discard, a refused get/set returns fmi2OK with the
+fmi2Error message in the log (a get NaN / 0 / false / "" for the bad references) and the
+next doStep is refused once, a refused initialization makes every doStep fmi2Discard.
 """
 from __future__ import annotations
 
@@ -204,15 +199,14 @@ def do_step(slave, current_time, step_size):
         return False
     component = slave._component
     if component is None:
-        slave.log(f"{slave.instance_name}: doStep before fmi2ExitInitializationMode",
-                  Fmi2Status.error)
+        _refuse(slave, "doStep before fmi2ExitInitializationMode", later=False)
         return False
     values = slave._values
     try:
         inputs = {n: values[n] for n in slave._input_names}
         values.update(component.advance(current_time, step_size, inputs))
     except RefusedCall as exc:
-        slave.log(f"{slave.instance_name}: {exc}", Fmi2Status.error)
+        _refuse(slave, str(exc), later=False)
         return False
     except NavcoreError as exc:
         _fail(slave, f"{exc} (at t = {current_time:.6g} s)")
@@ -263,7 +257,7 @@ def refusals_return_error(slave) -> bool:
 # pythonfmu's own get_real/set_real look every variable up through its ScalarVariable object
 # and a getter closure (about 1 us per variable); these read and write the value dict
 # directly, which matters because the master calls them for every component every step.
-# They never raise (module docstring): a bad call is refused through _refuse.
+# A bad call is refused through _refuse (module docstring).
 _PLACEHOLDER = {"Real": float("nan"), "Integer": 0, "Boolean": False, "String": ""}
 
 
@@ -323,11 +317,15 @@ def _why_not_settable(slave, type_name, vrs):
     return "; ".join(parts) + " (nothing was set)"
 
 
-def _refuse(slave, message):
-    slave._refused = message
-    slave.log(f"{slave.instance_name}: {message}", Fmi2Status.error)
-
-
+def _refuse(slave, message, later=True):
+    """Refuse the current call: fmi2Error with ``message`` where the binary allows it;
+    else log it at Error and (``later``, for a get/set) have the next do_step refused once."""
+    text = f"{slave.instance_name}: {message}"
+    if refusals_return_error(slave):
+        raise FmiCallRefused(text)
+    if later:
+        slave._refused = message
+    slave.log(text, Fmi2Status.error)
 
 # -- FMU state: declared data only, never code ---------------------------------------------
 # A state that cannot be taken, a blob fmi2DeSerializeFMUstate refuses and a state
