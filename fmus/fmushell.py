@@ -16,7 +16,8 @@ does the FMI side once for all of them:
   :mod:`navcore.state`) behind ``canGetAndSetFMUstate`` / ``canSerializeFMUstate``, and
   serializes it in the checked plain-data format of :mod:`navcore.state_format`: a blob is
   never code, and one that is refused leaves the instance as it was (see the state section);
-* never lets a Python exception escape an FMI call: a user error (bad parameter, NaN input)
+* never lets a Python exception escape an FMI call (but the refusals of the statuses
+  paragraph below, where the binary turns them into fmi2Error): a user error (NaN input)
   is logged through the FMI logger as one message ``<instance>: <what>`` (the first
   Error-level message of the instance: a master reports it as the cause) and reported as
   fmi2Discard from ``do_step``; after such an error every further ``do_step`` is refused too.
