@@ -42,7 +42,7 @@ Hostile or careless host calls (FMI rules checked here and in
 
 Statuses: each such call returns fmi2Error with its message logged at fmi2Error, and the
 instance stays usable (:func:`_refuse` raises :class:`FmiCallRefused`), where the FMU's binary
-is the patched pythonfmu library (``native/pythonfmu-export``, the Linux binary of every FMU
+is the patched pythonfmu library (``native/vendor/pythonfmu-export``, the Linux binary of every FMU
 built where a C++ compiler is found; :func:`refusals_return_error`).  pythonfmu's own library
 (Windows, macOS, no compiler) turns a Python exception in *any* call into fmi2Fatal and
 releases the Python instance, so the host's next call on it reads freed memory; there nothing
@@ -240,7 +240,7 @@ def _fail(slave, message, details=None, refuse=False):
 
 
 class FmiCallRefused(Exception):
-    """A refused FMI call.  The patched pythonfmu library (``native/pythonfmu-export``)
+    """A refused FMI call.  The patched pythonfmu library (``native/vendor/pythonfmu-export``)
     recognizes it by ``fmi2_status``, logs its message at fmi2Error, returns fmi2Error and
     keeps the instance; pythonfmu's own library would return fmi2Fatal and drop the
     instance, so it is raised only where :func:`refusals_return_error` is true."""

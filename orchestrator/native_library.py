@@ -2,7 +2,7 @@
 
 pythonfmu 0.7.0's library answers every Python exception of an FMI call with fmi2Fatal and
 drops the instance, so a refused call (an unknown value reference, a foreign FMU state) could
-not return fmi2Error.  ``native/pythonfmu-export/`` holds its C++ sources with a small patch
+not return fmi2Error.  ``native/vendor/pythonfmu-export/`` holds its C++ sources with a small patch
 (listed in the README there): an exception whose class has ``fmi2_status = "error"``
 (``fmushell.FmiCallRefused``) returns fmi2Error and leaves the instance usable.
 
@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Optional
 
 ROOT = Path(__file__).resolve().parent.parent
-SOURCES = ROOT / "native" / "pythonfmu-export"
+SOURCES = ROOT / "native" / "vendor" / "pythonfmu-export"
 CACHE = ROOT / "fmus" / "dist" / "native"
 LIBRARY_NAME = "libpythonfmu-export.so"
 #: the pythonfmu release whose C++ sources are vendored (its Python side calls them)

@@ -1,4 +1,4 @@
-"""The patched pythonfmu library (orchestrator/native_library.py, native/pythonfmu-export):
+"""The patched pythonfmu library (orchestrator/native_library.py, native/vendor/pythonfmu-export):
 it compiles here with the interface of the wheel's library, every built FMU carries it, and
 without it (no compiler, Windows, NAVFMU_PYTHONFMU_LIBRARY=wheel) a refused call reports as
 pythonfmu's own library allows: fmi2OK, an Error-status message, fmi2Discard at the next step.
