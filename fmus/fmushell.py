@@ -89,6 +89,7 @@ UNITS = {
     "urad": ({"rad": 1}, 1e-6),
     "deg/h/g": ({"rad": 1, "s": 1, "m": -1}, _DEG / 3600.0 / _G0),
     "deg/sqrt(h)": (None, 1.0),
+    "deg/h/sqrt(h)": (None, 1.0),
     "ug/sqrt(Hz)": (None, 1.0),
 }
 

@@ -1,5 +1,5 @@
 """The ``navfmu`` command line: build, validate, env, run, compare, bench, convert,
-montecarlo, report.
+montecarlo, report, tune.
 
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
@@ -492,6 +492,64 @@ def _bench_executors(scenario, filters, runs, stop, workers, as_json):
     out = bench_executors(scenario, names, runs=runs, stop_time=stop, workers=workers,
                           log=lambda m: click.echo(m, err=True))
     click.echo(json.dumps(out, indent=2) if as_json else format_bench(out))
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--component", default="filter", show_default=True,
+              help="Component whose parameters are tuned.")
+@click.option("--params", "params", required=True, help="Comma-separated parameter names.")
+@click.option("--range", "ranges", multiple=True, metavar="NAME=LO:HI",
+              help="Search range of a parameter (default: its declared min/max; repeatable).")
+@click.option("--generations", type=int, default=5, show_default=True,
+              help="Generations (paper 003: 500).")
+@click.option("--population", type=int, default=10, show_default=True,
+              help="Individuals per generation (paper 003: 100).")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Local processes evaluating candidates.")
+@click.option("--scheduler", help="Dask scheduler address tcp://HOST:PORT (instead of a "
+              "local pool).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the GA.")
+@click.option("--train-seeds", default="", help="Comma-separated values given to every "
+              "component's 'seed' parameter; the cost is the mean over them (default: the "
+              "model's own seeds).")
+@click.option("--backend", type=click.Choice(["fmu", "direct"]), default="direct",
+              show_default=True, help="Evaluate through the FMUs or the navcore objects "
+              "(same numbers).")
+@click.option("--stop", type=float, help="Stop time of each run [s] (default: the SSD's).")
+@click.option("--window", help="Fitness window t0:t1 [s] (default: the whole run).")
+@click.option("--out", type=click.Path(file_okay=False),
+              help="Output folder (default: navfmu-results/<scenario>/tune).")
+@click.option("--ssv", type=click.Path(dir_okay=False),
+              help="Write the tuned parameter set here (default: OUT/<component>_tuned.ssv).")
+def tune(scenario, component, params, ranges, generations, population, workers, scheduler,
+         seed, train_seeds, backend, stop, window, out, ssv):
+    """Tune numeric parameters of a component of SCENARIO with paper 003's genetic
+    algorithm; each cost evaluation is a co-simulation (attitude RMS, eq. 20)."""
+    from . import tune as tuner
+
+    names = [p.strip() for p in params.split(",") if p.strip()]
+    try:
+        seeds = [int(s) for s in train_seeds.split(",") if s.strip()]
+    except ValueError:
+        raise NavfmuError(f"--train-seeds: expected comma-separated integers, got "
+                          f"{train_seeds!r}") from None
+    with _progress_bars() as progress_bar:
+        summary = tuner.run_tune(scenario, component, names, generations=generations,
+                                 population=population, workers=workers, seed=seed,
+                                 ranges=tuner.parse_ranges(ranges), train_seeds=seeds,
+                                 backend=backend, stop_time=stop, window=_parse_window(window),
+                                 scheduler=scheduler, progress=progress_bar("tune", unit="individual"),
+                                 log=lambda m: click.echo(m, err=True))
+    out = Path(out) if out else DEFAULT_OUT / summary["model"] / "tune"
+    written = tuner.write_tune_outputs(summary, out, ssv)
+    click.echo(f"best cost {summary['best_cost']:.5f} deg after {summary['evaluations']} "
+               f"evaluations; tuned values:")
+    for k, v in summary["best_values"].items():
+        click.echo(f"  {component}.{k} = {v!r}")
+    click.echo(f"wrote {', '.join(str(p) for p in written)}")
+    click.echo(f"bind it with: <ssd:ParameterBinding source=\"{written[0].name}\"/> (in place "
+               f"of the component's bindings: it holds them too)")
 
 
 def _print_filter_bench(out):

@@ -19,6 +19,13 @@ Definitions (errors are estimate - truth):
   runs): root of (sum of squares / number of samples).
 * NEES per group (position, velocity, attitude) from the filter's 1-sigma outputs (diagonal):
   mean over the window of sum_i (e_i / sigma_i)^2, to compare with the group's dimension 3.
+* A filter with an ``aligned`` output counts only the samples where it is true (an AHRS
+  before its initialization has no solution).
+* An attitude-only (AHRS) filter has no nav_lat/nav_v*: only the attitude errors exist; its
+  consistency is the normalized RMS per Euler angle, sqrt(mean((e / std)^2)) with the
+  filter's ``std_roll``/``std_pitch``/``std_yaw`` (1 for a consistent filter).
+* Attitude fitness (paper 003 eq. 20, the GA's objective): the RMS over the window's samples
+  and the three Euler angles of the attitude error, sqrt(1/(n m) sum_k sum_j e_jk^2) [deg].
 * NIS: mean of ``nis`` over the update epochs, with the two-sided 95 % band of the mean of
   N chi-square(dof) samples: chi2.ppf(0.025, N dof)/N .. chi2.ppf(0.975, N dof)/N.
 * 3-D RMS of a group: root of the sum of the per-axis mean squares; improvement of a filter
@@ -95,6 +102,8 @@ def navigation_errors(results, filter_name, truth_name=None):
     keep = np.concatenate([[True], np.diff(t_truth) > 0])
     t_truth = t_truth[keep]
     inside = (t_nav >= t_truth[0] - 1e-9) & (t_nav <= t_truth[-1] + 1e-9)
+    if results.has(filter_name, "aligned"):
+        inside &= col(filter_name, "aligned") > 0.5
 
     def truth(var, angle=False):
         y = col(truth_name, "truth_" + var)[keep]
@@ -102,14 +111,16 @@ def navigation_errors(results, filter_name, truth_name=None):
             return _wrap(np.interp(t_nav, t_truth, np.unwrap(y)))
         return np.interp(t_nav, t_truth, y)
 
-    lat_t, lon_t, h_t = truth("lat"), truth("lon"), truth("h")
-    rn, re = _radii(lat_t)
     e = {"time": t_nav, "valid": inside}
-    e["pos_n"] = (col(filter_name, "nav_lat") - lat_t) * (rn + h_t)
-    e["pos_e"] = _wrap(col(filter_name, "nav_lon") - lon_t) * (re + h_t) * np.cos(lat_t)
-    e["pos_d"] = -(col(filter_name, "nav_h") - h_t)
-    for a in AXES:
-        e["vel_" + a] = col(filter_name, "nav_v" + a) - truth("v" + a)
+    if results.has(filter_name, "nav_lat"):
+        lat_t, lon_t, h_t = truth("lat"), truth("lon"), truth("h")
+        rn, re = _radii(lat_t)
+        e["pos_n"] = (col(filter_name, "nav_lat") - lat_t) * (rn + h_t)
+        e["pos_e"] = _wrap(col(filter_name, "nav_lon") - lon_t) * (re + h_t) * np.cos(lat_t)
+        e["pos_d"] = -(col(filter_name, "nav_h") - h_t)
+    if results.has(filter_name, "nav_vn"):
+        for a in AXES:
+            e["vel_" + a] = col(filter_name, "nav_v" + a) - truth("v" + a)
     angles_t = [truth(a, angle=True) for a in ("roll", "pitch", "yaw")]
     angles_e = [col(filter_name, "nav_" + a) for a in ("roll", "pitch", "yaw")]
     for a, at, ae in zip(("roll", "pitch", "yaw"), angles_t, angles_e):
@@ -131,12 +142,25 @@ def filters_of(results):
 SAMPLES = ("all", "fixes")
 
 
-def _sample_mask(results, e, window, samples):
+def _in_window(e, window):
     t = e["time"]
     mask = e["valid"].copy()
     if window is not None:
         t0, t1 = window
         mask &= (t >= t0 - 1e-9) & (t <= t1 + 1e-9)
+    return mask
+
+
+def window_mask(e, window):
+    """Samples of :func:`navigation_errors` ``e`` that are valid and within ``window``."""
+    mask = _in_window(e, window)
+    if not mask.any():
+        raise NavfmuError(f"the metric window {window} contains no sample of the filter output")
+    return mask
+
+
+def _sample_mask(results, e, window, samples):
+    mask = _in_window(e, window)
     if samples == "fixes":
         receiver = find_component(results, "gnss_", ("epoch",))
         epoch = results.column(receiver, "gnss_epoch")
@@ -164,7 +188,13 @@ class MetricAccumulator:
         self.truth_name = truth_name or find_component(results, "truth_",
                                                        ("time", "lat", "lon", "h"))
         names = results.columns[filter_name]
+        # attitude-only (AHRS) filters have no position/velocity outputs
+        self.groups = [g for g, first in (("pos", "nav_lat"), ("vel", "nav_vn"))
+                       if first in names]
         self.has_std = all(f"std_p{a}" in names for a in AXES)
+        self.has_att_std = all(f"std_{a}" in names for a in ATTITUDE)
+        self.normalized_sum = {a: 0.0 for a in ATTITUDE}
+        self.normalized_n = {a: 0 for a in ATTITUDE}
         self.has_nis = "nis" in names and "updated" in names
         self.n = 0
         self.t_first = self.t_last = None
@@ -185,12 +215,20 @@ class MetricAccumulator:
         self.t_first = float(t[0]) if self.t_first is None else self.t_first
         self.t_last = float(t[-1])
         self.n += int(mask.sum())
-        for key in [f"{g}_{a}" for g in ("pos", "vel") for a in AXES] + [
+        for key in [f"{g}_{a}" for g in self.groups for a in AXES] + [
                 "att_" + a for a in ATTITUDE]:
             x = e[key][mask]
             self.sq[key] = self.sq.get(key, 0.0) + float(np.dot(x, x))
             self.peak[key] = max(self.peak.get(key, 0.0), float(np.max(np.abs(x))))
         col = results.column
+        if self.has_att_std:
+            for a in ATTITUDE:
+                sig = col(self.filter_name, "std_" + a)[mask]
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    ratio2 = np.where(sig > 0, (e["att_" + a][mask] / sig) ** 2, np.nan)
+                finite = ~np.isnan(ratio2)
+                self.normalized_sum[a] += float(ratio2[finite].sum())
+                self.normalized_n[a] += int(finite.sum())
         if self.has_std:
             for g, (err, std) in _NEES_GROUPS.items():
                 sig = np.stack([col(self.filter_name, std + a)[mask] for a in AXES])
@@ -222,12 +260,21 @@ class MetricAccumulator:
         out = {"window_s": [self.t_first, self.t_last], "samples": self.n}
         if self.samples != "all":
             out["sampled_at"] = self.samples
-        out["position_rms_m"] = {a: self._rms("pos_" + a) for a in AXES}
-        out["velocity_rms_mps"] = {a: self._rms("vel_" + a) for a in AXES}
+        if "pos" in self.groups:
+            out["position_rms_m"] = {a: self._rms("pos_" + a) for a in AXES}
+            out["position_max_m"] = {a: self.peak["pos_" + a] for a in AXES}
+        if "vel" in self.groups:
+            out["velocity_rms_mps"] = {a: self._rms("vel_" + a) for a in AXES}
+            out["velocity_max_mps"] = {a: self.peak["vel_" + a] for a in AXES}
         out["attitude_rms_deg"] = {a: math.degrees(self._rms("att_" + a)) for a in ATTITUDE}
-        out["position_max_m"] = {a: self.peak["pos_" + a] for a in AXES}
-        out["velocity_max_mps"] = {a: self.peak["vel_" + a] for a in AXES}
         out["attitude_max_deg"] = {a: math.degrees(self.peak["att_" + a]) for a in ATTITUDE}
+        # paper 003 eq. 20 over the accumulated squares (as attitude_fitness)
+        att_sq = sum(self.sq["att_" + a] for a in ATTITUDE)
+        out["attitude_fitness_deg"] = math.degrees(math.sqrt(att_sq / (len(ATTITUDE) * self.n)))
+        if self.has_att_std:
+            out["attitude_normalized_rms"] = {
+                a: (math.sqrt(self.normalized_sum[a] / self.normalized_n[a])
+                    if self.normalized_n[a] else float("nan")) for a in ATTITUDE}
         if self.has_std:
             out["nees"] = {g: (self.nees_sum[g] / self.nees_n[g] if self.nees_n[g]
                                else float("nan")) for g in _NEES_GROUPS}
@@ -271,6 +318,14 @@ def filter_metrics(results, filter_name, window=None, truth_name=None, samples="
                             truth_name=truth_name)
     acc.add(results)
     return acc.result(results)
+
+
+def attitude_fitness(errors, mask=None):
+    """Paper 003 eq. 20: RMS over the samples (``mask``) and the three Euler angles of the
+    attitude error of :func:`navigation_errors`, in deg."""
+    mask = errors["valid"] if mask is None else mask
+    squares = np.stack([errors["att_" + a][mask] ** 2 for a in ATTITUDE])
+    return math.degrees(float(np.sqrt(np.mean(squares))))
 
 
 def reference_metrics(position_enu=None, velocity_enu=None, attitude_deg=None):

@@ -169,6 +169,48 @@ def plot_error_rms(entries, path, title=""):
     return _save(fig, path)
 
 
+def plot_attitude_errors(entries, path, title="", angles=nav_metrics.ATTITUDE):
+    """Euler angle errors (one panel per angle of ``angles``) of every filter, with the
+    +-3 sigma of the filter's ``std_<angle>`` output when it has one (dashed); paper 003's
+    Fig. 3 is ``angles=("pitch",)``."""
+    fig, axes = plt.subplots(len(angles), 1, figsize=(12, 2.6 * len(angles) + 0.6),
+                             sharex=True, squeeze=False)
+    for f_i, (label, results, name, e) in enumerate(entries):
+        ok = e["valid"]
+        t = e["time"][ok]
+        for ax, a in zip(axes[:, 0], angles):
+            ax.plot(t, np.degrees(e["att_" + a][ok]), color=f"C{f_i}", lw=0.7, label=label)
+            if results.has(name, "std_" + a):
+                s3 = 3.0 * np.degrees(results.column(name, "std_" + a)[ok])
+                ax.plot(t, s3, color=f"C{f_i}", lw=0.6, ls="--")
+                ax.plot(t, -s3, color=f"C{f_i}", lw=0.6, ls="--")
+            ax.set_ylabel(f"{a} error [deg]")
+            ax.grid(True, alpha=0.3)
+    axes[0, 0].legend(fontsize=8, loc="upper left")
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.suptitle(title or "attitude errors (solid) and +-3 sigma from the filter (dashed)")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def plot_fitness(summary, path):
+    """Paper 003's Fig. 1: the GA's best cost so far and the generation mean per generation
+    (``summary`` from ``orchestrator.tune.run_tune``)."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    g = np.arange(1, len(summary["best_so_far"]) + 1)
+    ax.plot(g, summary["best_so_far"], "o-", ms=3, label="best so far")
+    ax.plot(g, summary["generation_mean"], "s--", ms=3, alpha=0.7, label="generation mean")
+    ax.set_xlabel("generation")
+    ax.set_ylabel("cost: attitude RMS [deg] (eq. 20)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    ax.set_title(f"{summary['model']}: GA over {len(summary['parameters'])} parameters of "
+                 f"'{summary['component']}', population {summary['population']} "
+                 "(paper 003 Fig. 1)", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
 def plot_nis(entries, path, title=""):
     """NIS at the update epochs with the two-sided 95 % chi-square band of one epoch."""
     fig, ax = plt.subplots(figsize=(12, 4))
@@ -202,7 +244,7 @@ def _constant(values):
     return values.size == 0 or bool(np.all(values == values[0]))
 
 
-def plot_series(entries, variables, path, title=""):
+def plot_series(entries, variables, path, title="", log_variables=()):
     """Diagnostic outputs (adaptive scales, fading factor, model probabilities...) over time:
     one panel per variable, one line per filter that has it.  A variable that stays at one
     value in every filter that has it gets no panel but a line in the footnote.  Returns None
@@ -227,6 +269,8 @@ def plot_series(entries, variables, path, title=""):
             if results.has(name, var):
                 ax.plot(results.time, results.column(name, var), color=f"C{f_i}", lw=0.8,
                         label=label)
+        if var in log_variables:
+            ax.set_yscale("log")
         ax.set_ylabel(var)
         ax.grid(True, alpha=0.3)
     axes[0, 0].legend(fontsize=8)

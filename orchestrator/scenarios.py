@@ -17,9 +17,9 @@ from . import build as fmu_build
 from . import interrupts
 from . import metrics as nav_metrics
 from . import outputs
-from . import plots
 from . import prechecks
 from . import recorder
+from . import windows as paper_windows
 from .errors import NavfmuError
 from .master import Simulation
 from .results import Results, atomic_write
@@ -31,6 +31,9 @@ FILTER_COMPONENT = "filter"
 #: adaptive diagnostics plotted when a filter has them
 ADAPTIVE_OUTPUTS = ("q_scale", "r_scale", "fading_factor", "outlier", "compression", "chi2",
                     "model_prob_1", "model_prob_2", "model_prob_3")
+#: R scale factors of the attitude filters (paper 003 eq. 25) and the fuzzy inputs (eq. 19)
+R_SCALE_OUTPUTS = ("r_scale_accel", "r_scale_mag")
+FUZZY_INPUT_OUTPUTS = ("fuzzy_e_accel", "fuzzy_de_accel", "fuzzy_e_mag", "fuzzy_de_mag")
 
 
 def registry():
@@ -269,6 +272,9 @@ def paper_comparison(runs: Sequence[Run], reference=None) -> Dict[str, Any]:
                  if "outlier_detection" in m}
     if detection:
         out["outlier_detection"] = detection
+    windowed = paper_windows.window_comparison(runs, FILTER_COMPONENT, reference)
+    if windowed:
+        out["windows"] = windowed
     return out
 
 
@@ -289,7 +295,7 @@ def format_comparison(comparison: Dict[str, Any], bench_command: str = "",
                       show_missing: bool = True) -> str:
     """Text of :func:`paper_comparison` (empty if it has nothing); ``show_missing=False``
     leaves out the blocks that lack a filter (a single-filter ``navfmu run``)."""
-    lines = []
+    lines = [paper_windows.format_windows(comparison.get("windows") or {})]
     imp = comparison.get("improvement")
     if imp and ("missing" not in imp or show_missing):
         base, filt = imp["baseline"], imp["filter"]
@@ -345,7 +351,7 @@ def format_comparison(comparison: Dict[str, Any], bench_command: str = "",
                          f"{d['false_alarm_observations']}/{d['clean_observations']} clean "
                          f"observations ({_pct(d['false_alarm_rate_per_observation'])})"
                          + gate_text)
-    return "\n".join(lines)
+    return "\n".join(line for line in lines if line)
 
 
 def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, title="",
@@ -391,6 +397,8 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
         add(atomic_write(out / "report.json", lambda f: f.write(
             json.dumps(_jsonable(comparison), indent=2, sort_keys=True))))
     if plots_on and all(has_truth(run.results) for run in runs):
+        from . import plots  # matplotlib only where plots are drawn (not in executor workers)
+
         entries = []
         for run in runs:
             results = (run.results if run.series_file is None
@@ -398,6 +406,12 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
             for f in filters_in(results):
                 label = run.label if f == FILTER_COMPONENT else f"{run.label}:{f}"
                 entries.append((label, results, f, nav_metrics.navigation_errors(results, f)))
+        navigation = [en for en in entries if "pos_n" in en[3]]
+        attitude = [en for en in entries if "pos_n" not in en[3]]
+        if attitude:
+            for path in _attitude_plots(attitude, out, title):
+                add(path)
+        entries = navigation
         if entries:
             add(plots.plot_errors(entries, out / "errors.png", title))
             if len(entries) > 1:  # errors.png compares RMS; each filter's +-3 sigma apart
@@ -413,6 +427,24 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
         first = entries[0][1] if entries else runs[0].results
         truth = nav_metrics.find_component(first, "truth_", ("time", "lat", "lon", "h"))
         add(plots.plot_trajectory(first, truth, out / "trajectory.png", title))
+    return written
+
+
+def _attitude_plots(entries, out: Path, title: str) -> List[Path]:
+    """Plots of attitude-only filters: Euler errors with +-3 sigma, the pitch error alone
+    (paper 003's Fig. 3), NIS, the R scale factors and the fuzzy inputs when present."""
+    from . import plots
+
+    written = [plots.plot_attitude_errors(entries, out / "attitude_errors.png", title),
+               plots.plot_attitude_errors(entries, out / "pitch_error.png",
+                                          f"{title}: pitch error (paper 003 Fig. 3)",
+                                          angles=("pitch",)),
+               plots.plot_nis(entries, out / "nis.png", title)]
+    for p in (plots.plot_series(entries, R_SCALE_OUTPUTS, out / "r_scale.png", title,
+                                log_variables=R_SCALE_OUTPUTS),
+              plots.plot_series(entries, FUZZY_INPUT_OUTPUTS, out / "fuzzy_inputs.png", title)):
+        if p:
+            written.append(p)
     return written
 
 

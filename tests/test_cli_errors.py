@@ -192,7 +192,7 @@ PRE_RUN = {
     "stop_before_start": (["--stop", "-5"], "navfmu: error: --stop: the stop time -5 s must be "
                                             "after the start time 0 s"),
     "recording_too_large": (["--stop", "1e7"], "navfmu: error: --stop: the run would record "
-                                               "1000000001 rows x 74 variables"),
+                                               "1000000001 rows x 78 variables"),
     "stop_beyond_the_profile": (["--stop", "600"],
                                 "navfmu: error: component 'trajectory' (TrajectoryImu.fmu): the run "
                                 "ends at 600 s, after the end of profile 'aircraft_500s' at 500 s; "

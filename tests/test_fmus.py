@@ -52,8 +52,9 @@ def test_model_description_units_and_attributes(dist, name):
             assert sv.get("variability") == "discrete"
     assert n_real > 0
     md = read_model_description(str(dist / f"{name}.fmu"))
-    lat = [v for v in md.modelVariables if v.name in ("truth_lat", "nav_lat", "gnss_lat")]
-    assert lat and all(v.unit == "rad" for v in lat)
+    angles = [v for v in md.modelVariables
+              if v.name in ("truth_lat", "nav_lat", "gnss_lat", "nav_roll")]
+    assert angles and all(v.unit == "rad" for v in angles)
 
 
 class _Fmu:
@@ -193,8 +194,9 @@ def test_replay_state_save_restore_is_bit_identical(dist):
     assert first[0, -1] == 12 and first[-1, -1] == 13  # a fix at 12 s and 13 s
 
 
+AHRS_FMUS = ["UkfAhrs", "FuzzyUkfAhrs"]
 FILTER_FMUS = [n for n in FMU_NAMES if n not in ("TrajectoryImu", "GnssReceiver",
-                                                  "ImuGnssReplay")]
+                                                  "ImuGnssReplay", *AHRS_FMUS)]
 
 
 @pytest.mark.parametrize("name", FILTER_FMUS)
@@ -233,6 +235,47 @@ def test_filter_state_save_restore_is_bit_identical(dist, name):
         f.close()
     assert np.array_equal(first, again)
     assert np.isfinite(first).all()
+
+
+@pytest.mark.parametrize("name", AHRS_FMUS)
+def test_ahrs_state_save_restore_is_bit_identical(dist, name):
+    """The AHRS FMUs driven by the TrajectoryImu FMU on the vibrating turntable: state saved
+    after 3 s (the fuzzy filter's innovation window full), serialized and restored, continues
+    bit-identically."""
+    traj = _Fmu(dist / "TrajectoryImu.fmu", "traj", {
+        "profile": "turntable_240s", "imu_period": 0.02, "gyro_arw_dpsh": 0.5,
+        "accel_vrw_ugpsHz": 300.0, "mag_field_T": 5.4e-5, "mag_inclination": 1.0,
+        "mag_noise_T": 1e-7, "vibration_start_s": 2.0, "vibration_accel_noise_mps2": 1.0})
+    f = _Fmu(dist / f"{name}.fmu", name.lower(), {
+        "mag_field_T": 5.4e-5, "mag_inclination": 1.0, "fuzzy_window": 5} if name ==
+        "FuzzyUkfAhrs" else {"mag_field_T": 5.4e-5, "mag_inclination": 1.0})
+    links = ["imu_time", "imu_dt", "imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z",
+             "imu_dvel_x", "imu_dvel_y", "imu_dvel_z", "mag_time", "mag_x", "mag_y", "mag_z"]
+    out = ["nav_roll", "nav_pitch", "nav_yaw", "std_pitch", "nis", "r_scale_accel"]
+
+    def run(k0, n):
+        rows = []
+        for k in range(k0, k0 + n):
+            traj.fmu.doStep(k * 0.02, 0.02)
+            for name_, value in zip(links, traj.reals(links)):
+                f.set(name_, float(value))
+            f.fmu.doStep(k * 0.02, 0.02)
+            rows.append(f.reals(out))
+        return np.array(rows)
+
+    try:
+        run(0, 150)
+        states = (traj.fmu.getFMUstate(), f.fmu.getFMUstate())
+        first = run(150, 100)
+        blobs = [x.serializeFMUstate(s) for x, s in zip((traj.fmu, f.fmu), states)]
+        for x, b in zip((traj.fmu, f.fmu), blobs):
+            x.setFMUstate(x.deSerializeFMUstate(b))
+        again = run(150, 100)
+    finally:
+        traj.close()
+        f.close()
+    assert np.array_equal(first, again)
+    assert np.isfinite(first).all() and first[-1, 3] > 0
 
 
 def test_nan_reaching_a_filter_input_is_a_clear_fmi_error(dist):

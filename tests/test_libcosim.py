@@ -46,10 +46,15 @@ def test_libcosim_equals_our_jacobi_master_bit_for_bit(built, model_dir, capfd):
     out, err = capfd.readouterr()
     assert out == "" and err == "", "libcosim logged at WARNING level or above"
     assert_same_recording(theirs, ours)
-    # the comparison has teeth: fixes are published, the filter moves
-    source = next(c for c in theirs.components if theirs.has(c, "gnss_epoch"))
-    assert theirs.column(source, "gnss_epoch")[-1] >= WINDOW_S - 2
-    assert np.ptp(theirs.column("filter", "nav_lat")) > 0
+    # the comparison has teeth: fixes are published (an attitude filter updates), the
+    # filter moves
+    source = next((c for c in theirs.components if theirs.has(c, "gnss_epoch")), None)
+    if source is not None:
+        assert theirs.column(source, "gnss_epoch")[-1] >= WINDOW_S - 2
+        assert np.ptp(theirs.column("filter", "nav_lat")) > 0
+    else:
+        assert np.nansum(theirs.column("filter", "updated")) >= WINDOW_S
+        assert np.ptp(theirs.column("filter", "nav_pitch")) > 0
 
 
 def test_gauss_seidel_differs_from_libcosim_where_the_rules_differ(built):
@@ -89,8 +94,10 @@ def test_paper_scenarios_full_length_in_libcosim(built, model_dir):
     m_theirs = metrics.filter_metrics(theirs, "filter")
     m_ours = metrics.filter_metrics(ours, "filter")
     for key in ("position_rms_m", "velocity_rms_mps", "attitude_rms_deg"):
-        for axis, value in m_ours[key].items():
+        for axis, value in m_ours.get(key, {}).items():
             assert m_theirs[key][axis] == pytest.approx(value, rel=0.05), (key, axis)
+    if "gnss" not in theirs.components:     # an attitude-only model: no fixes to count
+        return
     # the valid fixes that reached the filter before its last step (a fix published at the
     # stop time has no step left to be applied in)
     epoch = theirs.column("gnss", "gnss_epoch")[:-1]

@@ -31,6 +31,9 @@ PARAMS = {
 FILTER_PARAMS = {"init_lat": LAT, "init_h": 100.0}
 #: a second IMM model far from the first, so the model probabilities move on these inputs
 PARAMS["ImmUkf"] = dict(FILTER_PARAMS, imm_q_scale_2=1e8)
+#: the attitude filters: the field the magnetometer input below measures
+PARAMS["UkfAhrs"] = {"mag_field_T": 4.5e-5, "mag_inclination": math.atan2(4.0, 2.0)}
+PARAMS["FuzzyUkfAhrs"] = dict(PARAMS["UkfAhrs"], fuzzy_window=5)
 #: the replay plays the shipped 80 s gnss-ins-sim log (100 Hz, from t = 0)
 PARAMS["ImuGnssReplay"] = {
     "log": str(Path(__file__).resolve().parent.parent / "models/replay_gnss_ins_sim/log")}
@@ -56,6 +59,9 @@ def inputs_at(cls, k):
     inputs.update(imu_time=t1, imu_dt=H, imu_dvel_z=-9.8 * H, imu_dtheta_x=1e-7 * math.sin(k),
                   gnss_time=epoch * 10 * H, gnss_lat=LAT + 1e-7 * math.cos(epoch) + jump,
                   gnss_h=100.0, gnss_valid=epoch > 0, gnss_epoch=epoch)
+    if "mag_time" in inputs:       # an attitude filter: a magnetometer sample with the IMU's
+        inputs.update(mag_time=t1, mag_x=2e-5 + 1e-8 * math.cos(k), mag_y=0.0, mag_z=4e-5)
+        inputs = {n: inputs[n] for n in cls.default_inputs()}
     return inputs
 
 

@@ -19,7 +19,8 @@ from .imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, DPH, DPSH, GYRO_AR
                          GYRO_BIAS_LIMITS, INTENSITY_REFERENCE_RATE, UG, ImuErrorModel)
 from .ins_gnss_kf import MEASUREMENTS, ErrorStateKf, KfConfig
 from .latency import SolutionHistory
-from .rotations import dcm_to_euler
+from .magnetometer import MagnetometerModel
+from .rotations import _euler_rows, dcm_to_euler
 from .strapdown import Strapdown
 from .timing import TIME_TOLERANCE, same_time, samples_reached, time_tolerance
 from .trajectory import TrajectoryGenerator, load_profile
@@ -35,7 +36,7 @@ DEFAULT_MAX_FIX_AGE = 1.5
 _UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug",
                       "ug/sqrt(Hz)": "ug/sqrt(Hz)", "ppm": "ppm", "urad": "urad",
                       "deg/h/g": "deg/h/g", "s": "s", "m": "m", "m/s": "m/s", "rad/s": "rad/s",
-                      "m/s2": "m/s2", "": ""}
+                      "m/s2": "m/s2", "T": "T", "rad": "rad", "Hz": "Hz", "": ""}
 
 
 def ports_from_table(table):
@@ -62,23 +63,27 @@ class TrajectoryImu(Component):
     model_name = "TrajectoryImu"
     description = ("Truth trajectory from a motion profile on WGS-84 and the strapdown IMU "
                    "increments along it, with bias, noise, Gauss-Markov, scale-factor, "
-                   "misalignment and manoeuvre-dependent noise errors.")
+                   "misalignment and manoeuvre-dependent noise errors; a three-axis "
+                   "magnetometer and a vibration disturbance.")
     parameters = (
-        string("profile", "built-in motion profile name (static, aircraft_500s, manoeuvre_1h, "
-               "uav_maneuver) or path of a JSON profile file", "aircraft_500s"),
+        string("profile", "built-in motion profile name (static, turntable_240s, "
+               "aircraft_500s, manoeuvre_1h, uav_maneuver) or path of a JSON profile file",
+               "aircraft_500s"),
         real("imu_period", "s", "IMU sampling interval (samples on this grid; any communication "
              "step)", 0.01,
              Limits(0.0, 1.0, low_open=True)),
         boolean("extend_profile", "allow a run beyond the profile's end (the truth then flies "
                 "on at the final velocity and attitude)", False),
-        integer("seed", "seed of every random error of the IMU", 1, SEED_LIMITS),
+        integer("seed", "seed of every random error of the IMU and the magnetometer", 1,
+                SEED_LIMITS),
         *ports_from_table(ImuErrorModel.PARAMETERS),
+        *ports_from_table(MagnetometerModel.PARAMETERS),
     )
     inputs = ()
-    outputs = signals.TRUTH + signals.IMU
+    outputs = signals.TRUTH + signals.IMU + signals.MAG
     default_experiment = (0.0, 500.0, 0.01)
-    state_fields = ("generator", "errors", "start_time", "n", "out")
-    derived_fields = ("dt",)
+    state_fields = ("generator", "errors", "magnetometer", "start_time", "n", "out")
+    derived_fields = ("dt", "mag_on", "_no_mag")
 
     def initialize(self, start_time):
         self.dt = self.params["imu_period"]
@@ -86,11 +91,21 @@ class TrajectoryImu(Component):
         self.generator = TrajectoryGenerator(profile, self.dt)
         error_params = {k: self.params[k] for k in ImuErrorModel.PARAMETERS}
         self.errors = ImuErrorModel(error_params, self.params["seed"])
+        self.magnetometer = MagnetometerModel(
+            {k: self.params[k] for k in MagnetometerModel.PARAMETERS}, self.params["seed"])
+        mag = self.magnetometer
+        # the magnetometer/vibration model runs (and draws) only when it is switched on, so a
+        # scenario without it keeps its numbers and its speed
+        self.mag_on = bool(mag.field_ned.any() or mag.vibrating(math.inf))
         self.start_time = float(start_time)
         self.n = 0
-        out = self._truth(self.generator.state())
-        out.update({p.name: 0.0 for p in signals.IMU})
-        out["imu_time"] = self.start_time
+        truth = self.generator.state()
+        out = self._truth(truth)
+        out.update({p.name: 0.0 for p in signals.IMU + signals.MAG})
+        out["imu_time"] = out["mag_time"] = self.start_time
+        self._no_mag = {p.name: out[p.name] for p in signals.MAG}
+        if self.mag_on:
+            self._write_mag(out, self.start_time, truth)
         self.out = out
         return dict(out)
 
@@ -102,6 +117,12 @@ class TrajectoryImu(Component):
                 f"{self.model_name}: the run ends at {stop_time:g} s, after the end of "
                 f"profile '{self.params['profile']}' at {end:g} s; stop by {end:g} s or set "
                 "parameter 'extend_profile' = true to fly on at the final velocity")
+
+    def _write_mag(self, out, t, truth):
+        C_bn = np.array(_euler_rows(truth["roll"], truth["pitch"], truth["yaw"]))
+        m = self.magnetometer.measure(t, C_bn)
+        out["mag_time"] = t
+        out["mag_x"], out["mag_y"], out["mag_z"] = (float(v) for v in m)
 
     def _truth(self, s):
         return {"truth_time": self.start_time + s["time"], "truth_lat": s["lat"],
@@ -121,6 +142,12 @@ class TrajectoryImu(Component):
         intensity = self.generator.last_rate_norm / INTENSITY_REFERENCE_RATE
         dtheta, dvel = self.errors.apply(t_end, self.dt, dtheta, dvel, intensity)
         out = self._truth(truth)
+        if self.mag_on:
+            self._write_mag(out, t_end, truth)
+            if self.magnetometer.vibrating(t_end):
+                dvel = dvel + self.magnetometer.accel_disturbance(t_end) * self.dt
+        else:
+            out.update(self._no_mag)
         out["imu_time"] = t_end
         out["imu_dt"] = self.dt
         for i, a in enumerate(signals.AXES_BODY):
@@ -780,3 +807,10 @@ REGISTRY.update({cls.model_name: cls for cls in (Ukf, CtfaUkf, ImmUkf)})
 from .replay import ImuGnssReplay  # noqa: E402  (registered with the other components)
 
 REGISTRY[ImuGnssReplay.model_name] = ImuGnssReplay
+
+
+# ---------------------------------------------------------------------------------------
+# Attitude (AHRS) filters of paper 003 (components in navcore.ahrs_components).
+from .ahrs_components import REGISTRY as _AHRS_REGISTRY  # noqa: E402
+
+REGISTRY.update(_AHRS_REGISTRY)

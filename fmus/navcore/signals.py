@@ -55,6 +55,11 @@ IMU = (
       for a in AXES_BODY),
 )
 
+MAG = (
+    real("mag_time", "s", "time the magnetometer sample is valid for"),
+    *(real(f"mag_{a}", "T", f"magnetic flux density along body {a}") for a in AXES_BODY),
+)
+
 GNSS = (
     real("gnss_time", "s", "time the latest fix was taken", limits=TIME),
     real("gnss_lat", "rad", "measured latitude", limits=LATITUDE),
@@ -115,3 +120,21 @@ _DIAGNOSTICS = (
 
 #: outputs every INS/GNSS filter has (filters may add their own diagnostics)
 FILTER_OUTPUTS = _NAV + _STD + _DIAGNOSTICS
+
+
+#: inputs of every attitude (AHRS) filter: IMU increments and the magnetometer
+AHRS_INPUTS = IMU[:8] + MAG
+
+_BY_NAME = {p.name: p for p in _NAV + _DIAGNOSTICS}
+
+#: outputs every AHRS filter has: attitude, its 1-sigma, gyro bias, innovation statistics
+AHRS_OUTPUTS = (
+    _BY_NAME["nav_time"],
+    boolean("aligned", "the filter has an attitude solution (false until its initialization)"),
+    *(_BY_NAME[f"nav_{a}"] for a in ("roll", "pitch", "yaw")),
+    *(real(f"std_{a}", "rad", f"1-sigma of the {a} error") for a in ("roll", "pitch", "yaw")),
+    *(_BY_NAME[f"nav_bg_{a}"] for a in AXES_BODY),
+    *(_BY_NAME[n] for n in ("nis", "nis_dof", "updated")),
+    real("r_scale_accel", "", "R of the accelerometer block / its nominal value", 1.0),
+    real("r_scale_mag", "", "R of the magnetometer block / its nominal value", 1.0),
+)

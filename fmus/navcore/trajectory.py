@@ -52,6 +52,11 @@ half the duration; 0 gives abrupt changes):
 ``hold_attitude``
     turntable-style attitude at rest: ``roll_deg``, ``pitch_deg``, ``yaw_deg``, reached over
     ``transition`` (default 2 s) by raised-cosine ramps, then held.
+``rotate``
+    turntable rotation at rest about an axis fixed in the room: ``axis_n``, ``axis_e``,
+    ``axis_d`` (NED components, normalised; default down = a yaw table) and ``rate_deg``
+    [deg/s, peak] or ``angle_deg`` (total); the rate follows the trapezoidal window,
+    ``C_bn(t) = exp([a x] angle(t)) C_bn(start)``.  The pitch must stay within +-85 deg.
 
 After the last segment the final state is held (straight level flight or rest).
 """
@@ -63,7 +68,7 @@ import math
 from typing import Any, Dict
 
 from .component import ParameterError
-from .rotations import _euler_rows
+from .rotations import _euler_from_rows, _euler_rows, _matmul_rows, _rodrigues_rows
 from .strapdown import Strapdown, integrate_position
 
 #: standard gravity used for the coordinated-turn bank angle [m/s^2]
@@ -83,6 +88,7 @@ _ALLOWED = {
     "roll": ("amplitude_deg", "period", "shape"),
     "pitch": ("amplitude_deg", "period", "shape"),
     "hold_attitude": ("roll_deg", "pitch_deg", "yaw_deg"),
+    "rotate": ("axis_n", "axis_e", "axis_d", "rate_deg", "angle_deg"),
 }
 _START_KEYS = ("lat_deg", "lon_deg", "h", "speed", "yaw_deg", "pitch_deg", "roll_deg")
 _MAX_PITCH_DEG = 85.0
@@ -233,9 +239,10 @@ def _compile(profile):
             "roll_amp": 0.0, "roll_period": 0.0, "roll_shape": "none",
             "pitch_amp": 0.0, "pitch_period": 0.0, "pitch_shape": "none",
             "droll": 0.0, "dpitch": 0.0, "dpsi": 0.0,
+            "axis": (0.0, 0.0, 1.0), "rate": 0.0,
         }
         Tw = rec["T"]
-        if kind in ("static", "hold_attitude"):
+        if kind in ("static", "hold_attitude", "rotate"):
             if V > 1e-9:
                 rd.fail("type", f"needs the vehicle at rest, but the speed at segment start is "
                                 f"{V:.6g} m/s (decelerate first: 'accelerate' with 'final_speed': 0)")
@@ -292,11 +299,15 @@ def _compile(profile):
             rec["droll"] = _wrap(r_t - roll_off)
             rec["dpitch"] = p_t - pitch_off
             rec["dpsi"] = _wrap(y_t - psi)
+        elif kind == "rotate":
+            _compile_rotation(rd, rec, roll_off, pitch_off, psi)
 
         # end state, exact
         psi_end = psi + rec["turn"] * (D - Tw) + rec["dpsi"]
         roll_end = roll_off + rec["droll"]
         pitch_end = pitch_off + rec["dpitch"]
+        if kind == "rotate":
+            _, psi_end, _, _, roll_end, pitch_end = _evaluate(rec, D)
         rec.update(t1=t0 + D, V1=V_end, psi1=psi_end, roll1=roll_end, pitch1=pitch_end)
         out.append(rec)
         V, psi, roll_off, pitch_off = V_end, psi_end, roll_end, pitch_end
@@ -304,10 +315,46 @@ def _compile(profile):
     return st, out
 
 
+def _rotation_angle(rec, tau):
+    D, T = rec["D"], rec["T"]
+    if T > 0.0:
+        return rec["rate"] * _window_integral(tau, D, T)
+    return rec["rate"] * min(max(tau, 0.0), D)
+
+
+def _rotated_euler(rec, angle):
+    a = rec["axis"]
+    C0 = _euler_rows(rec["roll0"], rec["pitch0"], rec["psi0"])
+    return _euler_from_rows(_matmul_rows(_rodrigues_rows(a[0] * angle, a[1] * angle,
+                                                         a[2] * angle), C0))
+
+
+def _compile_rotation(rd, rec, roll_off, pitch_off, psi):
+    """Axis and rate of a 'rotate' segment; checks that the pitch stays within limits."""
+    axis = [rd.get(f"axis_{c}", default) for c, default in (("n", 0.0), ("e", 0.0),
+                                                              ("d", 1.0))]
+    norm = math.sqrt(sum(c * c for c in axis))
+    if not norm > 0.0:
+        rd.fail("axis_n", "axis_n, axis_e, axis_d must not all be zero")
+    rec["axis"] = tuple(c / norm for c in axis)
+    which = rd.one_of("rate_deg", "angle_deg")
+    if which == "rate_deg":
+        rec["rate"] = rd.get("rate_deg") * _D2R
+    else:
+        rec["rate"] = rd.get("angle_deg") * _D2R / (rec["D"] - rec["T"])
+    for i in range(101):
+        _, pitch, _ = _rotated_euler(rec, _rotation_angle(rec, rec["D"] * i / 100.0))
+        if abs(pitch) > _MAX_PITCH_DEG * _D2R:
+            rd.fail(which, f"turns the pitch beyond +-{_MAX_PITCH_DEG} deg")
+
+
 def _evaluate(rec, tau):
     """(V, psi, psi_dot, gamma, roll_off, pitch_off) at time tau into segment ``rec``."""
     D, T = rec["D"], rec["T"]
     kind = rec["type"]
+    if kind == "rotate":
+        roll, pitch, yaw = _rotated_euler(rec, _rotation_angle(rec, tau))
+        return 0.0, yaw, 0.0, 0.0, roll, pitch
     if kind == "hold_attitude":
         r = _ramp(tau, rec["Th"]) if rec["Th"] > 0.0 else 1.0
         return (0.0, rec["psi0"] + rec["dpsi"] * r, 0.0, 0.0,
@@ -549,8 +596,21 @@ def _uav_maneuver_profile():
     }
 
 
+def _turntable_240s_profile():
+    """Paper 003 (Xiao & Lu): 240 s on a turntable at rest at one attitude ("placed at a
+    random angle"; ours: roll 8, pitch 12, yaw 35 deg) at the authors' institute in
+    Shijiazhuang, 38.04 N, 114.51 E, 80 m.  The vibration from 121 s is a sensor disturbance
+    (TrajectoryImu's vibration parameters), not a motion."""
+    return {
+        "start": {"lat_deg": 38.04, "lon_deg": 114.51, "h": 80.0, "speed": 0.0,
+                  "roll_deg": 8.0, "pitch_deg": 12.0, "yaw_deg": 35.0},
+        "segments": [{"type": "static", "duration": 240.0}],
+    }
+
+
 _BUILTIN = {
     "static": _static_profile,
+    "turntable_240s": _turntable_240s_profile,
     "aircraft_500s": _aircraft_500s_profile,
     "manoeuvre_1h": _manoeuvre_1h_profile,
     "uav_maneuver": _uav_maneuver_profile,

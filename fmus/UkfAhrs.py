@@ -1,0 +1,17 @@
+"""FMU slave 'UkfAhrs': a thin FMI shell over navcore.ahrs_components.UkfAhrs (see fmushell.py)."""
+from pythonfmu import Fmi2Slave
+
+import fmushell
+from navcore import ahrs_components
+
+
+class UkfAhrs(Fmi2Slave):
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        fmushell.setup(self, ahrs_components.UkfAhrs)
+
+    def do_step(self, current_time, step_size):
+        return fmushell.do_step(self, current_time, step_size)
+
+
+fmushell.bind_methods(UkfAhrs)

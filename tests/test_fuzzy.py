@@ -1,0 +1,97 @@
+"""The Mamdani inference of paper 003 (navcore.fuzzy) on hand-computed inputs, and the
+covariance-matching adaptation (navcore.ahrs.FuzzyAdaptiveR) on white noise of known size."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from navcore.ahrs import FuzzyAdaptiveR
+from navcore.component import ParameterError
+from navcore.fuzzy import FuzzyRScale, memberships
+
+LN12, LN15 = math.log(1.2), math.log(1.5)
+
+
+def test_memberships_of_the_default_sets_by_hand():
+    # e = 0.5: N 0 (N falls to 0 at 0), Z (1 - 0.5) / 1 = 0.5, P (0.5 - 0) / 1 = 0.5
+    np.testing.assert_allclose(memberships(0.5, (-0.5, 0.0, 1.0), (0.0, -0.5, 1.0, 0.0)),
+                               [0.0, 0.5, 0.5])
+    # e = -0.25: N (0 + 0.25) / 0.5 = 0.5, Z (-0.25 + 0.5) / 0.5 = 0.5, P 0
+    np.testing.assert_allclose(memberships(-0.25, (-0.5, 0.0, 1.0), (0.0, -0.5, 1.0, 0.0)),
+                               [0.5, 0.5, 0.0])
+    # shoulders beyond the outer vertices
+    np.testing.assert_allclose(memberships(5.0, (-0.5, 0.0, 1.0), (0.0, -0.5, 1.0, 0.0)),
+                               [0.0, 0.0, 1.0])
+
+
+def test_matched_filter_keeps_r():
+    assert FuzzyRScale()(0.0, 0.0) == pytest.approx(1.0, abs=1e-12)
+
+
+def _centroid(mu, u):
+    return float(np.sum(mu * u) / np.sum(mu))
+
+
+def test_output_for_e_half_de_zero_by_hand():
+    """e = 0.5, de = 0: rules (Z, Z) -> K and (P, Z) -> I fire with 0.5 each (memberships
+    above).  In u = ln F, K = triangle(-ln1.2, 0, ln1.2) and I = triangle(0, ln1.2, ln1.5),
+    both clipped at 0.5; their union's centroid, integrated here on a fine grid."""
+    u = np.linspace(-LN15, LN15, 2_000_001)
+
+    def tri(x, a, b, c):
+        return np.clip(np.minimum((x - a) / (b - a), (c - x) / (c - b)), 0.0, 1.0)
+
+    union = np.maximum(np.minimum(tri(u, -LN12, 0.0, LN12), 0.5),
+                       np.minimum(tri(u, 0.0, LN12, LN15), 0.5))
+    expected = math.exp(_centroid(union, u))
+    assert FuzzyRScale()(0.5, 0.0) == pytest.approx(expected, rel=2e-3)
+    assert 1.09 < expected < 1.13
+
+
+def test_output_for_large_growing_mismatch_is_large_increase():
+    """e >= 1 and de >= 0.5: only (P, P) -> LI fires, fully; the centroid of the LI
+    triangle (ln1.2, ln1.5, ln1.5) is (ln1.2 + 2 ln1.5) / 3."""
+    expected = math.exp((LN12 + 2 * LN15) / 3)
+    assert FuzzyRScale()(3.0, 1.0) == pytest.approx(expected, rel=2e-3)
+    # and the mirror image
+    assert FuzzyRScale()(-1.0, -1.0) == pytest.approx(1.0 / expected, rel=2e-3)
+
+
+def test_bad_feet_are_parameter_errors():
+    with pytest.raises(ParameterError, match="fuzzy_e"):
+        FuzzyRScale({"fuzzy_e_z_left": 0.5})
+    FuzzyRScale({"fuzzy_e_z_left": 0.0, "fuzzy_e_n_right": -0.5})   # vertical edges are fine
+    with pytest.raises(ParameterError, match="fuzzy_out"):
+        FuzzyRScale({"fuzzy_out_i": 0.9})
+
+
+def test_adaptation_finds_the_true_noise_level():
+    """Innovations of white noise 10x larger than R assumes (Pzz = 0): the accelerometer
+    scale climbs to about 100 (variance), the magnetometer one stays near 1."""
+    rng = np.random.default_rng(0)
+    R0 = np.diag([1e-4] * 3 + [1e-4] * 3)
+    adapt = FuzzyAdaptiveR(FuzzyRScale(), window=20, r_scale_min=0.1, r_scale_max=1e4)
+    scale = np.ones(2)
+    history = []
+    for _ in range(3000):
+        v = np.concatenate((0.1 * rng.standard_normal(3), 0.01 * rng.standard_normal(3)))
+        scale = adapt.step(v, np.zeros((6, 6)), R0, scale)
+        history.append(scale.copy())
+    late = np.exp(np.mean(np.log(np.array(history[1000:])), axis=0))
+    assert 50 < late[0] < 200
+    assert 0.5 < late[1] < 2.0
+
+
+def test_any_values_within_the_declared_ranges_are_valid():
+    """A tuner may pick any corner of the ranges: every one builds a valid inference."""
+    from navcore.fuzzy import FEET, OUTPUT_VERTICES
+
+    specs = {**FEET, **OUTPUT_VERTICES}
+    rng = np.random.default_rng(4)
+    for _ in range(300):
+        values = {k: (lo if rng.random() < 0.3 else hi if rng.random() < 0.5
+                      else rng.uniform(lo, hi)) for k, (_, lo, hi, _) in specs.items()}
+        f = FuzzyRScale(values)
+        assert 0.3 <= f(rng.normal(), rng.normal()) <= 4.0
