@@ -24,6 +24,12 @@ _PAPER_KEYS = {"position_rms_m": "position_enu_m", "velocity_rms_mps": "velocity
                "attitude_rms_deg": "attitude_deg"}
 
 
+def recorded_axes(records: Mapping[str, Sequence[Mapping[str, Any]]]) -> List[tuple]:
+    """The :data:`AXES` every run of every filter has (an attitude-only filter: attitude)."""
+    runs = [r["metrics"] for rows in records.values() for r in rows]
+    return [ax for ax in AXES if all(ax[1] in m for m in runs)]
+
+
 def per_run_values(records: Sequence[Mapping[str, Any]], group: str, axis: str) -> List[float]:
     return [float(r["metrics"][group][axis]) for r in records]
 
@@ -50,7 +56,7 @@ def summarize(records: Mapping[str, Sequence[Mapping[str, Any]]],
     filters = list(records)
     paper = paper_values(reference)
     axes: Dict[str, Any] = {}
-    for key, group, axis, label, unit in AXES:
+    for key, group, axis, label, unit in recorded_axes(records):
         values = {f: per_run_values(records[f], group, axis) for f in filters}
         entry = {"label": label, "unit": unit,
                  "filters": {f: {**st.t_interval(v), "pooled_rms": nav_metrics.pooled_rms(v),
@@ -115,4 +121,4 @@ def format_summary(summary: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["AXES", "summarize", "format_summary", "paper_values", "per_run_values"]
+__all__ = ["AXES", "recorded_axes", "summarize", "format_summary", "paper_values", "per_run_values"]

@@ -378,14 +378,15 @@ def rms_table(rows, reference=None):
 
 
 # -- comparisons of two filters ------------------------------------------------------------
-_GROUP_KEYS = {"position": "position_rms_m", "velocity": "velocity_rms_mps",
-               "attitude": "attitude_rms_deg"}
+#: the metrics key of each 3-D RMS group
+GROUP_KEYS = {"position": "position_rms_m", "velocity": "velocity_rms_mps",
+              "attitude": "attitude_rms_deg"}
 
 
 def rms_3d(metrics, group):
     """3-D RMS of ``group`` (position/velocity/attitude): the root of the sum of the per-axis
     mean squares."""
-    values = metrics[_GROUP_KEYS[group]].values()
+    values = metrics[GROUP_KEYS[group]].values()
     return float(math.sqrt(sum(v * v for v in values)))
 
 
@@ -412,7 +413,7 @@ def rms_ratio(baseline, value):
 def per_axis_enu(metrics, group):
     """RMS of ``group`` in the papers' order E, N, U (position, velocity) or roll, pitch, yaw."""
     keys = ATTITUDE if group == "attitude" else ENU
-    return [float(metrics[_GROUP_KEYS[group]][k]) for k in keys]
+    return [float(metrics[GROUP_KEYS[group]][k]) for k in keys]
 
 
 # -- outlier detection ---------------------------------------------------------------------

@@ -450,7 +450,9 @@ def plot_rms_intervals(summary, path, title=""):
     when it has one; ``summary`` from :func:`orchestrator.campaign_summary.summarize`."""
     axes_items = list(summary["axes"].items())
     filters = summary["filters"]
-    fig, axes = plt.subplots(3, 3, figsize=(max(9.0, 1.1 * len(filters) + 6), 9))
+    rows = max(1, -(-len(axes_items) // 3))  # an attitude-only campaign: one row
+    fig, axes = plt.subplots(rows, 3, figsize=(max(9.0, 1.1 * len(filters) + 6), 3 * rows),
+                             squeeze=False)
     x = np.arange(len(filters))
     for ax, (key, entry) in zip(axes.flat, axes_items):
         stats_ = [entry["filters"][f] for f in filters]

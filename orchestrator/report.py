@@ -173,7 +173,12 @@ def _figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
     if not entries:
         return figures
     title = f"{name}, run 0 ({', '.join(f'{c}.seed {s}' for c, s in seeds.items())})"
-    figures["errors"] = plots.plot_errors(entries, out / "figures" / f"{name}_errors.png", title)
+    if all("pos_n" in e for *_, e in entries):
+        figures["errors"] = plots.plot_errors(entries, out / "figures" / f"{name}_errors.png",
+                                              title)
+    else:  # attitude-only filters
+        figures["errors"] = plots.plot_attitude_errors(
+            entries, out / "figures" / f"{name}_errors.png", title)
     figures["nis"] = plots.plot_nis(entries, out / "figures" / f"{name}_nis.png", title)
     return figures
 
@@ -222,9 +227,12 @@ def _per_run(plan, f, fn) -> Optional[Dict[str, float]]:
 
 def _paper_table(plan) -> List[str]:
     summary, ref = plan["summary"], plan["reference"]
+    if not ref.get("table"):
+        return ([f"({ref.get('note') or 'The paper gives no table.'})", ""] + _orderings(plan)
+                + _improvement(plan) + _time_per_cycle(plan) + _detection(plan))
     lines = [f"**Table: RMS errors** ({ref.get('source', '')}). Ours: mean [95 % CI] over the "
              f"runs, {summary['method']}; {_provenance(plan)}.", ""]
-    keys = [k for k, *_ in AXES]
+    keys = list(summary["axes"])  # the axes the filters have (attitude-only: attitude)
     lines.append("| filter | | " + " | ".join(f"{summary['axes'][k]['label']} "
                                                f"[{summary['axes'][k]['unit']}]" for k in keys)
                  + " |")
@@ -254,7 +262,7 @@ def _orderings(plan) -> List[str]:
     lines = ["**Orderings** of the paper's filters (paired t intervals of the per-run "
              "differences; `<`: the interval lies below 0, `~`: not resolved):", ""]
     names = [r.get("filter") for r in plan["reference"].get("table", ())
-             if r.get("filter") in plan["records"]]
+             if r.get("filter") in plan["records"]] or list(plan["records"])
     where = {key: (group, axis) for key, group, axis, *_ in AXES}
     for key, entry in summary["axes"].items():
         group, axis = where[key]
@@ -376,9 +384,11 @@ def _cross_matrix(sections) -> List[str]:
             if f not in plan["records"]:
                 cells.append("-")
                 continue
-            cells.append(" / ".join(_ci(_per_run(plan, f, lambda m, g=g: nav_metrics.rms_3d(
-                m, g)), 3 if g == "position" else 4) for g in ("position", "velocity",
-                                                             "attitude")))
+            rms_3d = lambda m, g: (nav_metrics.rms_3d(m, g)  # noqa: E731
+                                   if nav_metrics.GROUP_KEYS[g] in m else None)
+            cells.append(" / ".join(_ci(_per_run(plan, f, lambda m, g=g: rms_3d(m, g)),
+                                        3 if g == "position" else 4)
+                                    for g in ("position", "velocity", "attitude")))
         lines.append(f"| {f} | " + " | ".join(cells) + " |")
     lines += ["", "Runs per scenario: " + "; ".join(f"{_provenance(p)}" for p in sections), ""]
     return lines

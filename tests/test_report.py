@@ -21,6 +21,10 @@ def test_discovery_finds_every_scenario_and_the_filters_that_fit():
     # the paper's filters first, in the order of its table
     assert plans["uav_maneuver"]["filters"][:3] == ["Ukf", "ImmUkf", "CtfaUkf"]
     assert plans["aircraft_500s"]["reference"]["table"][0]["filter"] == "Kf"
+    # attitude filters on the attitude scenario only, and only they
+    assert set(plans["ahrs_turntable"]["filters"]) == {"UkfAhrs", "FuzzyUkfAhrs"}
+    assert all(not {"UkfAhrs", "FuzzyUkfAhrs"} & set(p["filters"])
+               for name, p in plans.items() if name != "ahrs_turntable")
 
 
 def test_tiny_report_has_the_papers_table_figures_and_cross_matrix(tmp_path, monkeypatch):
@@ -43,3 +47,20 @@ def test_tiny_report_has_the_papers_table_figures_and_cross_matrix(tmp_path, mon
     matrix = text.split("## Cross matrix")[1]
     assert all(f"| {f} |" in matrix for f in shown)
     assert "## Consistency: NEES and NIS" in text
+
+
+def test_tiny_report_of_the_attitude_scenario_has_attitude_columns_only(tmp_path):
+    """ahrs_turntable (attitude-only filters, a paper without a table), 2 runs of 20 s: the
+    campaign summary, figures and cross matrix carry the attitude axes and '-' elsewhere."""
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models" / "ahrs_turntable", models / "ahrs_turntable")
+    out = tmp_path / "report"
+    path = report.build_report(out, runs=2, stop_time=20.0, models=models, log=print)
+    text = path.read_text()
+    assert "## ahrs_turntable: paper 003" in text
+    for fig in re.findall(r"\]\(figures/([^)]+)\)", text):
+        assert (out / "figures" / fig).stat().st_size > 10_000
+    matrix = text.split("## Cross matrix")[1]
+    for f in ("UkfAhrs", "FuzzyUkfAhrs"):
+        assert re.search(rf"\| {f} \| - / - / \d+\.\d{{4}} \[", matrix)
+    assert "- pitch: " in text and "- pos E" not in text.split("## Consistency")[0]
