@@ -115,6 +115,8 @@ class Run:
     metrics: Dict[str, Dict[str, Any]] = field(default_factory=dict)
     #: the Parquet file the run was streamed to (then ``results`` has no rows)
     series_file: Optional[Path] = None
+    #: of a streamed run: paper.json window name -> filter component -> metrics
+    window_metrics: Dict[str, Dict[str, Dict[str, Any]]] = field(default_factory=dict)
 
 
 def filter_label(model: SystemModel, filter: Optional[str] = None) -> str:
@@ -153,10 +155,15 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
                      parameters=parameters, record=record, algorithm=algorithm)
     prechecks.check_simulation(sim, stop_time)
     if stream_to is not None:
-        sink = recorder.MetricsSink(window=window, overlap=max(sim.decimation.values()) + 1)
-        header = sim.run(stop_time=stop_time, progress=progress,
-                         sink=recorder.Tee([sink, recorder.ParquetSink(stream_to)]))
-        return Run(label, model, header, dict(sink.metrics), Path(stream_to))
+        overlap = max(sim.decimation.values()) + 1
+        sink = recorder.MetricsSink(window=window, overlap=overlap)
+        windowed = {name: recorder.MetricsSink(window=(float(w["t0"]), float(w["t1"])),
+                                               overlap=overlap)
+                    for name, w in paper_windows.paper_windows(paper_reference(model)).items()}
+        header = sim.run(stop_time=stop_time, progress=progress, sink=recorder.Tee(
+            [sink, *windowed.values(), recorder.ParquetSink(stream_to)]))
+        return Run(label, model, header, dict(sink.metrics), Path(stream_to),
+                   {name: dict(s.metrics) for name, s in windowed.items()})
     results = sim.run(stop_time=stop_time, progress=progress)
     run = Run(label, model, results)
     if not has_truth(results):
@@ -424,7 +431,8 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
             add(plots.plot_r_estimate(entries, out / "r_estimate.png", title))
             add(plots.plot_chi2(entries, out / "chi2.png", title))
             add(plots.plot_outliers(entries, out / "outliers.png", title))
-        first = entries[0][1] if entries else runs[0].results
+        shown = entries or attitude   # a streamed run's rows are in its plot view only
+        first = shown[0][1] if shown else runs[0].results
         truth = nav_metrics.find_component(first, "truth_", ("time", "lat", "lon", "h"))
         add(plots.plot_trajectory(first, truth, out / "trajectory.png", title))
     return written

@@ -26,7 +26,8 @@ _GROUPS = (("attitude_rms_deg", "attitude", "deg"), ("position_rms_m", "position
            ("velocity_rms_mps", "velocity", "m/s"))
 
 
-def _windows(reference) -> Dict[str, Dict[str, Any]]:
+def paper_windows(reference) -> Dict[str, Dict[str, Any]]:
+    """The named windows of a paper.json (``{}`` without any), each checked."""
     windows = (reference or {}).get("windows") or {}
     for name, w in windows.items():
         if not (isinstance(w, dict) and "t0" in w and "t1" in w and w["t1"] > w["t0"]):
@@ -37,15 +38,21 @@ def _windows(reference) -> Dict[str, Dict[str, Any]]:
 def window_comparison(runs: Sequence[Any], component: str, reference=None) -> Dict[str, Any]:
     """Per window: ``{label, t0, t1, filters: {run label: metrics}}`` and the claims with
     ``ours``; empty when paper.json has no windows.  ``component`` is the filter component
-    of each run."""
-    windows = _windows(reference)
+    of each run; a run streamed to a file brings its windows' metrics computed while it ran
+    (``run.window_metrics``)."""
+    windows = paper_windows(reference)
     if not windows:
         return {}
     out: Dict[str, Any] = {"windows": {}, "claims": []}
     for name, w in windows.items():
         per_filter = {}
         for run in runs:
-            if component in run.metrics:
+            if component not in run.metrics:
+                continue
+            streamed = getattr(run, "window_metrics", None) or {}
+            if name in streamed:
+                per_filter[run.label] = streamed[name][component]
+            else:
                 per_filter[run.label] = nav_metrics.filter_metrics(
                     run.results, component, window=(float(w["t0"]), float(w["t1"])))
         out["windows"][name] = {"label": w.get("label", name), "t0": w["t0"], "t1": w["t1"],
