@@ -157,9 +157,12 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     if stream_to is not None:
         overlap = max(sim.decimation.values()) + 1
         sink = recorder.MetricsSink(window=window, overlap=overlap)
+        end = model.stop_time if stop_time is None else stop_time
+        # the paper's windows the run reaches (a shorter run: the others are left out)
         windowed = {name: recorder.MetricsSink(window=(float(w["t0"]), float(w["t1"])),
                                                overlap=overlap)
-                    for name, w in paper_windows.paper_windows(paper_reference(model)).items()}
+                    for name, w in paper_windows.paper_windows(paper_reference(model)).items()
+                    if end is None or float(w["t0"]) < end}
         header = sim.run(stop_time=stop_time, progress=progress, sink=recorder.Tee(
             [sink, *windowed.values(), recorder.ParquetSink(stream_to)]))
         return Run(label, model, header, dict(sink.metrics), Path(stream_to),

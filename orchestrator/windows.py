@@ -49,9 +49,9 @@ def window_comparison(runs: Sequence[Any], component: str, reference=None) -> Di
         for run in runs:
             if component not in run.metrics:
                 continue
-            streamed = getattr(run, "window_metrics", None) or {}
-            if name in streamed:
-                per_filter[run.label] = streamed[name][component]
+            if getattr(run, "series_file", None) is not None:  # streamed: what it reached
+                if name in run.window_metrics:
+                    per_filter[run.label] = run.window_metrics[name][component]
             else:
                 per_filter[run.label] = nav_metrics.filter_metrics(
                     run.results, component, window=(float(w["t0"]), float(w["t1"])))

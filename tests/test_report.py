@@ -27,23 +27,30 @@ def test_discovery_finds_every_scenario_and_the_filters_that_fit():
                for name, p in plans.items() if name != "ahrs_turntable")
 
 
+def _tiny_report(tmp_path, scenario, stop_time):
+    """A 2-run report of models/``scenario`` alone: its text and folder, every figure it
+    links checked to exist with content."""
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models" / scenario, models / scenario)
+    out = tmp_path / "report"
+    text = report.build_report(out, runs=2, stop_time=stop_time, models=models,
+                               log=print).read_text()
+    for fig in re.findall(r"\]\(figures/([^)]+)\)", text):
+        assert (out / "figures" / fig).stat().st_size > 10_000
+    return text, out
+
+
 def test_tiny_report_has_the_papers_table_figures_and_cross_matrix(tmp_path, monkeypatch):
     """aircraft_500s alone, 2 runs of 2 s, the paper's three filters and Ukf (to keep the
     test short; discovery is tested above)."""
     shown = ["Kf", "SageHusaFading", "Iakf", "Ukf"]
     monkeypatch.setattr(report, "fitting_filters", lambda model: shown)
-    models = tmp_path / "models"
-    shutil.copytree(ROOT / "models" / "aircraft_500s", models / "aircraft_500s")
-    out = tmp_path / "report"
-    path = report.build_report(out, runs=2, stop_time=2.0, models=models, log=print)
-    text = path.read_text()
+    text, out = _tiny_report(tmp_path, "aircraft_500s", stop_time=2.0)
     assert "## aircraft_500s: paper 001" in text
     # the paper's row printed with its number, ours with an interval
     assert "| standard Kalman filter | paper | 8.600 | 9.414 | 3.284 |" in text
     assert re.search(r"\| Iakf \| ours \| \d+\.\d{3} \[-?\d+\.\d{3}, \d+\.\d{3}\] \|", text)
     assert "2 runs (trajectory.seed 1..2, gnss.seed 1001..1002)" in text
-    for fig in re.findall(r"\]\(figures/([^)]+)\)", text):
-        assert (out / "figures" / fig).stat().st_size > 10_000
     matrix = text.split("## Cross matrix")[1]
     assert all(f"| {f} |" in matrix for f in shown)
     assert "## Consistency: NEES and NIS" in text
@@ -52,14 +59,8 @@ def test_tiny_report_has_the_papers_table_figures_and_cross_matrix(tmp_path, mon
 def test_tiny_report_of_the_attitude_scenario_has_attitude_columns_only(tmp_path):
     """ahrs_turntable (attitude-only filters, a paper without a table), 2 runs of 20 s: the
     campaign summary, figures and cross matrix carry the attitude axes and '-' elsewhere."""
-    models = tmp_path / "models"
-    shutil.copytree(ROOT / "models" / "ahrs_turntable", models / "ahrs_turntable")
-    out = tmp_path / "report"
-    path = report.build_report(out, runs=2, stop_time=20.0, models=models, log=print)
-    text = path.read_text()
+    text, _ = _tiny_report(tmp_path, "ahrs_turntable", stop_time=20.0)
     assert "## ahrs_turntable: paper 003" in text
-    for fig in re.findall(r"\]\(figures/([^)]+)\)", text):
-        assert (out / "figures" / fig).stat().st_size > 10_000
     matrix = text.split("## Cross matrix")[1]
     for f in ("UkfAhrs", "FuzzyUkfAhrs"):
         assert re.search(rf"\| {f} \| - / - / \d+\.\d{{4}} \[", matrix)
