@@ -104,7 +104,8 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    component, the variable and the FMU file.  For a component whose source was replaced
    (:meth:`SystemModel.replace_source`), SSD parameters the new FMU does not have are skipped
    (a filter swap keeps the scenario's parameters that still apply) and listed in
-   :attr:`Simulation.skipped_parameters`.
+   :attr:`Simulation.skipped_parameters`; those of a swap variant file written for the new
+   FMU (``filter.MODEL.ssv``, :mod:`orchestrator.ssp`) are never skipped.
 
 9. **Failures.**  A component failing mid-run (FMU status Discard/Error/Fatal, or a Python
    component raising ParameterError/InputError) raises
@@ -281,7 +282,7 @@ class Simulation:
             for pname, (_, value) in d.spec.parameters.items():
                 var = d.variables.get(pname)
                 if var is None or var.causality not in settable:
-                    if swapped:
+                    if swapped and pname not in d.spec.variant_parameters:
                         skipped.append(f"{d.spec.name}.{pname}")
                         continue
                     raise WiringError(

@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from . import metrics as nav_metrics  # noqa: E402
+from .phases import shade_phases  # noqa: E402
 from .results import atomic_write  # noqa: E402
 
 #: the panels of the error plots, named as in the RMS tables: (group, unit, scale to the
@@ -244,11 +245,12 @@ def _constant(values):
     return values.size == 0 or bool(np.all(values == values[0]))
 
 
-def plot_series(entries, variables, path, title="", log_variables=()):
+def plot_series(entries, variables, path, title="", log_variables=(), phases=()):
     """Diagnostic outputs (adaptive scales, fading factor, model probabilities...) over time:
     one panel per variable, one line per filter that has it.  A variable that stays at one
     value in every filter that has it gets no panel but a line in the footnote.  Returns None
-    (no plot) if no filter has any of ``variables`` or none of them changes."""
+    (no plot) if no filter has any of ``variables`` or none of them changes.  ``phases``
+    (windows of :mod:`orchestrator.phases`) are shaded."""
     present = [v for v in variables if any(r.has(c, v) for _, r, c, _ in entries)]
     if not present:
         return None
@@ -273,6 +275,7 @@ def plot_series(entries, variables, path, title="", log_variables=()):
             ax.set_yscale("log")
         ax.set_ylabel(var)
         ax.grid(True, alpha=0.3)
+        shade_phases(ax, phases)
     axes[0, 0].legend(fontsize=8)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title)
@@ -319,12 +322,13 @@ def _gate_label(gate):
     return f"{gate['name']} = {gate['value']:g} ({gate['source']})"
 
 
-def plot_chi2(entries, path, title=""):
+def plot_chi2(entries, path, title="", phases=()):
     """Chi-square statistic of every update: ``chi2`` of a filter that outputs it (CTFA-UKF,
     eq. 24), ``nis`` of the others (the same statistic of a plain filter), log scale, with
     the chi-square gates of the filters that output ``chi2`` (ctfa_t1/t2, value from the
-    run's parameters or the default, as the legend says).  Returns None unless an entry has a
-    ``chi2`` output."""
+    run's parameters or the default, as the legend says); ``phases`` (windows of
+    :mod:`orchestrator.phases`) are shaded.  Returns None unless an entry has a ``chi2``
+    output."""
     if not any(r.has(c, "chi2") for _, r, c, _ in entries):
         return None
     fig, ax = plt.subplots(figsize=(12, 4.5))
@@ -344,6 +348,7 @@ def plot_chi2(entries, path, title=""):
     for i, g in enumerate(sorted(gates.values(), key=lambda g: g["value"])):
         ax.axhline(g["value"], color="k", lw=0.9, ls=("--", ":", "-.")[i % 3],
                    label=_gate_label(g))
+    shade_phases(ax, phases)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("chi-square statistic")
     ax.grid(True, alpha=0.3)

@@ -17,6 +17,7 @@ from . import build as fmu_build
 from . import interrupts
 from . import metrics as nav_metrics
 from . import outputs
+from . import phases as scenario_phases
 from . import prechecks
 from . import recorder
 from . import windows as paper_windows
@@ -278,6 +279,9 @@ def paper_comparison(runs: Sequence[Run], reference=None) -> Dict[str, Any]:
             "filter_step_s": (run0.get("base_step", float("nan"))
                               * (run0.get("decimation") or {}).get(FILTER_COMPONENT, 1)),
             "missing": [f for f in times if f not in ours]}
+    phase_stats = scenario_phases.phase_statistics(runs, reference, filters_in)
+    if phase_stats and phase_stats["rows"]:
+        out["phases"] = phase_stats
     detection = {name: m["outlier_detection"] for name, m in ours.items()
                  if "outlier_detection" in m}
     if detection:
@@ -345,6 +349,9 @@ def format_comparison(comparison: Dict[str, Any], bench_command: str = "",
         lines.append("  ours: separate runs one after the other on a shared machine; for the "
                      "ratios measured in one process, alternating the filters, run "
                      + (bench_command or "`navfmu bench SCENARIO --filters A,B,C`"))
+    phase_text = scenario_phases.format_phase_statistics(comparison.get("phases"))
+    if phase_text:
+        lines.append(phase_text)
     det = comparison.get("outlier_detection")
     if det:
         lines.append("\noutlier detection at the update epochs (injected = the receiver's "
@@ -430,9 +437,11 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
                     add(plots.plot_errors([entry], out / f"errors_{safe}.png",
                                           f"{entry[0]} ({title})" if title else entry[0]))
             add(plots.plot_nis(entries, out / "nis.png", title))
-            add(plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png", title))
+            windows = scenario_phases.phase_windows(reference)
+            add(plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png", title,
+                                  phases=windows))
             add(plots.plot_r_estimate(entries, out / "r_estimate.png", title))
-            add(plots.plot_chi2(entries, out / "chi2.png", title))
+            add(plots.plot_chi2(entries, out / "chi2.png", title, phases=windows))
             add(plots.plot_outliers(entries, out / "outliers.png", title))
         shown = entries or attitude   # a streamed run's rows are in its plot view only
         first = shown[0][1] if shown else runs[0].results

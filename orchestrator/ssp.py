@@ -14,6 +14,11 @@ files next to it).  The subset:
 * ``ssd:ParameterBindings/ssd:ParameterBinding`` inline
   (``ssd:ParameterValues/ssv:ParameterSet/ssv:Parameters/ssv:Parameter``) or by
   ``source="file.ssv"`` (relative to the .ssd);
+* swap variants (ours, outside SSP): when a component's FMU is replaced
+  (:meth:`SystemModel.replace_source`) by one whose file is ``MODEL.fmu``, a file
+  ``file.MODEL.ssv`` next to a bound ``file.ssv`` is applied on top of that binding, so a
+  scenario can carry settings for the FMUs it may be swapped to.  The .ssd does not reference
+  it, so libcosim and other SSP hosts, which run the .ssd's own FMU, never read it;
 * ``ssd:Connections/ssd:Connection`` from a component's output to a component's input,
   without transformation;
 * ``ssd:DefaultExperiment startTime stopTime`` with the base step in
@@ -91,6 +96,10 @@ class ComponentSpec:
     type: str = FMU_TYPE
     #: the ``source`` attribute as written in the .ssd
     source_text: str = ""
+    #: the ``.ssv`` files bound by ``source=`` (for the swap variants, module docstring)
+    parameter_files: List[Path] = field(default_factory=list)
+    #: names set by a swap variant file: meant for this FMU, so never skipped as absent
+    variant_parameters: Tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -139,13 +148,17 @@ class SystemModel:
 
         A relative ``new_source`` is taken relative to the current directory.  Whether the new
         FMU has every connected variable is checked when a :class:`Simulation` is built.
+        The swap variants for the new FMU's model name are applied (module docstring).
         """
         old = self.component(component_name)
         new_path = Path(new_source).expanduser().resolve()
+        variant = _swap_variant(old, new_path.stem)
         components = [
             dataclasses.replace(c, source=new_path,
-                                connectors=dict(c.connectors), parameters=dict(c.parameters),
-                                units=dict(c.units))
+                                connectors=dict(c.connectors),
+                                parameters={**c.parameters, **variant},
+                                units=dict(c.units), parameter_files=list(c.parameter_files),
+                                variant_parameters=tuple(variant))
             if c.name == component_name else c
             for c in self.components
         ]
@@ -154,6 +167,16 @@ class SystemModel:
         return dataclasses.replace(self, components=components,
                                    connections=list(self.connections),
                                    replaced_sources=replaced)
+
+
+def _swap_variant(comp: ComponentSpec, model_name: str) -> Dict[str, Tuple[str, object]]:
+    """Values of ``file.MODEL.ssv`` next to each ``file.ssv`` bound to ``comp`` (in order)."""
+    values: Dict[str, Tuple[str, object]] = {}
+    for ssv in comp.parameter_files:
+        variant = ssv.with_name(f"{ssv.stem}.{model_name}{ssv.suffix}")
+        if variant.is_file():
+            values.update(_read_ssv(variant))
+    return values
 
 
 # ----------------------------------------------------------------------------------------
@@ -288,7 +311,9 @@ def _read_ssv(path: Path) -> Dict[str, Tuple[str, object]]:
     return _read_parameter_set(path, root, "<ssv:ParameterSet>")
 
 
-def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str) -> Dict[str, Tuple[str, object]]:
+def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str,
+                   files: List[Path]) -> Dict[str, Tuple[str, object]]:
+    """The bound parameters; the ``.ssv`` files bound by ``source=`` are appended to ``files``."""
     params: Dict[str, Tuple[str, object]] = {}
     bindings = comp_elem.find(_tag(SSD_NS, "ParameterBindings"))
     if bindings is None:
@@ -305,6 +330,7 @@ def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str) -> Dict[str, 
             if not ssv_path.is_file():
                 raise SspError(f"{path}: {bwhere} source=\"{source}\": file not found ({ssv_path})")
             values = _read_ssv(ssv_path)
+            files.append(ssv_path)
         else:
             pv = binding.find(_tag(SSD_NS, "ParameterValues"))
             if pv is None:
@@ -347,7 +373,7 @@ def _read_component(path: Path, elem: ET.Element) -> ComponentSpec:
             comp.connectors[cname] = (kind, typ)
             if typ == "Real" and typed[0].get("unit"):
                 comp.units[cname] = typed[0].get("unit")
-    comp.parameters = _read_bindings(path, elem, cwhere)
+    comp.parameters = _read_bindings(path, elem, cwhere, comp.parameter_files)
     osp = _osp_annotation(elem)
     if osp is not None:
         hint = osp.find(_tag(OSP_NS, "StepSizeHint"))

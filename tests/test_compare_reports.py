@@ -191,6 +191,12 @@ def test_uav_report(uav, tmp_path):
     assert rows["Ukf"]["ours_ms"] > 0
     text = scenarios.format_comparison(comp, "`navfmu bench X --filters Ukf,CtfaUkf`")
     assert "1.38" in text and "navfmu bench X --filters Ukf,CtfaUkf" in text
+    # phase means from paper.json's windows: 20 s lie in the first strong phase only
+    phase_rows = {(r["filter"], r["variable"]): r for r in comp["phases"]["rows"]}
+    nis = runs[0].results.column("filter", "nis")[runs[0].results.column("filter", "updated") > 0.5]
+    assert phase_rows[("Ukf", "nis")]["means"] == {"strong": pytest.approx(nis.mean()),
+                                                   "low": None}
+    assert "means per phase at the update epochs" in text
 
     gates = nav_metrics.chi2_thresholds(runs[1].results, "filter")
     assert [(g["name"], g["value"]) for g in gates] == [("ctfa_t1", 6.25), ("ctfa_t2", 11.35)]

@@ -134,3 +134,29 @@ def test_bad_arguments_raise_clear_errors():
         chi_square_statistic(np.ones(2), -np.eye(2))
     with pytest.raises(InputError, match="previous_weight"):
         ctfa_q_scale(1.0, previous_weight=1.5)
+
+
+def test_pass_decay_returns_geometrically_to_qmin_and_one_is_the_paper():
+    """Our pass_decay variant against its closed form: after an exceedance that sets the
+    weight w0, n passing epochs leave w0 d^n; d = 1 reproduces eq. 25's hold exactly."""
+    Qmin, Qmax = np.eye(2), 50.0 * np.eye(2)
+    stats = [9.0] + [1.0] * 6 + [12.0, 0.5]
+    w0 = (9.0 - PAPER_T1) / (PAPER_T2 - PAPER_T1)
+    for d in (1.0, 0.6, 0.0):
+        sched = CtfaQSchedule(Qmin, Qmax, pass_decay=d)
+        weights = []
+        for s in stats:
+            sched.update(s)
+            weights.append(sched.weight)
+        expected = [w0] + [w0 * d ** n for n in range(1, 7)] + [1.0, d]
+        np.testing.assert_allclose(weights, expected, rtol=1e-12, atol=0.0)
+        np.testing.assert_allclose(sched.Q, Qmin + d * (Qmax - Qmin), rtol=1e-12)
+    held = CtfaQSchedule(Qmin, Qmax)                 # default = the paper's eq. 25
+    w = 0.0
+    for s in stats:
+        held.update(s)
+        w = ctfa_q_scale(s, PAPER_T1, PAPER_T2, w)
+        assert held.weight == w
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ParameterError, match="pass_decay"):
+            CtfaQSchedule(Qmin, Qmax, pass_decay=bad)

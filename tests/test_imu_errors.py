@@ -163,6 +163,33 @@ def test_g_sensitivity_uses_the_specific_force():
     assert elements.std() == pytest.approx(10.0 * DPH / G0, rel=0.05)
 
 
+def test_level_reference_leaves_level_flight_with_the_bias_only():
+    """level_reference_g = 1: at rest or in level flight (f = (0, 0, -g) FRD) the measured
+    increments are the ideal ones plus the constant bias; a 2 g pull-up adds (S + M) df and
+    G df for df = f - f_ref (hand-computed from the drawn matrices)."""
+    params = {"gyro_bias_dph": 5.0, "accel_bias_ug": 100.0, "gyro_scale_factor_ppm": 5000.0,
+              "gyro_misalignment_urad": 3000.0, "g_sensitivity_dphpg": 54.0,
+              "accel_scale_factor_ppm": 5000.0, "accel_misalignment_urad": 3000.0}
+    dt = 0.02
+    f_level = np.array([0.0, 0.0, -G0])
+    ref = ImuErrorModel({**params, "level_reference_g": 1.0}, seed=3)
+    plain = ImuErrorModel(params, seed=3)
+    bg, ba = ref.constant_bias[:3], ref.constant_bias[3:]
+    g, a = ref.apply(dt, dt, ZERO3, f_level * dt)
+    np.testing.assert_allclose(g, bg * dt, rtol=1e-12, atol=1e-18)
+    np.testing.assert_allclose(a, (f_level + ba) * dt, rtol=1e-12, atol=1e-15)
+    g_plain, _ = plain.apply(dt, dt, ZERO3, f_level * dt)    # the same draws act on all of f
+    np.testing.assert_allclose(g_plain, (bg + plain.g_sensitivity @ f_level) * dt, rtol=1e-12)
+    f_pull = np.array([0.0, 0.0, -2.0 * G0])
+    w = np.array([0.0, 0.2, 0.0])
+    g, a = ref.apply(2 * dt, dt, w * dt, f_pull * dt)
+    df = f_pull - f_level
+    np.testing.assert_allclose(g, (ref.gyro_matrix @ w + bg + ref.g_sensitivity @ df) * dt,
+                               rtol=1e-12)
+    np.testing.assert_allclose(a, (f_pull + (ref.accel_matrix - np.eye(3)) @ df + ba) * dt,
+                               rtol=1e-12)
+
+
 def test_noise_windows_scale_noise_only_inside():
     base = {"gyro_arw_dpsh": 0.5, "accel_vrw_ugpsHz": 50.0, "gyro_bias_dph": 3.0}
     dt, n = 0.01, 3000

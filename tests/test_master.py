@@ -245,6 +245,39 @@ def test_swap_skips_parameters_the_new_component_lacks(write_ssd, tmp_path):
     assert res.metadata["replaced_sources"] == {"ramp": str(model.path.parent / "Ramp.fmu")}
 
 
+def _ssv(path, **values):
+    params = "".join(f'<ssv:Parameter name="{k}"><ssv:Real value="{v}"/></ssv:Parameter>'
+                     for k, v in values.items())
+    path.write_text('<ssv:ParameterSet version="1.0" name="p" xmlns:ssv="http://ssp-standard.org/'
+                    f'SSP1/SystemStructureParameterValues"><ssv:Parameters>{params}'
+                    '</ssv:Parameters></ssv:ParameterSet>')
+
+
+def test_swap_variant_file_applies_to_the_swapped_in_model_only(write_ssd, tmp_path):
+    """gain.ssv binds k = 3; gain.LimitedGain.ssv (not in the .ssd) sets k = 5 and limit for a
+    swap to LimitedGain only: the .ssd's own Gain, and a swap to another model, never read it."""
+    gain = GAIN.replace('<ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues>',
+                        '<ssd:ParameterBindings><ssd:ParameterBinding source="gain.ssv"/>'
+                        '</ssd:ParameterBindings><!--')
+    gain = gain.replace('</ssd:ParameterBinding></ssd:ParameterBindings>', '-->')
+    path = write_ssd(ssd_text(ACC + gain + RAMP, CHAIN, base_step=0.25, stop=3.0))
+    _ssv(path.parent / "gain.ssv", k=3.0)
+    _ssv(path.parent / "gain.LimitedGain.ssv", k=5.0, limit=100.0)
+    model = load_ssd(path)
+    assert model.component("gain").parameters == {"k": ("Real", 3.0)}
+    np.testing.assert_array_equal(run_direct(model).column("gain", "y"), 3 * np.arange(13) * 0.25)
+    swapped = model.replace_source("gain", tmp_path / "LimitedGain.fmu")
+    np.testing.assert_array_equal(run_direct(swapped).column("gain", "y"),
+                                  5 * np.arange(13) * 0.25)
+    assert model.replace_source("gain", tmp_path / "Gain.fmu").component("gain").parameters == {
+        "k": ("Real", 3.0)}
+    # a variant written for a model must fit it: not skipped like the scenario's own parameters
+    _ssv(path.parent / "gain.Gain.ssv", limit=1.0)
+    with pytest.raises(WiringError, match="parameter 'limit', which does not exist"):
+        Simulation(load_ssd(path).replace_source("gain", tmp_path / "Gain.fmu"),
+                   backend="direct", registry=REGISTRY)
+
+
 def test_direct_instance_state_round_trip():
     from orchestrator.backends import DirectInstance
 

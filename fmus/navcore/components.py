@@ -740,6 +740,10 @@ class CtfaUkf(Ukf):
              "measurement, else the 90 % chi-square quantile)", 0.0, Limits(0.0, 1e4)),
         real("ctfa_t2", "", "upper chi-square threshold of eq. 25 (0 = 11.35 for a 3-dimensional "
              "measurement, else the 99 % chi-square quantile)", 0.0, Limits(0.0, 1e4)),
+        real("ctfa_pass_decay", "", "ours, not the paper's: factor on Q - Qmin at every update "
+             "whose chi-square passes (below ctfa_t1); 1 = eq. 25 as printed (Q_k-1 kept), "
+             "0 = back to Qmin at once, in between an exponential return to Qmin", 1.0,
+             Limits(0.0, 1.0)),
     )
     extra_outputs = (
         real("chi2", "", "chi-square statistic of the latest update (eq. 24)"),
@@ -748,7 +752,7 @@ class CtfaUkf(Ukf):
     def engine_options(self):
         p = self.params
         return dict(super().engine_options(), q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
-                    t2=p["ctfa_t2"])
+                    t2=p["ctfa_t2"], pass_decay=p["ctfa_pass_decay"])
 
     def make_engine(self, config, nav):
         engine = super().make_engine(config, nav)

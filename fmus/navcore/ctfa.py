@@ -25,6 +25,13 @@ scalar weight ``w in [0, 1]``: :func:`ctfa_q_scale` maps ``(q_k, w_{k-1})`` to `
 :func:`ctfa_q` / :class:`CtfaQSchedule` turn it into Q.  Passing ``previous_weight=0`` (or
 ``Q_previous=None``) gives the memoryless variant "Q_min below q_min", which equals eq. 25 as
 long as nothing above ``q_min`` has been seen since ``Q_0 = Q_min``.
+
+Ours, not the paper's: :class:`CtfaQSchedule` takes a ``pass_decay`` factor ``d in [0, 1]``
+applied while the test passes, ``w_k = d w_{k-1}`` for ``q_k < q_min``.  ``d = 1`` is eq. 25
+as printed (the default), ``d = 0`` the memoryless variant; in between Q returns
+exponentially towards ``Q_min`` (time constant ``-T_fix / ln d`` for fixes every ``T_fix``)
+once the manoeuvre that raised it is over, instead of staying wherever the last exceedance
+put it (with 3 degrees of freedom ``q_k >= 6.25`` on 10 % of the epochs of a correct model).
 """
 from __future__ import annotations
 
@@ -135,17 +142,22 @@ class CtfaQSchedule:
     """Stateful eq. 25 schedule: holds the weight ``w`` so that ``Q = Qmin + w (Qmax - Qmin)``.
 
     ``update(stat)`` applies eq. 25 after a measurement update and returns the Q for the next
-    prediction.  Starts at ``Q_0 = Qmin`` (``w = 0``).  Plain attributes, deep-copyable.
+    prediction; ``pass_decay`` < 1 is our return towards Qmin while the test passes (module
+    docstring).  Starts at ``Q_0 = Qmin`` (``w = 0``).  Plain attributes, deep-copyable.
     ``Qmin`` and ``Qmax`` are validated: same square shape, finite, symmetric, and
     ``Qmax - Qmin`` positive semi-definite (so every scheduled Q lies between them).
     """
 
     state_fields = ("weight", "Q")
-    derived_fields = ("Qmin", "Qmax", "T1", "T2", "_span")
+    derived_fields = ("Qmin", "Qmax", "T1", "T2", "_span", "pass_decay")
 
     def __init__(self, Qmin: np.ndarray, Qmax: np.ndarray, T1: float = PAPER_T1,
-                 T2: float = PAPER_T2):
+                 T2: float = PAPER_T2, pass_decay: float = 1.0):
         _check_thresholds(T1, T2, "CtfaQSchedule")
+        pass_decay = float(pass_decay)
+        if not 0.0 <= pass_decay <= 1.0:
+            raise ParameterError(f"CtfaQSchedule: 'pass_decay' must be in [0, 1], got {pass_decay}")
+        self.pass_decay = pass_decay
         Qmin = np.array(Qmin, dtype=float)
         Qmax = np.array(Qmax, dtype=float)
         for name, Q in (("Qmin", Qmin), ("Qmax", Qmax)):
@@ -169,8 +181,9 @@ class CtfaQSchedule:
         self.Q = Qmin.copy()
 
     def update(self, stat: float) -> np.ndarray:
-        """Eq. 25 with the chi-square statistic of the last update; returns the new Q."""
-        self.weight = ctfa_q_scale(stat, self.T1, self.T2, self.weight)
+        """Eq. 25 with the chi-square statistic of the last update (below ``T1`` the weight is
+        multiplied by ``pass_decay``, 1 = the paper's hold); returns the new Q."""
+        self.weight = ctfa_q_scale(stat, self.T1, self.T2, self.pass_decay * self.weight)
         self.Q = self.Qmin + self.weight * self._span
         return self.Q
 

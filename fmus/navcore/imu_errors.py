@@ -8,7 +8,9 @@ written for increments)::
     dtheta_meas = (I + S_g + M_g) dtheta + (b_g + b_gm(t) + G_g f) dt + w_g
     dvel_meas   = (I + S_a + M_a) dvel   + (b_a + b_am(t)) dt         + w_a
 
-with ``S`` the diagonal scale-factor errors, ``M`` the misalignment (off-diagonal) matrix,
+(with ``level_reference_g`` set, ``dvel`` and ``f`` in the scale-factor, misalignment and
+g-sensitivity terms are taken relative to the level 1 g specific force, see the class
+docstring) with ``S`` the diagonal scale-factor errors, ``M`` the misalignment (off-diagonal) matrix,
 ``b`` the constant (turn-on) bias, ``b_m(t)`` a first-order Gauss-Markov bias, ``G_g`` the
 gyro g-sensitivity matrix, ``f = dvel/dt`` the mean true specific force over the interval and
 ``w`` the white noise integrated over the interval (angle / velocity random walk, plus
@@ -126,6 +128,15 @@ class ImuErrorModel:
     ``accel_bias_instability_ug`` [ug], ``accel_bias_tau_s`` [s],
     ``accel_scale_factor_ppm`` [ppm], ``accel_misalignment_urad`` [urad]: as for the gyro.
 
+    ``level_reference_g`` [g]
+        0 (default): scale factor, misalignment and g-sensitivity act on the whole specific
+        force.  ``r`` > 0: the constant biases are those of a calibration in level flight at
+        ``r`` g (body specific force ``f_ref = (0, 0, -r G0)``, forward-right-down), so these
+        three errors act on ``f - f_ref`` only: ``(S_a + M_a) f_ref`` and ``G_g f_ref`` are
+        part of the measured bias in level flight, and the errors appear only when the
+        vehicle accelerates, banks or rotates (datasheets state the bias in a static 1 g
+        field, e.g. the zero-rate output of the MPU-6000 and ADIS16445).
+
     Time-varying white-noise level
 
     ``noise_level_windows`` (str "t0,t1,factor; ..." or list of tuples)
@@ -156,6 +167,7 @@ class ImuErrorModel:
                     "_vibration_sigma_dt")
     derived_fields = ("noise_intensity_gain", "noise_level_windows", "seed", "constant_bias",
                       "g_sensitivity", "gyro_matrix", "accel_matrix", "_increment_matrix",
+                      "_reference_offset",
                       "_gm_sigma", "_gm_tau", "_white_density", "_vibration_sigma",
                       "_vibration_on")
 
@@ -186,6 +198,10 @@ class ImuErrorModel:
                                                "per axis", SCALE_FACTOR_LIMITS),
         "accel_misalignment_urad": (0.0, "urad", "1-sigma accelerometer misalignment, per "
                                                  "off-diagonal element", MISALIGNMENT_LIMITS),
+        "level_reference_g": (0.0, "", "specific force [g] along body -z at which the constant "
+                                        "biases are specified; scale factor, misalignment and "
+                                        "g-sensitivity act on f minus it (0 = on all of f)",
+                              Limits(0.0, 10.0)),
         "noise_level_windows": ("", "", "'t0,t1,factor; ...' white noise multiplied by factor "
                                         "inside [t0,t1)", None),
         "noise_intensity_gain": (0.0, "", "white noise multiplied by 1 + gain*intensity",
@@ -258,6 +274,10 @@ class ImuErrorModel:
         self._increment_matrix[:3, :3] = self.gyro_matrix
         self._increment_matrix[:3, 3:] = self.g_sensitivity
         self._increment_matrix[3:, 3:] = self.accel_matrix
+        # rate / specific-force error already contained in the biases of a level calibration
+        f_ref = np.array([0.0, 0.0, -sigma("level_reference_g") * G0])
+        self._reference_offset = np.concatenate((self.g_sensitivity @ f_ref,
+                                                 (self.accel_matrix - np.eye(3)) @ f_ref))
 
         # Gauss-Markov biases (gyro 3, accel 3): steady-state sigma and correlation time;
         # disabled axes get sigma 0 and tau = inf (phi = 1, no driving noise, state stays 0).
@@ -351,6 +371,6 @@ class ImuErrorModel:
             white = np.sqrt(white * white + vibration * vibration)
 
         out = self._increment_matrix @ x
-        out += (self.constant_bias + 0.5 * (gm_start + gm_end)) * dt
+        out += (self.constant_bias - self._reference_offset + 0.5 * (gm_start + gm_end)) * dt
         out += white * z[:6]
         return out[:3], out[3:]

@@ -339,12 +339,15 @@ class CtfaUkfEngine(UkfEngine):
     3-dimensional position measurement; for another dimension (or when ``t1``/``t2`` are 0) the
     90 %/99 % chi-square quantiles of the measurement dimension (``ctfa_thresholds``).
     ``q_scale`` is the current Q relative to Qmin, ``chi2`` the latest statistic.
+    ``pass_decay`` (ours, not the paper's; 1 = eq. 25 as printed): factor on ``Q - Qmin`` at
+    every update that passes the test, so Q returns towards Qmin after a manoeuvre.
     """
 
     state_fields = ("schedule", "chi2")
     derived_fields = ("q_max_scale",)
 
-    def __init__(self, config, nav, q_max_scale=10.0, t1=0.0, t2=0.0, **kwargs):
+    def __init__(self, config, nav, q_max_scale=10.0, t1=0.0, t2=0.0, pass_decay=1.0,
+                 **kwargs):
         super().__init__(config, nav, **kwargs)
         if not (math.isfinite(q_max_scale) and q_max_scale >= 1.0):
             raise ParameterError(f"CtfaUkfEngine: 'q_max_scale' must be >= 1, got {q_max_scale}")
@@ -356,7 +359,8 @@ class CtfaUkfEngine(UkfEngine):
         T2 = float(t2) if t2 > 0 else d2
         self.q_max_scale = float(q_max_scale)
         # the schedule on the scalar scale of Q: Qmin = [1], Qmax = [q_max_scale]
-        self.schedule = CtfaQSchedule(np.eye(1), self.q_max_scale * np.eye(1), T1, T2)
+        self.schedule = CtfaQSchedule(np.eye(1), self.q_max_scale * np.eye(1), T1, T2,
+                                      pass_decay)
         self.chi2 = 0.0
 
     def update(self, z):
