@@ -105,7 +105,8 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    (:meth:`SystemModel.replace_source`), SSD parameters the new FMU does not have are skipped
    (a filter swap keeps the scenario's parameters that still apply) and listed in
    :attr:`Simulation.skipped_parameters`; those of a swap variant file written for the new
-   FMU (``filter.MODEL.ssv``, :mod:`orchestrator.ssp`) are never skipped.
+   FMU (``file.MODEL.ssv`` next to a bound ``file.ssv``, :mod:`orchestrator.ssp`) are never
+   skipped.
 
 9. **Failures.**  A component failing mid-run (FMU status Discard/Error/Fatal, or a Python
    component raising ParameterError/InputError) raises
