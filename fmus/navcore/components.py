@@ -235,18 +235,12 @@ class GnssReceiver(Component):
 # ---------------------------------------------------------------------------------------
 #: accepted ranges of the filters' parameters: the initial state within the ranges of the
 #: signals (navcore.signals); an assumed GNSS sigma positive and at most the receiver model's
-_LAT, _LON, _HEIGHT = signals.LATITUDE, signals.LONGITUDE, signals.HEIGHT
-_SPEED, _ANGLE = signals.VELOCITY, signals.EULER_ANGLE
+_ANGLE = signals.EULER_ANGLE
 _R_POS = Limits(0.0, POS_SIGMA_LIMITS.high, low_open=True)
 _R_VEL = Limits(0.0, VEL_SIGMA_LIMITS.high, low_open=True)
 _TAU = Limits(0.0, 1e9)
 _FILTER_PARAMETERS = (
-    real("init_lat", "rad", "initial latitude", 0.0, _LAT),
-    real("init_lon", "rad", "initial longitude", 0.0, _LON),
-    real("init_h", "m", "initial height", 0.0, _HEIGHT),
-    real("init_vn", "m/s", "initial velocity north", 0.0, _SPEED),
-    real("init_ve", "m/s", "initial velocity east", 0.0, _SPEED),
-    real("init_vd", "m/s", "initial velocity down", 0.0, _SPEED),
+    *signals.state_ports("init", "initial"),
     real("init_roll", "rad", "initial roll", 0.0, _ANGLE),
     real("init_pitch", "rad", "initial pitch", 0.0, _ANGLE),
     real("init_yaw", "rad", "initial yaw", 0.0, _ANGLE),

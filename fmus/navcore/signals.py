@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from .component import Limits, boolean, integer, real
+from .component import FINITE, Limits, boolean, integer, real
 
 AXES_NED = ("n", "e", "d")
 AXES_BODY = ("x", "y", "z")
@@ -29,14 +29,25 @@ INTERVAL = Limits(0.0, 1.0)
 DTHETA = Limits(-math.pi, math.pi)
 DVEL = Limits(-1e3, 1e3)
 
+#: the position and velocity every interface carries (truth, fix, initial state, solution):
+#: (name suffix, unit, quantity, accepted range), declared once
+POSITION_FIELDS = (("lat", "rad", "geodetic latitude", LATITUDE), ("lon", "rad", "longitude", LONGITUDE),
+                   ("h", "m", "height above the WGS-84 ellipsoid", HEIGHT))
+VELOCITY_FIELDS = tuple((f"v{a}", "m/s", f"velocity {axis}", VELOCITY)
+                        for a, axis in zip(AXES_NED, ("north", "east", "down")))
+
+
+def state_ports(prefix, adjective, start=0.0, ranged=True):
+    """The Reals ``<prefix>_lat .. <prefix>_vd`` ("true latitude", "measured velocity north");
+    ``ranged=False``: finite only (a filter's estimate, which may leave the ranges)."""
+    return tuple(real(f"{prefix}_{suffix}", unit, f"{adjective} {quantity}", start,
+                      limits if ranged else FINITE)
+                 for suffix, unit, quantity, limits in POSITION_FIELDS + VELOCITY_FIELDS)
+
+
 TRUTH = (
     real("truth_time", "s", "time the truth sample is valid for", limits=TIME),
-    real("truth_lat", "rad", "true geodetic latitude", limits=LATITUDE),
-    real("truth_lon", "rad", "true longitude", limits=LONGITUDE),
-    real("truth_h", "m", "true height above the WGS-84 ellipsoid", limits=HEIGHT),
-    real("truth_vn", "m/s", "true velocity north", limits=VELOCITY),
-    real("truth_ve", "m/s", "true velocity east", limits=VELOCITY),
-    real("truth_vd", "m/s", "true velocity down", limits=VELOCITY),
+    *state_ports("truth", "true"),
     real("truth_roll", "rad", "true roll (ZYX Euler)"),
     real("truth_pitch", "rad", "true pitch (ZYX Euler)"),
     real("truth_yaw", "rad", "true yaw / heading (ZYX Euler), (-pi, pi]"),
@@ -62,12 +73,7 @@ MAG = (
 
 GNSS = (
     real("gnss_time", "s", "time the latest fix was taken", limits=TIME),
-    real("gnss_lat", "rad", "measured latitude", limits=LATITUDE),
-    real("gnss_lon", "rad", "measured longitude", limits=LONGITUDE),
-    real("gnss_h", "m", "measured height above the ellipsoid", limits=HEIGHT),
-    real("gnss_vn", "m/s", "measured velocity north", limits=VELOCITY),
-    real("gnss_ve", "m/s", "measured velocity east", limits=VELOCITY),
-    real("gnss_vd", "m/s", "measured velocity down", limits=VELOCITY),
+    *state_ports("gnss", "measured"),
     boolean("gnss_valid", "the latest fix is usable (false during outages)"),
     integer("gnss_epoch", "counter of fixes; a filter updates when it changes"),
 )
@@ -82,12 +88,7 @@ FILTER_INPUTS = IMU[:8] + GNSS
 
 _NAV = (
     real("nav_time", "s", "time the navigation solution is valid for"),
-    real("nav_lat", "rad", "estimated latitude"),
-    real("nav_lon", "rad", "estimated longitude"),
-    real("nav_h", "m", "estimated height above the ellipsoid"),
-    real("nav_vn", "m/s", "estimated velocity north"),
-    real("nav_ve", "m/s", "estimated velocity east"),
-    real("nav_vd", "m/s", "estimated velocity down"),
+    *state_ports("nav", "estimated", ranged=False),
     real("nav_roll", "rad", "estimated roll"),
     real("nav_pitch", "rad", "estimated pitch"),
     real("nav_yaw", "rad", "estimated yaw"),
