@@ -221,7 +221,7 @@ def do_step(slave, current_time, step_size):
         _fail(slave, f"internal error: {exc!r} (at t = {current_time:.6g} s)",
               traceback.format_exc())
         return False
-    for notice in component.take_notices():
+    for notice in (component.take_notices() if component.notices else ()):
         slave.log(f"{slave.instance_name}: {notice}", Fmi2Status.warning)
     return True
 

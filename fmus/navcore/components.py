@@ -22,7 +22,7 @@ from .latency import SolutionHistory
 from .magnetometer import MagnetometerModel
 from .rotations import _euler_rows, dcm_to_euler
 from .strapdown import Strapdown
-from .timing import TIME_TOLERANCE, same_time, samples_reached, time_tolerance
+from .timing import same_time, samples_reached, time_tolerance
 from .trajectory import TrajectoryGenerator, load_profile
 
 #: accepted seeds (numpy's generators take non-negative integers; FMI Integers are 32 bit)
@@ -82,8 +82,8 @@ class TrajectoryImu(Component):
     inputs = ()
     outputs = signals.TRUTH + signals.IMU + signals.MAG
     default_experiment = (0.0, 500.0, 0.01)
-    state_fields = ("generator", "errors", "magnetometer", "start_time", "n", "out")
-    derived_fields = ("dt", "mag_on", "_no_mag")
+    state_fields = ("generator", "errors", "magnetometer", "n", "out")
+    derived_fields = ("dt", "mag_on", "_no_mag", "start_time")
 
     def initialize(self, start_time):
         self.dt = self.params["imu_period"]
@@ -112,7 +112,7 @@ class TrajectoryImu(Component):
     def check_stop_time(self, stop_time):
         """Refuse a run past the profile's end unless ``extend_profile``."""
         end = self.start_time + self.generator.duration
-        if not self.params["extend_profile"] and stop_time > end + TIME_TOLERANCE * max(1.0, end):
+        if not self.params["extend_profile"] and stop_time > end + time_tolerance(self.dt, end):
             raise ParameterError(
                 f"{self.model_name}: the run ends at {stop_time:g} s, after the end of "
                 f"profile '{self.params['profile']}' at {end:g} s; stop by {end:g} s or set "
@@ -184,8 +184,8 @@ class GnssReceiver(Component):
     inputs = signals.TRUTH[:7]
     outputs = signals.GNSS + signals.GNSS_INJECTED
     default_experiment = (0.0, 500.0, 1.0)
-    state_fields = ("model", "next_fix", "n_fix", "start_time", "out", "queue")
-    derived_fields = ("interval", "delay")
+    state_fields = ("model", "next_fix", "n_fix", "out", "queue")
+    derived_fields = ("interval", "delay", "start_time")
 
     def initialize(self, start_time):
         self.delay = self.params["output_delay"]
@@ -373,6 +373,7 @@ class InsGnssFilter(Component):
         imu_time = inputs["imu_time"]
         out = self.out
         out["updated"] = False
+        integrated = False
         # a new IMU interval ends after the one already integrated: mechanize it
         if imu_time > self.nav_time + 0.5 * imu_dt and imu_dt > 0:
             begin = imu_time - imu_dt
@@ -389,6 +390,7 @@ class InsGnssFilter(Component):
                                inputs["imu_dtheta_z"]])
             dvel = np.array([inputs["imu_dvel_x"], inputs["imu_dvel_y"], inputs["imu_dvel_z"]])
             self._integrate((imu_time, dtheta, dvel, imu_dt))
+            integrated = True
             while self.pending and self.pending[0][0] <= self.nav_time + self._half_interval():
                 self._apply(self.pending.pop(0))
         epoch = inputs["gnss_epoch"]
@@ -396,7 +398,8 @@ class InsGnssFilter(Component):
             self.last_epoch = epoch
             if inputs["gnss_valid"]:
                 self._receive_fix(inputs)
-        self._write_solution()
+        if integrated or out["updated"]:   # otherwise the engine, so the solution, is unchanged
+            self._write_solution()
         return out
 
     def _integrate(self, increment):

@@ -35,6 +35,7 @@ called, imported or instantiated, so a tree from an untrusted source is only dat
 from __future__ import annotations
 
 import collections
+import functools
 from typing import Any, Dict, Tuple
 
 import numpy as np
@@ -47,6 +48,7 @@ class StateError(ValueError):
     """A state cannot be taken or restored; the message names the field and the reason."""
 
 
+@functools.lru_cache(maxsize=None)   # declarations are class attributes: one walk per class
 def declared_fields(cls) -> Tuple[Tuple[str, ...], Tuple[str, ...]]:
     """(state fields, derived fields) of ``cls``: the declarations of its MRO, in order."""
     state, derived = [], []
