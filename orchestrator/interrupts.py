@@ -28,11 +28,6 @@ def _handler(signum, frame):
     _pending["flag"] = True
 
 
-def requested() -> bool:
-    """True when a SIGINT arrived and was not yet acted on."""
-    return _pending["flag"]
-
-
 def check() -> None:
     """Raise :class:`Interrupted` if a SIGINT is pending (a no-op outside :func:`deferred`)."""
     if _pending["flag"]:
@@ -63,4 +58,4 @@ def deferred():
     check()
 
 
-__all__ = ["Interrupted", "deferred", "check", "requested"]
+__all__ = ["Interrupted", "deferred", "check"]

@@ -142,13 +142,15 @@ def filters_of(results):
 SAMPLES = ("all", "fixes")
 
 
+def time_mask(t, window):
+    """Samples of ``t`` inside the closed ``window`` (t0, t1) [s], 1e-9 s of slack; all if None."""
+    if window is None:
+        return np.ones(len(t), dtype=bool)
+    return (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
+
+
 def _in_window(e, window):
-    t = e["time"]
-    mask = e["valid"].copy()
-    if window is not None:
-        t0, t1 = window
-        mask &= (t >= t0 - 1e-9) & (t <= t1 + 1e-9)
-    return mask
+    return e["valid"] & time_mask(e["time"], window)
 
 
 def window_mask(e, window):
@@ -438,8 +440,7 @@ def update_epochs(results, filter_name, window=None, receiver_name=None, first_r
     rows = col(filter_name, "updated") > 0.5
     rows[:first_row] = False
     t = col(filter_name, "nav_time")
-    if window is not None:
-        rows &= (t >= window[0] - 1e-9) & (t <= window[1] + 1e-9)
+    rows &= time_mask(t, window)
     out = {"time": t[rows]}
     out["dof"] = (col(filter_name, "nis_dof")[rows] if "nis_dof" in names
                   else np.full(int(rows.sum()), np.nan))

@@ -27,6 +27,8 @@ import zipfile
 from pathlib import Path
 from typing import Optional
 
+from .results import atomic_write
+
 ROOT = Path(__file__).resolve().parent.parent
 SOURCES = ROOT / "native" / "vendor" / "pythonfmu-export"
 CACHE = ROOT / "fmus" / "dist" / "native"
@@ -129,10 +131,8 @@ def build_library() -> Path:
         built = work / LIBRARY_NAME
         target = cached_library()
         target.parent.mkdir(parents=True, exist_ok=True)
-        fd, partial = tempfile.mkstemp(dir=target.parent, prefix=".lib.", suffix=".part")
-        os.close(fd)
-        shutil.copyfile(built, partial)
-        os.replace(partial, target)
+        with open(built, "rb") as src:
+            atomic_write(target, lambda f: shutil.copyfileobj(src, f), binary=True)
     return target
 
 

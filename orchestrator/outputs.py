@@ -29,17 +29,12 @@ from pathlib import Path
 from typing import Iterator
 
 from .errors import NavfmuError
+from .results import _umask
 
 #: marker file listing the outputs of the command that wrote the folder
 MARKER = ".navfmu-outputs"
 #: file kinds an output folder written before the marker existed may hold
 OUTPUT_SUFFIXES = (".csv", ".npz", ".json", ".png", ".parquet")
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def _is_output_folder(path: Path) -> bool:
