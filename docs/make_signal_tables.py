@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from navcore import ahrs_components, components, signals
+from navcore.filter_component import InsGnssFilter
 
 HEADER = """# Signals and parameters
 
@@ -52,7 +53,7 @@ def render():
     text += _table("INS/GNSS filter inputs (every filter)", signals.FILTER_INPUTS, ranges=True)
     text += _table("INS/GNSS filter outputs (every filter)", signals.FILTER_OUTPUTS)
     for name, cls in components.REGISTRY.items():
-        if issubclass(cls, components.InsGnssFilter) and cls is not components.Kf:
+        if issubclass(cls, InsGnssFilter) and cls is not components.Kf:
             extra = tuple(cls.extra_outputs)
             if extra:
                 text += _table(f"{name}: additional outputs", extra)
@@ -66,7 +67,7 @@ def render():
     text += _table("INS/GNSS filter parameters (Kf; every filter has them)",
                    components.Kf.parameters, True)
     for name, cls in components.REGISTRY.items():
-        if issubclass(cls, components.InsGnssFilter) and cls is not components.Kf:
+        if issubclass(cls, InsGnssFilter) and cls is not components.Kf:
             extra = tuple(cls.extra_parameters)
             if extra:
                 text += _table(f"{name}: additional parameters", extra, True)

@@ -64,9 +64,9 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 from navcore import state_format
-from navcore.component import NavcoreError, RefusedCall, numerical_failure
-from navcore.state import StateError, capture_value, check_kind
-from navcore.state_format import StateFormatError
+from navcore.errors import (NavcoreError, RefusedCall, StateError, StateFormatError,
+                            numerical_failure)
+from navcore.state import capture_value, check_kind
 
 _DEG = 0.017453292519943295
 _G0 = 9.80665

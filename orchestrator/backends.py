@@ -528,7 +528,7 @@ class FmuInstance(Instance):
 def _component_error_types() -> Tuple[type, ...]:
     """The exceptions a component raises for user errors (navcore's NavcoreError)."""
     try:
-        from navcore.component import NavcoreError
+        from navcore.errors import NavcoreError
     except ImportError:  # the master also runs components that do not come from navcore
         return ()
     return (NavcoreError,)
@@ -536,7 +536,7 @@ def _component_error_types() -> Tuple[type, ...]:
 
 def _numerical_failure(exc: Exception) -> str:
     try:
-        from navcore.component import numerical_failure
+        from navcore.errors import numerical_failure
     except ImportError:
         return f"the computation failed numerically ({exc!r})"
     return numerical_failure(exc)

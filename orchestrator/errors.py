@@ -1,14 +1,13 @@
 """Errors a user of the master can act on.
 
-Every error the master raises on purpose derives from :class:`NavfmuError`; the command line
-prints its message (no traceback) and exits with a non-zero status.  Any other exception is a
-bug and keeps its traceback.
+Every error the master raises on purpose derives from :class:`NavfmuError`, the root of the
+one hierarchy, defined in :mod:`navcore.errors` (navcore ships inside the FMUs and must not
+import the master); the command line prints its message (no traceback) and exits with a
+non-zero status.  Any other exception is a bug and keeps its traceback.
 """
 from __future__ import annotations
 
-
-class NavfmuError(Exception):
-    """Base class of the user-facing errors; the message says what is wrong and where."""
+from navcore.errors import NavfmuError
 
 
 class SspError(NavfmuError):

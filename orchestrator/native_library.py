@@ -27,6 +27,7 @@ import zipfile
 from pathlib import Path
 from typing import Optional
 
+from .errors import NavfmuError
 from .results import atomic_write
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -167,5 +168,5 @@ def fmu_has_patched_library(fmu: Path) -> bool:
         return member in z.namelist() and MARKER in z.read(member)
 
 
-class NativeBuildError(RuntimeError):
+class NativeBuildError(NavfmuError):
     """The patched library could not be built."""

@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 from navcore import components, signals
-from navcore.adaptive_filters import NewtonRobustKf, UNUSABLE_VARIANCE_FACTOR, masked_update
+from navcore.adaptive_filters import UNUSABLE_VARIANCE_FACTOR, NewtonRobustKfEngine, masked_update
+from navcore.adaptive_laws import CHI2_THRESHOLD_PAPER_004
 from navcore.component import ParameterError
-from navcore.ins_gnss_kf import ErrorStateKf, KfConfig
+from navcore.ins_gnss_kf import KfConfig, KfEngine
 from navcore.strapdown import Strapdown
 
 from scenario_runner import MODELS, rms_table, run_filter, simulate_sensors
@@ -221,7 +222,8 @@ def test_newton_extrapolated_variance_and_first_epoch():
                       accel_bias_sigma=0.0, accel_bias_tau=0.0,
                       r_sigma=np.array([5, 5, 5, 0.3, 0.3, 0.3]))
     nav = Strapdown.from_euler(0.7, 2.0, 100.0, np.zeros(3), 0.0, 0.0, 0.0)
-    kf = NewtonRobustKf(config, nav)
+    kf = NewtonRobustKfEngine(config, nav, chi2_threshold=CHI2_THRESHOLD_PAPER_004,
+                              newton_order=4, replacement_variance="propagated")
     r0 = np.diag(kf.R0)
     # first epoch, a gross error on north position: nothing to extrapolate from, the
     # component is left out of the update (and the others are used)
@@ -248,7 +250,7 @@ def test_masked_update_equals_full_update_when_all_kept():
     config = KfConfig(p0=np.ones(15), gyro_arw=0.0, accel_vrw=0.0, gyro_bias_sigma=0.0,
                       gyro_bias_tau=0.0, accel_bias_sigma=0.0, accel_bias_tau=0.0,
                       r_sigma=np.sqrt(np.diag(R)))
-    kf = ErrorStateKf(config, Strapdown.from_euler(0.7, 2.0, 0.0, np.zeros(3), 0, 0, 0))
+    kf = KfEngine(config, Strapdown.from_euler(0.7, 2.0, 0.0, np.zeros(3), 0, 0, 0))
     dx, P_full, _, _, _ = kf.kalman_update(P, z, R)
     dx_m, P_m = masked_update(P, z, R, np.ones(6, dtype=bool))
     np.testing.assert_allclose(dx_m, dx, rtol=1e-12, atol=1e-14)

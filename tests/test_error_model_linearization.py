@@ -20,7 +20,7 @@ import numpy as np
 
 from navcore import earth
 from navcore.error_model import ATT, N_STATES, POS, VEL, system_matrix
-from navcore.ins_gnss_kf import ErrorStateKf, KfConfig
+from navcore.ins_gnss_kf import KfConfig, KfEngine
 from navcore.rotations import euler_to_dcm, rotvec_to_dcm
 from navcore.strapdown import Strapdown
 from navcore.trajectory import TrajectoryGenerator
@@ -98,7 +98,7 @@ def test_accumulated_process_noise_matches_noisy_strapdown_runs():
     cfg = KfConfig(p0=np.zeros(N_STATES), gyro_arw=arw, accel_vrw=vrw, gyro_bias_sigma=0.0,
                    gyro_bias_tau=0.0, accel_bias_sigma=0.0, accel_bias_tau=0.0,
                    r_sigma=np.ones(3), measurement="position")
-    kf = ErrorStateKf(cfg, Strapdown(*state))
+    kf = KfEngine(cfg, Strapdown(*state))
     ref = Strapdown(*state)
     for dtheta, dvel in steps:
         kf.propagate(dtheta, dvel, DT)

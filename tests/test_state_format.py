@@ -16,8 +16,8 @@ import pytest
 
 from navcore import components, state, state_format
 from navcore.components import REGISTRY
-from navcore.state import StateError
-from navcore.state_format import MAGIC, StateFormatError
+from navcore.errors import StateError, StateFormatError
+from navcore.state_format import MAGIC
 
 LAT = math.radians(40.0)
 H = 0.01

@@ -1,21 +1,21 @@
-"""Adaptive and robust INS/GNSS filters of papers 001 and 004, built on :class:`ErrorStateKf`.
+"""Adaptive and robust INS/GNSS filters of papers 001 and 004, built on :class:`KfEngine`.
 
 Every engine here is the baseline 15-state closed-loop error-state filter of
 :mod:`navcore.ins_gnss_kf` with a different measurement update; propagation, feedback and the
 measurement ``z = INS - GNSS`` are shared.  The adaptation laws are the pure functions of
 :mod:`navcore.adaptive_laws` (equation numbers below refer to the papers):
 
-* :class:`SageHusaFadingKf` -- simplified Sage-Husa R estimator (paper 001 eq. 9) combined
+* :class:`SageHusaFadingEngine` -- simplified Sage-Husa R estimator (paper 001 eq. 9) combined
   with the fading-memory filter (eqs. 10-12): the combination of paper 001's reference [9]
   and its Fig. 4 ("Sage-Husa + fading").
-* :class:`IakfKf` -- paper 001's improved adaptive filter: the above plus the outlier
+* :class:`IakfEngine` -- paper 001's improved adaptive filter: the above plus the outlier
   compression of the innovation (eqs. 13-14).
-* :class:`NewtonRobustKf` -- paper 004: per-observation chi-square test (threshold 6.635)
+* :class:`NewtonRobustKfEngine` -- paper 004: per-observation chi-square test (threshold 6.635)
   and replacement of a failed observation by the Newton forward extrapolation of the
   previous observations.
-* :class:`Igg3RobustKf` -- IGG-III equivalent weights on the standardized innovations (the
+* :class:`Igg3RobustKfEngine` -- IGG-III equivalent weights on the standardized innovations (the
   "equivalent weight" method paper 004 lists in its section 1.2; not a paper's own filter).
-* :class:`InsOnlyKf` -- no measurement feedback at all (paper 004's "INS only" curves).
+* :class:`InsOnlyEngine` -- no measurement feedback at all (paper 004's "INS only" curves).
 
 In closed loop the predicted error state is zero, so the innovation is ``v = z`` (paper 001
 eq. 5 with x_{k,k-1} = 0).  All engines return an :class:`UpdateResult` (NIS, r_scale,
@@ -30,25 +30,15 @@ from collections import deque
 import numpy as np
 
 from . import adaptive_laws as laws
-from .component import ParameterError
 from .error_model import N_STATES
-from .ins_gnss_kf import ErrorStateKf, UpdateResult, nis_of
-
-#: default reserve coefficient gamma of the divergence test (paper 001 eq. 11), see
-#: :class:`SageHusaFadingKf` for why 10 and not the paper's strictest 1.
-DEFAULT_RESERVE_GAMMA = 10.0
-#: default forgetting factor b of the Sage-Husa estimator (paper 001: 0.95-0.99)
-DEFAULT_FORGETTING_FACTOR = 0.95
-#: default significance alpha of the IAKF outlier gate (paper 001: 0.05 or 0.02)
-DEFAULT_OUTLIER_ALPHA = 0.02
-
+from .ins_gnss_kf import KfEngine, UpdateResult, nis_of
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
 
     The measurement matrix is ``[I_m 0]`` (z = INS - GNSS of the first m states), so the
     rows of the kept components select states directly.  Joseph form, like
-    :meth:`ErrorStateKf.kalman_update`.  Returns ``(dx, P)``; with nothing kept, ``dx = 0``
+    :meth:`KfEngine.kalman_update`.  Returns ``(dx, P)``; with nothing kept, ``dx = 0``
     and ``P = P_pred`` (a pure prediction).
     """
     idx = np.flatnonzero(keep)
@@ -65,7 +55,7 @@ def masked_update(P_pred, z, R, keep):
 
 
 # ------------------------------------------------------------------------------------------
-class SageHusaFadingKf(ErrorStateKf):
+class SageHusaFadingEngine(KfEngine):
     """Simplified Sage-Husa R estimation + fading memory (paper 001, secs. 1.1-1.2).
 
     One update (``v = z``, closed loop)::
@@ -117,18 +107,9 @@ class SageHusaFadingKf(ErrorStateKf):
     state_fields = ("R", "sage_husa_index")
     derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor", "r_min")
 
-    def __init__(self, config, nav, forgetting_factor=DEFAULT_FORGETTING_FACTOR,
-                 reserve_gamma=DEFAULT_RESERVE_GAMMA,
-                 r_floor_fraction=laws.DEFAULT_R_FLOOR_FRACTION, max_fading_factor=None):
+    def __init__(self, config, nav, *, forgetting_factor, reserve_gamma, r_floor_fraction,
+                 max_fading_factor):
         super().__init__(config, nav)
-        # validate once here (the laws validate again per call, but a bad value should be
-        # reported when the filter is built, not at the first GNSS fix)
-        laws.sage_husa_weight(1, forgetting_factor)
-        if not (reserve_gamma > 0.0) or not math.isfinite(reserve_gamma):
-            raise ParameterError(f"reserve_gamma must be finite and > 0, got {reserve_gamma}")
-        if max_fading_factor is not None and not (max_fading_factor >= 1.0
-                                                  and math.isfinite(max_fading_factor)):
-            raise ParameterError(f"max_fading_factor must be >= 1, got {max_fading_factor}")
         self.forgetting_factor = float(forgetting_factor)
         self.reserve_gamma = float(reserve_gamma)
         self.max_fading_factor = max_fading_factor
@@ -136,7 +117,7 @@ class SageHusaFadingKf(ErrorStateKf):
         self.R = self.R0.copy()
         self.sage_husa_index = 0
 
-    # -- pieces shared with IakfKf ---------------------------------------------------------
+    # -- pieces shared with IakfEngine ---------------------------------------------------------
     def faded_prediction(self, v, p_prop, q_acc):
         """(lambda, P_pred): divergence test eq. 11, fading factor eq. 12, prediction eq. 10."""
         m = self.m
@@ -174,7 +155,7 @@ class SageHusaFadingKf(ErrorStateKf):
 
 
 # ------------------------------------------------------------------------------------------
-class IakfKf(SageHusaFadingKf):
+class IakfEngine(SageHusaFadingEngine):
     """Paper 001's improved adaptive Kalman filter: Sage-Husa + fading + outlier compression.
 
     Order of operations (paper 001 sec. 2; its flow chart, Fig. 1, is missing from our copy,
@@ -192,7 +173,7 @@ class IakfKf(SageHusaFadingKf):
     2. ``v <- Y v`` (eq. 13).
     3. Divergence test and fading factor (eqs. 11-12) on the compressed innovation, faded
        prediction eq. 10.  Without an outlier (Y = 1) the filter is exactly
-       :class:`SageHusaFadingKf`, as the paper says ("退化为普通简化的 Sage-Husa").
+       :class:`SageHusaFadingEngine`, as the paper says ("退化为普通简化的 Sage-Husa").
     4. Kalman update with the compressed innovation and R_hat, then R_hat by eq. 9 from the
        same compressed innovation ("用修正的新息去估计量测方差阵 R_k 和当前时刻的状态").
 
@@ -210,9 +191,9 @@ class IakfKf(SageHusaFadingKf):
     state_fields = ("compression", "tau")
     derived_fields = ("outlier_gate", "outlier_alpha")
 
-    def __init__(self, config, nav, outlier_alpha=DEFAULT_OUTLIER_ALPHA, **kwargs):
+    def __init__(self, config, nav, *, outlier_alpha, **kwargs):
         super().__init__(config, nav, **kwargs)
-        self.outlier_gate = laws.chi2_threshold(outlier_alpha, self.m)  # validates alpha
+        self.outlier_gate = laws.chi2_threshold(outlier_alpha, self.m)
         self.outlier_alpha = float(outlier_alpha)
         self.compression = 1.0
         self.tau = 0.0
@@ -238,15 +219,15 @@ class IakfKf(SageHusaFadingKf):
 
 
 # ------------------------------------------------------------------------------------------
-#: NewtonRobustKf: a replacement whose error variance reaches this multiple of R_ii (1000
+#: NewtonRobustKfEngine: a replacement whose error variance reaches this multiple of R_ii (1000
 #: sigma) carries no information and is left out of the update (first epoch, or a run of
 #: faults so long that the history holds only extrapolations of extrapolations)
 UNUSABLE_VARIANCE_FACTOR = 1e6
-#: how the R of a replaced observation is set (NewtonRobustKf ``replacement_variance``)
+#: how the R of a replaced observation is set (NewtonRobustKf's ``replacement_variance``)
 REPLACEMENT_VARIANCES = ("propagated", "nominal")
 
 
-class NewtonRobustKf(ErrorStateKf):
+class NewtonRobustKfEngine(KfEngine):
     """Paper 004: per-observation chi-square test + Newton extrapolation of failed observations.
 
     Each update:
@@ -296,16 +277,8 @@ class NewtonRobustKf(ErrorStateKf):
                     "n_rejected")
     derived_fields = ("chi2_threshold", "newton_order", "replacement_variance")
 
-    def __init__(self, config, nav, chi2_threshold=laws.CHI2_THRESHOLD_PAPER_004,
-                 newton_order=4, replacement_variance="propagated"):
+    def __init__(self, config, nav, *, chi2_threshold, newton_order, replacement_variance):
         super().__init__(config, nav)
-        if not (chi2_threshold > 0.0) or not math.isfinite(chi2_threshold):
-            raise ParameterError(f"chi2_threshold must be finite and > 0, got {chi2_threshold}")
-        if int(newton_order) != newton_order or newton_order < 0:
-            raise ParameterError(f"newton_order must be an integer >= 0, got {newton_order}")
-        if replacement_variance not in REPLACEMENT_VARIANCES:
-            raise ParameterError(f"replacement_variance = {replacement_variance!r}; expected one "
-                                 f"of {REPLACEMENT_VARIANCES}")
         self.chi2_threshold = float(chi2_threshold)
         self.newton_order = int(newton_order)
         self.replacement_variance = replacement_variance
@@ -323,7 +296,7 @@ class NewtonRobustKf(ErrorStateKf):
         self.n_rejected = 0
 
     def propagate(self, dtheta, dvel, dt):
-        """As :meth:`ErrorStateKf.propagate`, counting time for the history's epoch index."""
+        """As :meth:`KfEngine.propagate`, counting time for the history's epoch index."""
         super().propagate(dtheta, dvel, dt)
         self.time += dt
 
@@ -399,7 +372,7 @@ class NewtonRobustKf(ErrorStateKf):
 
 
 # ------------------------------------------------------------------------------------------
-class Igg3RobustKf(ErrorStateKf):
+class Igg3RobustKfEngine(KfEngine):
     """IGG-III equivalent-weight robust filter (the "等价权函数法" of paper 004 sec. 1.2).
 
     Per component, the standardized innovation ``u_i = v_i / sqrt(S_ii)`` with
@@ -415,9 +388,8 @@ class Igg3RobustKf(ErrorStateKf):
     state_fields = ("weights", "n_rejected")
     derived_fields = ("igg_k0", "igg_k1")
 
-    def __init__(self, config, nav, igg_k0=1.5, igg_k1=3.0):
+    def __init__(self, config, nav, *, igg_k0, igg_k1):
         super().__init__(config, nav)
-        laws.igg3_weight(0.0, igg_k0, igg_k1)  # validates k0, k1
         self.igg_k0 = float(igg_k0)
         self.igg_k1 = float(igg_k1)
         self.weights = np.ones(self.m)
@@ -448,7 +420,7 @@ class Igg3RobustKf(ErrorStateKf):
 
 
 # ------------------------------------------------------------------------------------------
-class InsOnlyKf(ErrorStateKf):
+class InsOnlyEngine(KfEngine):
     """Free inertial navigation: the mechanization with no measurement feedback.
 
     :meth:`update` only evaluates the innovation against the propagated covariance (for

@@ -21,8 +21,8 @@ import numpy as np
 
 from . import signals
 from .ahrs import FuzzyAdaptiveR, UkfAhrsEngine, triad_attitude
-from .component import (Component, InputError, Limits, ParameterError, integer, real,
-                        string)
+from .component import Component, Limits, integer, real, string
+from .errors import DivergenceError, ParameterError, StepSizeError
 from .fuzzy import FEET, OUTPUT_VERTICES, FuzzyRScale
 from .imu_errors import DPH, DPSH
 from .rotations import euler_to_dcm
@@ -116,7 +116,7 @@ class AhrsFilter(Component):
             return out
         begin = imu_time - imu_dt
         if self.engine.started and not same_time(begin, self.nav_time, imu_dt):
-            raise InputError(
+            raise StepSizeError(
                 f"{self.model_name}: input 'imu_time' = {imu_time!r} s with 'imu_dt' = "
                 f"{imu_dt!r} s starts at {begin!r} s, but the last IMU interval integrated "
                 f"ended at nav_time = {self.nav_time!r} s; step the filter at least as often "
@@ -161,8 +161,8 @@ class AhrsFilter(Component):
             out[f"nav_bg_{a}"] = float(engine.gyro_bias[i])
         out["r_scale_accel"], out["r_scale_mag"] = (float(s) for s in engine.r_scale)
         if not all(math.isfinite(out[k]) for k in ("nav_roll", "nav_pitch", "nav_yaw")):
-            raise InputError(f"{self.model_name}: the attitude became non-finite at "
-                             f"t = {self.nav_time} s (filter diverged)")
+            raise DivergenceError(f"{self.model_name}: the attitude became non-finite at "
+                                  f"t = {self.nav_time} s (filter diverged)")
 
 
 class UkfAhrs(AhrsFilter):
@@ -180,11 +180,11 @@ class FuzzyUkfAhrs(AhrsFilter):
     model_name = "FuzzyUkfAhrs"
     description = ("Fuzzy adaptive attitude UKF (paper 003): the UkfAhrs whose accelerometer "
                    "and magnetometer R blocks are scaled at every update by a Mamdani fuzzy "
-                   "inference on the innovation covariance mismatch (eqs. 15-19, 25); the "
-                   "membership feet are parameters (GA-tunable).")
+                   "inference on the innovation covariance mismatch (paper 003 eqs. 15-19, 25); "
+                   "the membership feet are parameters (GA-tunable).")
     extra_parameters = (
-        integer("fuzzy_window", "window N of the measured innovation covariance (eq. 17)", 20,
-                Limits(2, 100000)),
+        integer("fuzzy_window", "window N of the measured innovation covariance (paper 003 "
+                "eq. 17)", 20, Limits(2, 100000)),
         real("r_scale_min", "", "smallest R scale factor (times the nominal R)", 0.5,
              Limits(0.0, 1.0, low_open=True)),
         real("r_scale_max", "", "largest R scale factor (times the nominal R)", 1.0e5,
@@ -215,5 +215,3 @@ class FuzzyUkfAhrs(AhrsFilter):
         out["fuzzy_e_accel"], out["fuzzy_e_mag"] = (float(v) for v in adaptive.e)
         out["fuzzy_de_accel"], out["fuzzy_de_mag"] = (float(v) for v in adaptive.de)
 
-
-REGISTRY = {cls.model_name: cls for cls in (UkfAhrs, FuzzyUkfAhrs)}

@@ -47,7 +47,7 @@ model inside a component):
 
 * add it to ``state_fields`` if stepping changes it, to ``derived_fields`` if it is a pure
   function of the parameters; ``get_state`` refuses an object with an undeclared attribute
-  (:class:`~navcore.state.StateError` naming it), and ``tests/test_state_format.py`` walks
+  (:class:`~navcore.errors.StateError` naming it), and ``tests/test_state_format.py`` walks
   every component of ``components.REGISTRY`` after stepping it;
 * a derived attribute must come out bit-identical from ``__init__`` + ``start`` (the same
   test compares every attribute of a restored component with the original);
@@ -84,26 +84,8 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Dict, List, Tuple
 
 from . import state as _state
+from .errors import InputError, ParameterError, RefusedCall, StateError
 from .timing import time_tolerance
-
-
-class NavcoreError(ValueError):
-    """Base class of the errors a user can act on."""
-
-
-class ParameterError(NavcoreError):
-    """A parameter has an unusable value; the message names the parameter."""
-
-
-class InputError(NavcoreError):
-    """An input has an unusable value (NaN, inf, out of range); the message names it."""
-
-
-def numerical_failure(exc: Exception) -> str:
-    """The message for an arithmetic error (overflow, math domain) escaping a component's
-    step: its state diverged, which declared ranges alone cannot rule out."""
-    return (f"the computation failed numerically ({exc!r}): the state diverged; the inputs or "
-            "parameters are outside what the component can follow")
 
 
 @dataclass(frozen=True)
@@ -136,9 +118,6 @@ class Limits:
 
 #: any finite value
 FINITE = Limits()
-class RefusedCall(NavcoreError):
-    """A call the component refused before changing anything (a communication point that
-    jumps, a step size <= 0): the caller may go on with a legal call."""
 
 
 @dataclass(frozen=True)
@@ -306,20 +285,20 @@ class Component(ABC):
     @classmethod
     def from_state(cls, state: Any) -> "Component":
         """A component built from the saved parameters and started at the saved time, with
-        the saved fields written into it.  Raises :class:`~navcore.state.StateError` (or
+        the saved fields written into it.  Raises :class:`~navcore.errors.StateError` (or
         :class:`ParameterError` for unusable parameters) and builds nothing on any mismatch."""
         where = cls.model_name or cls.__name__
         if not (isinstance(state, dict) and set(state) == {"params", "initial_time", "fields"}):
-            raise _state.StateError(f"{where}: a component state has the keys params, "
+            raise StateError(f"{where}: a component state has the keys params, "
                                     "initial_time and fields")
         params, start_time = state["params"], state["initial_time"]
         names = [p.name for p in cls.parameters]
         if not isinstance(params, dict) or sorted(params) != sorted(names):
-            raise _state.StateError(f"{where}: the state's parameters are not those of {where}")
+            raise StateError(f"{where}: the state's parameters are not those of {where}")
         for port in cls.parameters:
             _state.check_kind(port.default(), params[port.name], f"{where}.{port.name}")
         if type(start_time) is not float or not math.isfinite(start_time):
-            raise _state.StateError(f"{where}: the state's start time is not a finite float")
+            raise StateError(f"{where}: the state's start time is not a finite float")
         component = cls(**params)
         component.start(start_time)
         _state.restore(component, state["fields"], where)

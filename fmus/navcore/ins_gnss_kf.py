@@ -15,7 +15,7 @@ because the adaptive filters need the two parts separately (the fading factor of
 eqs. 10 and 12, scales only the propagated ``P_{k-1}`` part).
 
 The update is the standard one (paper 001, eqs. 4, 5, 7, 8) in Joseph form; subclasses change
-:meth:`ErrorStateKf.update` (adaptive R, fading memory, outlier handling) and keep the rest.
+:meth:`KfEngine.update` (adaptive R, fading memory, outlier handling) and keep the rest.
 The measurement is ``z = INS - GNSS`` of position in NED metres and, optionally, velocity.
 """
 from __future__ import annotations
@@ -60,7 +60,7 @@ class UpdateResult:
     outlier: bool = False
 
 
-class ErrorStateKf:
+class KfEngine:
     """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
 
     state_fields = ("nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates",

@@ -5,7 +5,7 @@ that passes outputs one communication step late (Jacobi exchange, as libcosim do
 taken at ``gnss_time = 1.0`` by a 1 Hz receiver reaches the filter at t = 2.0).  The filters
 of :mod:`navcore.components` apply every fix at the IMU epoch nearest its ``gnss_time``
 (within half an IMU interval; the INS solution is carried to ``gnss_time`` by its velocity
-over that fraction, see :meth:`navcore.ins_gnss_kf.ErrorStateKf.measurement`):
+over that fraction, see :meth:`navcore.ins_gnss_kf.KfEngine.measurement`):
 
 * a fix taken at the current epoch is applied at once (the same arithmetic as a filter
   without history);

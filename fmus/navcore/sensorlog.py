@@ -50,7 +50,7 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
-from .component import ParameterError
+from .errors import LogError
 
 #: largest accepted log file [bytes] (about 10 h of 200 Hz IMU data)
 MAX_FILE_BYTES = 1 << 30
@@ -79,10 +79,6 @@ COLUMNS = {IMU_FILE: IMU_COLUMNS, GNSS_FILE: GNSS_COLUMNS, TRUTH_FILE: TRUTH_COL
 OPTIONAL_GROUPS = {IMU_FILE: (), TRUTH_FILE: (),
                    GNSS_FILE: (("vn", "ve", "vd"), ("std_n", "std_e", "std_d"), ("outlier",))}
 FLAGS = ("valid", "outlier")
-
-
-class LogError(ParameterError):
-    """A sensor log breaks a rule of the format; the message names the file and line."""
 
 
 @dataclass

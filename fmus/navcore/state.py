@@ -6,7 +6,7 @@ state and which are rebuilt from the parameters::
     class Strapdown:
         state_fields = ("lat", "lon", "h", "v_ned", "C_bn", "_v_prev", ...)
 
-    class ErrorStateKf:
+    class KfEngine:
         state_fields = ("nav", "P", "gyro_bias", ...)      # nav: a declared object itself
         derived_fields = ("config", "q_density", "R0", "m", "H")
 
@@ -40,12 +40,10 @@ from typing import Any, Dict, Tuple
 
 import numpy as np
 
+from .errors import StateError
+
 #: dtypes a state array may have (stored little-endian)
 ARRAY_DTYPES = (np.dtype("<f8"), np.dtype("<i8"), np.dtype("|b1"))
-
-
-class StateError(ValueError):
-    """A state cannot be taken or restored; the message names the field and the reason."""
 
 
 @functools.lru_cache(maxsize=None)   # declarations are class attributes: one walk per class

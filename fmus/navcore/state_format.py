@@ -45,6 +45,8 @@ from typing import Any, Tuple
 
 import numpy as np
 
+from .errors import StateFormatError
+
 from .state import ARRAY_DTYPES
 
 MAGIC = b"navfmu-fmu-state\n"
@@ -59,10 +61,6 @@ MAX_DEPTH = 48
 MAX_INT_BITS = 256
 _HEADER_KEYS = ("build", "model", "payload_sha256", "payload_size", "version")
 _ARRAY_DTYPES = {d.str: d for d in ARRAY_DTYPES}
-
-
-class StateFormatError(ValueError):
-    """A serialized state is refused; the message says why."""
 
 
 Identity = Tuple[str, str]  # (model name, build hash)

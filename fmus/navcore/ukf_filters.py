@@ -1,8 +1,8 @@
 """Unscented INS/GNSS error-state filters of paper 000 (Yang et al. 2018): UKF, CTFA-UKF, IMM-UKF.
 
-All three share the interface of :class:`navcore.ins_gnss_kf.ErrorStateKf` (``propagate``,
+All three share the interface of :class:`navcore.ins_gnss_kf.KfEngine` (``propagate``,
 ``measurement``, ``update``, ``covariance_diagonal``, ``nav``, ``gyro_bias``, ``accel_bias``,
-``m``, ``H``, ``R0``, ``config``) so the component shell of :mod:`navcore.components` drives them
+``m``, ``H``, ``R0``, ``config``) so the component shell of :mod:`navcore.filter_component` drives them
 unchanged.
 
 Nominal navigation and error state
@@ -85,16 +85,13 @@ import math
 import numpy as np
 
 from . import earth
-from .component import ParameterError
 from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from .error_model import ATT, BA, BG, N_STATES, POS, VEL
 from .imm import ImmBank
-from .ins_gnss_kf import ErrorStateKf, UpdateResult
+from .ins_gnss_kf import KfEngine, UpdateResult
 from .strapdown import _gravity, _radii
 from .unscented import UnscentedKalmanFilter
 
-#: default UKF prediction interval [s] (see the module docstring)
-DEFAULT_PREDICT_INTERVAL = 0.1
 #: tolerance on accumulated time when deciding that a prediction interval is complete [s]
 _TIME_EPS = 1e-9
 
@@ -211,13 +208,13 @@ def discrete_process_noise(q_density, T):
     return Q
 
 
-class UkfEngine(ErrorStateKf):
+class UkfEngine(KfEngine):
     """15-state INS/GNSS UKF with the nonlinear error model of the module docstring.
 
     Paper 000's plain "UKF" (fixed Q): eqs. 11-23 on the error model above, position measurement
     eqs. 3-4, closed-loop feedback.  ``predict_interval`` [s] is the UKF prediction interval;
-    ``alpha``, ``beta``, ``kappa`` the scaled-UT parameters (eqs. 11-13; defaults 1, 2, 0, see
-    navcore.unscented).  ``q_scale`` multiplies the configured process noise density (the
+    ``alpha``, ``beta``, ``kappa`` the scaled-UT parameters (eqs. 11-13; the components'
+    defaults 1, 2, 0, see navcore.unscented).  ``q_scale`` multiplies the configured process noise density (the
     adaptive subclasses change it between predictions).
     """
 
@@ -225,12 +222,8 @@ class UkfEngine(ErrorStateKf):
                     "_sum_C", "_sum_dv")
     derived_fields = ("predict_interval", "alpha", "beta", "kappa")
 
-    def __init__(self, config, nav, predict_interval=DEFAULT_PREDICT_INTERVAL, alpha=1.0,
-                 beta=2.0, kappa=0.0):
+    def __init__(self, config, nav, *, predict_interval, alpha, beta, kappa):
         super().__init__(config, nav)
-        if not (math.isfinite(predict_interval) and predict_interval >= 0.0):
-            raise ParameterError(f"UkfEngine: 'ukf_predict_interval' must be >= 0, got "
-                                 f"{predict_interval}")
         self.predict_interval = float(predict_interval)
         self.alpha, self.beta, self.kappa = float(alpha), float(beta), float(kappa)
         self.ukf = self._new_ukf()
@@ -346,11 +339,8 @@ class CtfaUkfEngine(UkfEngine):
     state_fields = ("schedule", "chi2")
     derived_fields = ("q_max_scale",)
 
-    def __init__(self, config, nav, q_max_scale=10.0, t1=0.0, t2=0.0, pass_decay=1.0,
-                 **kwargs):
+    def __init__(self, config, nav, *, q_max_scale, t1, t2, pass_decay, **kwargs):
         super().__init__(config, nav, **kwargs)
-        if not (math.isfinite(q_max_scale) and q_max_scale >= 1.0):
-            raise ParameterError(f"CtfaUkfEngine: 'q_max_scale' must be >= 1, got {q_max_scale}")
         if self.m == 3:
             d1, d2 = PAPER_T1, PAPER_T2
         else:
@@ -387,14 +377,10 @@ class ImmUkfEngine(UkfEngine):
     state_fields = ("bank",)
     derived_fields = ("q_scales",)
 
-    def __init__(self, config, nav, q_scales=(1.0, 10.0), p_stay=0.95, **kwargs):
+    def __init__(self, config, nav, *, q_scales, p_stay, **kwargs):
         super().__init__(config, nav, **kwargs)
         q_scales = [float(s) for s in q_scales]
         r = len(q_scales)
-        if r < 1 or any(not (math.isfinite(s) and s > 0.0) for s in q_scales):
-            raise ParameterError(f"ImmUkfEngine: model Q scales must be > 0, got {q_scales}")
-        if not (0.0 <= p_stay <= 1.0):
-            raise ParameterError(f"ImmUkfEngine: 'imm_p_stay' must be in [0, 1], got {p_stay}")
         if r == 1:
             Pi = np.ones((1, 1))
         else:
