@@ -1,4 +1,4 @@
-"""FMU slave 'CtfaUkf': a thin FMI shell over navcore.components.CtfaUkf (see fmushell.py)."""
+"""FMU slave 'CtfaUkf': a thin FMI shell over navcore.components.CtfaUkf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

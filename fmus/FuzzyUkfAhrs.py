@@ -1,4 +1,4 @@
-"""FMU slave 'FuzzyUkfAhrs': a thin FMI shell over navcore.ahrs_components.FuzzyUkfAhrs (see fmushell.py)."""
+"""FMU slave 'FuzzyUkfAhrs': a thin FMI shell over navcore.ahrs_components.FuzzyUkfAhrs (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

@@ -1,4 +1,4 @@
-"""FMU slave 'GnssReceiver': a thin FMI shell over navcore.components.GnssReceiver (see fmushell.py)."""
+"""FMU slave 'GnssReceiver': a thin FMI shell over navcore.components.GnssReceiver (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

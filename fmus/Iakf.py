@@ -1,4 +1,4 @@
-"""FMU slave 'Iakf': a thin FMI shell over navcore.components.Iakf (see fmushell.py)."""
+"""FMU slave 'Iakf': a thin FMI shell over navcore.components.Iakf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

@@ -1,4 +1,4 @@
-"""FMU slave 'Igg3RobustKf': a thin FMI shell over navcore.components.Igg3RobustKf (see fmushell.py)."""
+"""FMU slave 'Igg3RobustKf': a thin FMI shell over navcore.components.Igg3RobustKf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

@@ -1,4 +1,4 @@
-"""FMU slave 'ImmUkf': a thin FMI shell over navcore.components.ImmUkf (see fmushell.py)."""
+"""FMU slave 'ImmUkf': a thin FMI shell over navcore.components.ImmUkf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

@@ -1,4 +1,4 @@
-"""FMU slave 'ImuGnssReplay': a thin FMI shell over navcore.replay.ImuGnssReplay (see fmushell.py)."""
+"""FMU slave 'ImuGnssReplay': a thin FMI shell over navcore.replay.ImuGnssReplay (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

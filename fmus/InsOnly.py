@@ -1,4 +1,4 @@
-"""FMU slave 'InsOnly': a thin FMI shell over navcore.components.InsOnly (see fmushell.py)."""
+"""FMU slave 'InsOnly': a thin FMI shell over navcore.components.InsOnly (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

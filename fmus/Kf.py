@@ -1,4 +1,4 @@
-"""FMU slave 'Kf': a thin FMI shell over navcore.components.Kf (see fmushell.py)."""
+"""FMU slave 'Kf': a thin FMI shell over navcore.components.Kf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

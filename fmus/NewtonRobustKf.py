@@ -1,4 +1,4 @@
-"""FMU slave 'NewtonRobustKf': a thin FMI shell over navcore.components.NewtonRobustKf (see fmushell.py)."""
+"""FMU slave 'NewtonRobustKf': a thin FMI shell over navcore.components.NewtonRobustKf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

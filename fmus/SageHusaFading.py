@@ -1,4 +1,4 @@
-"""FMU slave 'SageHusaFading': a thin FMI shell over navcore.components.SageHusaFading (see fmushell.py)."""
+"""FMU slave 'SageHusaFading': a thin FMI shell over navcore.components.SageHusaFading (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

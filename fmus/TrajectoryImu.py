@@ -1,4 +1,4 @@
-"""FMU slave 'TrajectoryImu': a thin FMI shell over navcore.components.TrajectoryImu (see fmushell.py)."""
+"""FMU slave 'TrajectoryImu': a thin FMI shell over navcore.components.TrajectoryImu (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

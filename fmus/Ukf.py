@@ -1,4 +1,4 @@
-"""FMU slave 'Ukf': a thin FMI shell over navcore.components.Ukf (see fmushell.py)."""
+"""FMU slave 'Ukf': a thin FMI shell over navcore.components.Ukf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

@@ -1,4 +1,4 @@
-"""FMU slave 'UkfAhrs': a thin FMI shell over navcore.ahrs_components.UkfAhrs (see fmushell.py)."""
+"""FMU slave 'UkfAhrs': a thin FMI shell over navcore.ahrs_components.UkfAhrs (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell

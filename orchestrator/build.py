@@ -2,7 +2,7 @@
 
 An FMU is stale when it is missing, has no platform binaries, or when its build stamp
 differs from the one recorded beside it in ``fmus/dist/<Model>.fmu.sha256``: the hash of its
-Python inputs (its slave script, ``fmushell.py`` and every file of ``navcore``) and which Linux
+Python inputs (its slave script and every file of the ``fmushell`` and ``navcore`` packages) and which Linux
 library it carries (the patched pythonfmu library of :mod:`orchestrator.native_library` with the
 hash of its sources, or the wheel's when that cannot be built here).  Each FMU is written to a
 temporary name and renamed, so an interrupted build never leaves a broken ``.fmu`` behind.
@@ -25,15 +25,15 @@ from .errors import NavfmuError
 ROOT = Path(__file__).resolve().parent.parent
 FMU_SOURCES = ROOT / "fmus"
 DIST = FMU_SOURCES / "dist"
-SHELL = "fmushell.py"
+SHELL = "fmushell"
 LIBRARY = "navcore"
 
 
 def slave_scripts(src: Path = FMU_SOURCES):
-    """The FMU scripts: every ``fmus/*.py`` except the shared shell."""
+    """The FMU scripts: every ``fmus/*.py`` (the shared shell is the package ``fmushell``)."""
     if not src.is_dir():
         raise NavfmuError(f"FMU sources not found at {src} (navfmu build needs the source tree)")
-    return sorted(p for p in src.glob("*.py") if p.name != SHELL)
+    return sorted(src.glob("*.py"))
 
 
 def source_hash(script: Path) -> str:

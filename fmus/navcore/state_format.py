@@ -66,13 +66,14 @@ _ARRAY_DTYPES = {d.str: d for d in ARRAY_DTYPES}
 Identity = Tuple[str, str]  # (model name, build hash)
 
 
-def build_hash(script: Path, shell: str = "fmushell.py", library: str = "navcore") -> str:
-    """SHA-256 of an FMU's Python sources: its script, the shell and every ``.py`` of the
-    library beside it (the layout of ``fmus/`` and of an FMU's resources alike)."""
+def build_hash(script: Path, shell: str = "fmushell", library: str = "navcore") -> str:
+    """SHA-256 of an FMU's Python sources: its script and every ``.py`` of the shell and of
+    the library beside it (the layout of ``fmus/`` and of an FMU's resources alike)."""
     script = Path(script)
     h = hashlib.sha256()
-    files = [script, script.parent / shell]
-    files += sorted((script.parent / library).rglob("*.py"))
+    files = [script]
+    for package in (shell, library):
+        files += sorted((script.parent / package).rglob("*.py"))
     for f in files:
         h.update(f.relative_to(script.parent).as_posix().encode())
         h.update(f.read_bytes())
