@@ -3,7 +3,8 @@ compiled here with the system ``cc`` against the FMI 2 headers fmpy ships, run w
 the environment ``navfmu env`` prints.  Each run must exit with status 0 (no crash at exit)
 and print the values fmpy reads from the same FMU after the same calls.  Also: what
 ``navfmu env`` prints, and the two causes of the crash at exit that used to kill about half of
-the native runs (see navcore/chisquare.py and fmushell._balance_loader_decref).
+the native runs (see navcore/chisquare.py and
+fmushell.pythonfmu_fixes.balance_loader_decref).
 """
 from __future__ import annotations
 

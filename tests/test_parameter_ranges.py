@@ -5,17 +5,43 @@ outside it (or a non-finite Real) is refused with the parameter, the value and t
 """
 from __future__ import annotations
 
+import inspect
 import math
 
 import pytest
 
 from navcore import components, signals
 from navcore.component import InputError, Limits, ParameterError
+from navcore.filter_component import InsGnssFilter
 from navcore.gnss_errors import GnssErrorModel
 from navcore.imu_errors import ImuErrorModel
 
 NUMERIC = [(cls, p) for cls in components.REGISTRY.values() for p in cls.parameters
            if p.type in ("Real", "Integer")]
+
+
+def _engine_keywords(engine_class):
+    """{name: default} of the keyword-only options of an engine and its bases."""
+    keywords = {}
+    for klass in engine_class.__mro__:
+        init = vars(klass).get("__init__")
+        if init is None:
+            continue
+        for param in inspect.signature(init).parameters.values():
+            if param.kind is param.KEYWORD_ONLY:
+                keywords[param.name] = param.default
+    return keywords
+
+
+@pytest.mark.parametrize("cls", [c for c in components.REGISTRY.values()
+                                 if issubclass(c, InsGnssFilter)], ids=lambda c: c.model_name)
+def test_engine_options_are_declared_once_on_the_component(cls):
+    """The component's ports hold the one default and range of each engine option: the engine
+    takes exactly the options the component passes, and none of them has a default there."""
+    keywords = _engine_keywords(cls.engine_class)
+    assert sorted(cls().engine_options()) == sorted(keywords)
+    with_default = [n for n, d in keywords.items() if d is not inspect.Parameter.empty]
+    assert not with_default, f"{cls.engine_class.__name__} has defaults for {with_default}"
 
 
 def test_limits_text_and_membership():

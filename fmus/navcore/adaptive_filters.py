@@ -379,7 +379,7 @@ class Igg3RobustKfEngine(KfEngine):
     ``S = H P_{k,k-1} H' + R0`` gives the weight ``w_i`` of
     :func:`adaptive_laws.igg3_weight` (1 up to k0, down-weighted up to k1, 0 beyond); the
     update uses the equivalent variance ``R_ii / w_i`` (a component with w_i = 0 is left out).
-    Defaults k0 = 1.5, k1 = 3.0 (Yang Yuanxi's usual constants): 13 % of clean components
+    The component's defaults k0 = 1.5, k1 = 3.0 (Yang Yuanxi's usual constants): 13 % of clean components
     are down-weighted a little, 0.3 % rejected.
 
     After an update: ``weights`` (m,), ``n_rejected`` (components with w = 0).

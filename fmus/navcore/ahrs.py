@@ -42,7 +42,7 @@ from typing import Optional
 
 import numpy as np
 
-from .component import InputError, ParameterError
+from .component import InputError
 from .fuzzy import FuzzyRScale
 from .mrp import (dcm_to_mrp, mrp_to_dcm_batch, mrp_to_quat, nearest_set, quat_to_mrp, shadow,
                   shadow_jacobian)
@@ -133,7 +133,7 @@ class UkfAhrsEngine:
                       "gyro_bias_rw", "R0", "p0")
 
     def __init__(self, gravity, field_intensity, inclination, gyro_arw, gyro_bias_rw, r_accel,
-                 r_mag, p0_att, p0_gyro_bias, alpha=1.0, beta=2.0, kappa=0.0,
+                 r_mag, p0_att, p0_gyro_bias, alpha, beta, kappa,
                  adaptive: Optional["FuzzyAdaptiveR"] = None):
         self.gravity = float(gravity)
         self.field_intensity = float(field_intensity)
@@ -261,7 +261,8 @@ class FuzzyAdaptiveR:
     * ``R_k,b = F_b R_(k-1),b`` (eq. 15), the scale kept within
       ``[r_scale_min, r_scale_max]`` times the nominal R, and used in this update.
 
-    Until ``N`` innovations exist, ``F = 1``.
+    Until ``N`` innovations exist, ``F = 1``.  ``window`` >= 2 (the component's parameter
+    ``fuzzy_window`` declares the range).
     """
 
     state_fields = ("residuals", "count", "e", "de")
@@ -269,8 +270,6 @@ class FuzzyAdaptiveR:
 
     def __init__(self, inference: FuzzyRScale, window: int, r_scale_min: float,
                  r_scale_max: float):
-        if window < 2:
-            raise ParameterError(f"fuzzy window N = {window} must be >= 2")
         self.inference = inference
         self.window = int(window)
         self.r_scale_min = float(r_scale_min)

@@ -3,7 +3,7 @@
 A fix reaches a filter some time after it was taken: the receiver's own latency, or a master
 that passes outputs one communication step late (Jacobi exchange, as libcosim does: the fix
 taken at ``gnss_time = 1.0`` by a 1 Hz receiver reaches the filter at t = 2.0).  The filters
-of :mod:`navcore.components` apply every fix at the IMU epoch nearest its ``gnss_time``
+of :mod:`navcore.filter_component` apply every fix at the IMU epoch nearest its ``gnss_time``
 (within half an IMU interval; the INS solution is carried to ``gnss_time`` by its velocity
 over that fraction, see :meth:`navcore.ins_gnss_kf.KfEngine.measurement`):
 
