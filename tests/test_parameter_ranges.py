@@ -12,6 +12,7 @@ import pytest
 
 from navcore import components, signals
 from navcore.component import InputError, Limits, ParameterError
+from navcore.errors import StepSizeError
 from navcore.filter_component import InsGnssFilter
 from navcore.gnss_errors import GnssErrorModel
 from navcore.imu_errors import ImuErrorModel
@@ -107,3 +108,21 @@ def test_stop_time_beyond_the_profile():
     traj = components.TrajectoryImu(profile="aircraft_500s", extend_profile=True)
     traj.start(0.0)
     traj.check_stop_time(500.5)
+
+
+@pytest.mark.parametrize("cls", [components.Kf, components.Ukf, components.UkfAhrs],
+                         ids=lambda c: c.model_name)
+def test_a_skipped_imu_interval_is_a_step_size_error_in_every_filter_family(cls):
+    """A host stepping a filter more coarsely than the IMU delivers samples gets the same
+    error class (StepSizeError, an InputError) from the INS/GNSS and the attitude filters."""
+    component = cls()
+    component.start(0.0)
+    inputs = {p.name: p.default() for p in cls.inputs}
+    dt = 0.01
+    inputs.update(imu_dt=dt, imu_dvel_z=-9.8 * dt, mag_x=2e-5, mag_z=4e-5)
+    inputs["imu_time"] = dt
+    component.advance(0.0, dt, inputs)
+    inputs["imu_time"] = 3 * dt                   # the interval (dt, 2 dt] never arrived
+    with pytest.raises(StepSizeError, match="'imu_time'") as err:
+        component.advance(dt, dt, inputs)
+    assert isinstance(err.value, InputError)
