@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from navcore import components
-from navcore.component import NavcoreError
+from navcore.errors import NavcoreError
 from orchestrator import build as fmu_build
 from orchestrator import scenarios
 from orchestrator.backends import DirectInstance, FmuInstance
