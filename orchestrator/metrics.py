@@ -51,6 +51,10 @@ import numpy as np
 from scipy import stats
 
 from navcore.earth import radii as _radii
+# the papers' gates: paper 004's when a run does not set chi2_threshold, paper 000's eq. 25
+# thresholds for dof 3 when ctfa_t1/t2 are 0 or unset
+from navcore.innovation_stats import (CHI2_THRESHOLD_PAPER_004 as CHI2_GATE_DEFAULT,
+                                      CTFA_THRESHOLDS_PAPER_000 as CTFA_THRESHOLDS_DOF3)
 from navcore.rotations import wrap_angle as _wrap
 
 from .errors import NavfmuError
@@ -59,10 +63,6 @@ AXES = ("n", "e", "d")
 #: paper order of the tables: east, north, up (up error RMS = down error RMS)
 ENU = ("e", "n", "d")
 ATTITUDE = ("roll", "pitch", "yaw")
-#: per-observation chi-square gate of paper 004 when the run does not set chi2_threshold
-CHI2_GATE_DEFAULT = 6.635
-#: paper 000's thresholds of eq. 25 for a 3-dimensional measurement (ctfa_t1/t2 = 0 or unset)
-CTFA_THRESHOLDS_DOF3 = (6.25, 11.35)
 
 
 def _dcm(roll, pitch, yaw):

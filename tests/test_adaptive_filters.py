@@ -14,8 +14,8 @@ import pytest
 
 from navcore import components, signals
 from navcore.adaptive_filters import UNUSABLE_VARIANCE_FACTOR, NewtonRobustKfEngine, masked_update
-from navcore.adaptive_laws import CHI2_THRESHOLD_PAPER_004
 from navcore.component import ParameterError
+from navcore.innovation_stats import CHI2_THRESHOLD_PAPER_004
 from navcore.ins_gnss_kf import KfConfig, KfEngine
 from navcore.strapdown import Strapdown
 

@@ -1,4 +1,5 @@
-"""Tests of navcore.adaptive_laws: the adaptation laws of papers 001 and 004."""
+"""Tests of navcore.adaptive_laws and navcore.robust_laws: the adaptation laws of papers 001
+and 004 (and the chi-square gate and per-observation statistic they use)."""
 import copy
 import math
 import pickle
@@ -9,21 +10,21 @@ import pytest
 from scipy.stats import chi2
 
 from navcore.adaptive_laws import (
-    CHI2_THRESHOLD_PAPER_004,
-    ObservationHistory,
-    chi2_threshold,
-    chi_square_faults,
-    chi_square_per_observation,
     compression_factor,
     divergence_test,
     fading_factor,
     fading_predict,
     guard_positive_definite,
-    igg3_weight,
-    newton_forward_extrapolate,
     r_floor_from_initial,
     sage_husa_r_update,
     sage_husa_weight,
+)
+from navcore.innovation_stats import CHI2_THRESHOLD_PAPER_004, chi2_gate, chi_square_per_observation
+from navcore.robust_laws import (
+    ObservationHistory,
+    chi_square_faults,
+    igg3_weight,
+    newton_forward_extrapolate,
 )
 from navcore.component import InputError, ParameterError
 
@@ -241,7 +242,7 @@ def test_fading_factor_equals_eq12_when_test_fails():
     assert lam == pytest.approx(expected, rel=1e-14)
     assert lam > 1.0
     # the faded prediction (eq. 10) makes eq. 11 with gamma = 1 hold with equality
-    P_pred = fading_predict(Phi, P, GQG, lam)
+    P_pred = fading_predict(Phi @ P @ Phi.T, GQG, lam)
     assert np.trace(H @ P_pred @ H.T + R) == pytest.approx(v @ v, rel=1e-13)
     assert fading_factor(v, HQH, R, HPH0, max_factor=2.0) == 2.0
 
@@ -261,13 +262,18 @@ def test_fading_factor_zero_denominator_raises():
 
 def test_fading_predict_standard_and_faded():
     Phi, P, GQG, _, _, _, _ = _fading_setup()
-    np.testing.assert_allclose(fading_predict(Phi, P, GQG, 1.0), Phi @ P @ Phi.T + GQG,
+    p_prop = Phi @ P @ Phi.T
+    np.testing.assert_allclose(fading_predict(p_prop, GQG, 1.0), Phi @ P @ Phi.T + GQG,
                                rtol=1e-15)
-    P2 = fading_predict(Phi, P, GQG, 2.5)
+    # lambda = 1 is the standard prediction (eq. 6) exactly, as the filter relies on
+    assert np.array_equal(fading_predict(p_prop, GQG, 1.0), p_prop + GQG)
+    P2 = fading_predict(p_prop, GQG, 2.5)
     np.testing.assert_allclose(P2, Phi @ (2.5 * P) @ Phi.T + GQG, rtol=1e-15)
-    assert np.array_equal(P2, P2.T)
+    np.testing.assert_allclose(P2, P2.T, rtol=1e-15)
     with pytest.raises(InputError, match="lam"):
-        fading_predict(Phi, P, GQG, 0.0)
+        fading_predict(p_prop, GQG, 0.0)
+    with pytest.raises(InputError, match="GQG"):
+        fading_predict(p_prop, GQG[:1, :1], 2.0)
 
 
 # ----------------------------------------------------------------------------------------
@@ -343,14 +349,14 @@ def test_compression_rejects_non_pd_G():
 # per-observation chi-square test (paper 004)
 # ----------------------------------------------------------------------------------------
 def test_chi2_threshold_matches_paper_004():
-    assert chi2_threshold(0.01, 1) == pytest.approx(6.6349, abs=1e-4)
-    assert abs(chi2_threshold(0.01, 1) - CHI2_THRESHOLD_PAPER_004) < 2e-4
-    assert chi2_threshold(0.025, 1) == pytest.approx(5.0239, abs=1e-4)
-    assert chi2_threshold(0.05, 3) == pytest.approx(7.8147, abs=1e-4)
+    assert chi2_gate(0.01, 1) == pytest.approx(6.6349, abs=1e-4)
+    assert abs(chi2_gate(0.01, 1) - CHI2_THRESHOLD_PAPER_004) < 2e-4
+    assert chi2_gate(0.025, 1) == pytest.approx(5.0239, abs=1e-4)
+    assert chi2_gate(0.05, 3) == pytest.approx(7.8147, abs=1e-4)
     with pytest.raises(ParameterError, match="alpha"):
-        chi2_threshold(1.5, 1)
+        chi2_gate(1.5, 1)
     with pytest.raises(ParameterError, match="dof"):
-        chi2_threshold(0.01, 0)
+        chi2_gate(0.01, 0)
 
 
 def test_per_observation_false_alarm_rate_is_alpha():

@@ -3,7 +3,7 @@ compiled here with the system ``cc`` against the FMI 2 headers fmpy ships, run w
 the environment ``navfmu env`` prints.  Each run must exit with status 0 (no crash at exit)
 and print the values fmpy reads from the same FMU after the same calls.  Also: what
 ``navfmu env`` prints, and the two causes of the crash at exit that used to kill about half of
-the native runs (see navcore/chisquare.py and
+the native runs (see navcore/innovation_stats.py and
 fmushell.pythonfmu_fixes.balance_loader_decref).
 """
 from __future__ import annotations
@@ -195,7 +195,7 @@ def test_navfmu_env_names_this_interpreter():
 def test_fmu_import_chain_loads_no_scipy_stats_or_uarray():
     """scipy.stats pulls in scipy.fft and the C++ extension scipy._lib._uarray, whose static
     destructors run before pythonfmu's Py_FinalizeEx in a native host that calls exit():
-    a segfault at exit in about half of the runs (navcore/chisquare.py)."""
+    a segfault at exit in about half of the runs (navcore/innovation_stats.py)."""
     code = textwrap.dedent(f"""
         import sys
         sys.path.insert(0, {str(fmu_build.FMU_SOURCES)!r})

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from navcore.component import InputError, ParameterError
-from navcore.ctfa import (PAPER_T1, PAPER_T2, CtfaQSchedule, chi_square_statistic, ctfa_q,
-                          ctfa_q_scale, ctfa_thresholds)
+from navcore.ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_q_scale, ctfa_thresholds
+from navcore.innovation_stats import chi_square_statistic
 from navcore.unscented import UnscentedKalmanFilter
 
 QMIN = np.diag([1e-6, 2e-6, 3e-6])
@@ -20,6 +20,15 @@ def paper_eq25(q, Qmin, Qmax, Q_previous):
     if q <= 11.35:
         return 1.0 / 5.1 * (q - 6.25) * (Qmax - Qmin) + Qmin
     return Qmax
+
+
+def scheduled_q(q, previous_weight=0.0):
+    """Q of the schedule the filter runs for statistic ``q``, from the weight
+    ``previous_weight`` of Q_{k-1} (0: Q_0 = Q_min)."""
+    schedule = CtfaQSchedule(QMIN, QMAX)
+    schedule.weight = previous_weight
+    schedule.Q = QMIN + previous_weight * (QMAX - QMIN)
+    return schedule.update(q)
 
 
 def test_thresholds_for_three_dof_match_the_paper():
@@ -43,17 +52,17 @@ def test_thresholds_grow_with_dof_and_reject_bad_arguments():
 def test_schedule_matches_eq25_everywhere():
     Q_prev = 0.3 * QMAX + 0.7 * QMIN
     for q in [0.0, 1.0, 6.0, 6.2499, 6.25, 7.0, 8.8, 10.0, 11.35, 11.36, 20.0, 1e6]:
-        assert np.allclose(ctfa_q(q, QMIN, QMAX, Q_previous=Q_prev),
+        assert np.allclose(scheduled_q(q, previous_weight=0.3),
                            paper_eq25(q, QMIN, QMAX, Q_prev), rtol=1e-14, atol=0)
 
 
 def test_schedule_at_thresholds_below_and_above():
-    assert np.array_equal(ctfa_q(PAPER_T1, QMIN, QMAX), QMIN)
-    assert np.allclose(ctfa_q(PAPER_T2, QMIN, QMAX), QMAX, rtol=1e-15)
-    assert np.array_equal(ctfa_q(3.0, QMIN, QMAX), QMIN)                 # Q_0 = Q_min
+    assert np.array_equal(scheduled_q(PAPER_T1), QMIN)
+    assert np.allclose(scheduled_q(PAPER_T2), QMAX, rtol=1e-15)
+    assert np.array_equal(scheduled_q(3.0), QMIN)                        # Q_0 = Q_min
     Q_prev = 0.5 * (QMIN + QMAX)
-    assert np.array_equal(ctfa_q(3.0, QMIN, QMAX, Q_previous=Q_prev), Q_prev)  # eq. 25: keep Q_{k-1}
-    assert np.array_equal(ctfa_q(50.0, QMIN, QMAX, Q_previous=Q_prev), QMAX)
+    assert np.allclose(scheduled_q(3.0, previous_weight=0.5), Q_prev, rtol=1e-15)  # eq. 25: keep Q_{k-1}
+    assert np.allclose(scheduled_q(50.0, previous_weight=0.5), QMAX, rtol=1e-15)
     assert ctfa_q_scale(3.0) == 0.0 and ctfa_q_scale(3.0, previous_weight=0.4) == 0.4
     assert ctfa_q_scale(PAPER_T1) == 0.0 and ctfa_q_scale(PAPER_T2) == 1.0
     assert ctfa_q_scale(1e9) == 1.0
@@ -64,9 +73,9 @@ def test_schedule_is_exactly_linear_between_thresholds():
     w = np.array([ctfa_q_scale(s) for s in stats])
     assert np.allclose(w, np.linspace(0.0, 1.0, 11), rtol=0, atol=1e-15)
     assert np.allclose(np.diff(w, 2), 0.0, atol=1e-15)
-    Qs = np.array([ctfa_q(s, QMIN, QMAX) for s in stats])
+    Qs = np.array([scheduled_q(s) for s in stats])
     assert np.allclose(np.diff(Qs, 2, axis=0), 0.0, atol=1e-14 * QMAX.max())   # round-off only
-    mid = ctfa_q(0.5 * (PAPER_T1 + PAPER_T2), QMIN, QMAX)
+    mid = scheduled_q(0.5 * (PAPER_T1 + PAPER_T2))
     assert np.allclose(mid, 0.5 * (QMIN + QMAX), rtol=1e-15)
 
 
@@ -76,20 +85,19 @@ def test_schedule_is_monotonic_and_bounded():
     assert np.all(np.diff(w) >= 0.0) and w.min() == 0.0 and w.max() == 1.0
 
 
-def test_weight_form_equals_matrix_form_with_memory():
+def test_schedule_follows_eq25_with_memory():
     # the statistic sequence rises, falls below T1 (Q held), jumps above T2, falls, rises
     sequence = [8.0, 3.0, 12.0, 2.0, 7.0, 0.5, 11.0]
     expected_weights = [(8.0 - 6.25) / 5.1, (8.0 - 6.25) / 5.1, 1.0, 1.0,
                         (7.0 - 6.25) / 5.1, (7.0 - 6.25) / 5.1, (11.0 - 6.25) / 5.1]
     schedule = CtfaQSchedule(QMIN, QMAX)
     assert np.array_equal(schedule.Q, QMIN) and schedule.weight == 0.0
-    Q_prev = Q_paper = QMIN          # Q_0 = Q_min
+    Q_paper = QMIN                   # Q_0 = Q_min
     for q, w in zip(sequence, expected_weights):
-        Q_prev = ctfa_q(q, QMIN, QMAX, Q_previous=Q_prev)
         Q_paper = paper_eq25(q, QMIN, QMAX, Q_paper)
         Q = schedule.update(q)
         assert schedule.weight == pytest.approx(w, rel=1e-14)
-        assert np.allclose(Q, Q_prev, rtol=1e-14) and np.allclose(Q, Q_paper, rtol=1e-14)
+        assert np.allclose(Q, Q_paper, rtol=1e-14)
     snapshot = copy.deepcopy(schedule)
     schedule.reset()
     assert np.array_equal(schedule.Q, QMIN) and snapshot.weight == pytest.approx(expected_weights[-1])
@@ -127,7 +135,7 @@ def test_bad_arguments_raise_clear_errors():
     with pytest.raises(ParameterError, match="thresholds"):
         ctfa_q_scale(5.0, T1=10.0, T2=5.0)
     with pytest.raises(ParameterError, match="shape"):
-        ctfa_q(7.0, QMIN, np.eye(2))
+        CtfaQSchedule(QMIN, np.eye(2))
     with pytest.raises(ParameterError, match="positive semi-definite"):
         CtfaQSchedule(QMAX, QMIN)
     with pytest.raises(InputError, match="positive definite"):

@@ -164,7 +164,7 @@ def filter_inputs(draw):
                                 components.Ukf, components.ImmUkf]))
     steps = []
     for k in range(1, 21):
-        inputs = cls.default_inputs()
+        inputs = {p.name: p.default() for p in cls.inputs}
         inputs.update(imu_time=0.01 * k, imu_dt=0.01, imu_dvel_z=-9.8 * 0.01,
                       gnss_time=0.01 * k, gnss_epoch=k // 5, gnss_valid=True)
         for key in draw(st.lists(st.sampled_from(sorted(inputs)), max_size=2)):

@@ -91,7 +91,7 @@ def test_error_models_use_the_same_declaration():
 def test_inputs_out_of_range_name_the_input():
     kf = components.Kf()
     kf.initialize(0.0)
-    inputs = components.Kf.default_inputs()
+    inputs = {p.name: p.default() for p in components.Kf.inputs}
     inputs.update(imu_time=0.01, imu_dt=0.01, imu_dtheta_x=1e300)
     with pytest.raises(InputError, match=r"input 'imu_dtheta_x' = 1e\+300 is outside the "
                                          r"accepted range \[-3.14159, 3.14159\] rad"):

@@ -51,7 +51,7 @@ def inputs_at(cls, k):
     if cls.model_name == "GnssReceiver":
         return {"truth_time": t1, "truth_lat": 0.7 + 1e-7 * t1, "truth_lon": 2.0,
                 "truth_h": 100.0, "truth_vn": 1.0, "truth_ve": 0.0, "truth_vd": 0.0}
-    inputs = cls.default_inputs()
+    inputs = {p.name: p.default() for p in cls.inputs}
     if not inputs:
         return inputs
     epoch = (k + 1) // 10
@@ -61,7 +61,7 @@ def inputs_at(cls, k):
                   gnss_h=100.0, gnss_valid=epoch > 0, gnss_epoch=epoch)
     if "mag_time" in inputs:       # an attitude filter: a magnetometer sample with the IMU's
         inputs.update(mag_time=t1, mag_x=2e-5 + 1e-8 * math.cos(k), mag_y=0.0, mag_z=4e-5)
-        inputs = {n: inputs[n] for n in cls.default_inputs()}
+        inputs = {p.name: inputs[p.name] for p in cls.inputs}
     return inputs
 
 

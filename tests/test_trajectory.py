@@ -8,12 +8,8 @@ import numpy as np
 import pytest
 
 from navcore.component import ParameterError
-from navcore.trajectory import (
-    BUILTIN_PROFILES,
-    TrajectoryGenerator,
-    builtin_profile,
-    load_profile,
-)
+from navcore.motion_profiles import BUILTIN_PROFILES, builtin_profile, load_profile
+from navcore.trajectory import TrajectoryGenerator
 
 
 def speed(s):

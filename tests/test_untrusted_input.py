@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from navcore import trajectory
+from navcore import motion_profiles
 from navcore.component import ParameterError
 from orchestrator import ssp
 from orchestrator.errors import SspError
@@ -48,10 +48,10 @@ def test_oversized_or_deeply_nested_profile_is_refused(tmp_path, monkeypatch):
     deep = tmp_path / "deep.json"
     deep.write_text("[" * 100_000 + "]" * 100_000)
     with pytest.raises(ParameterError, match="deep.json"):
-        trajectory.load_profile(str(deep))
-    monkeypatch.setattr(trajectory, "MAX_PROFILE_BYTES", 1000)
+        motion_profiles.load_profile(str(deep))
+    monkeypatch.setattr(motion_profiles, "MAX_PROFILE_BYTES", 1000)
     with pytest.raises(ParameterError, match="larger than the 1000 bytes"):
-        trajectory.load_profile(str(deep))
+        motion_profiles.load_profile(str(deep))
 
 
 #: modules whose loaders run code from the data they read

@@ -6,8 +6,8 @@ from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Slave
 
-_DEG = 0.017453292519943295
-_G0 = 9.80665
+from navcore.constants import DEG as _DEG, G0 as _G0
+
 #: every unit symbol used on our interfaces: (FMI 2.0 BaseUnit exponents, factor to SI).
 #: Datasheet units (only in parameters whose name says so) carry their factor; those with a
 #: fractional exponent (deg/sqrt(h), ug/sqrt(Hz)) are declared without a BaseUnit.

@@ -3,13 +3,14 @@
 Every engine here is the baseline 15-state closed-loop error-state filter of
 :mod:`navcore.ins_gnss_kf` with a different measurement update; propagation, feedback and the
 measurement ``z = INS - GNSS`` are shared.  The adaptation laws are the pure functions of
-:mod:`navcore.adaptive_laws` (equation numbers below refer to the papers):
+:mod:`navcore.adaptive_laws` (paper 001) and :mod:`navcore.robust_laws` (paper 004), the
+statistics those of :mod:`navcore.innovation_stats`:
 
 * :class:`SageHusaFadingEngine` -- simplified Sage-Husa R estimator (paper 001 eq. 9) combined
-  with the fading-memory filter (eqs. 10-12): the combination of paper 001's reference [9]
-  and its Fig. 4 ("Sage-Husa + fading").
+  with the fading-memory filter (paper 001 eqs. 10-12): the combination of paper 001's
+  reference [9] and its Fig. 4 ("Sage-Husa + fading").
 * :class:`IakfEngine` -- paper 001's improved adaptive filter: the above plus the outlier
-  compression of the innovation (eqs. 13-14).
+  compression of the innovation (paper 001 eqs. 13-14).
 * :class:`NewtonRobustKfEngine` -- paper 004: per-observation chi-square test (threshold 6.635)
   and replacement of a failed observation by the Newton forward extrapolation of the
   previous observations.
@@ -30,8 +31,10 @@ from collections import deque
 import numpy as np
 
 from . import adaptive_laws as laws
+from . import robust_laws
 from .error_model import N_STATES
-from .ins_gnss_kf import KfEngine, UpdateResult, nis_of
+from .innovation_stats import chi2_gate, chi_square_per_observation, nis
+from .ins_gnss_kf import KfEngine, UpdateResult
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
@@ -58,7 +61,7 @@ def masked_update(P_pred, z, R, keep):
 class SageHusaFadingEngine(KfEngine):
     """Simplified Sage-Husa R estimation + fading memory (paper 001, secs. 1.1-1.2).
 
-    One update (``v = z``, closed loop)::
+    One update (``v = z``, closed loop; equations of paper 001)::
 
         p_prop, q_acc = Phi P_{k-1} Phi', Gamma Q Gamma'          (the two parts of eq. 6)
         lambda = 1 if eq. 11 holds else eq. 12                    (with the current R_hat)
@@ -66,42 +69,32 @@ class SageHusaFadingEngine(KfEngine):
         K, x, P from P_pred and R_hat                             (eqs. 4, 7, 8; Joseph form)
         R_hat <- eq. 9 with d_k = (1-b)/(1-b^(k+1)), then the PD guard
 
-    The fading factor multiplies only the propagated P_{k-1} part (eq. 10), never the
+    The fading factor multiplies only the propagated P_{k-1} part (paper 001 eq. 10), never the
     process noise.  The Sage-Husa index k counts updates from 1, so R0 (the datasheet R of
     the scenario) counts as the first sample of the exponentially weighted mean (see
     :func:`adaptive_laws.sage_husa_weight`).
 
     Parameters
     ----------
-    forgetting_factor : b of eq. 9, in (0, 1]; paper 001: 0.95-0.99.  Default 0.95, the
-        short end: a memory of about 1/(1-b) = 20 updates (20 s at 1 Hz).  What costs
-        accuracy in paper 001's scenario is the lag of R_hat after a noise step (the
-        velocity noise jumps from 0.3 to 1.5 and 3 m/s): until R_hat catches up the filter
-        over-weights the noisy fixes (Sage-Husa) or compresses them as outliers, position
-        included (IAKF, whose R_hat sees only compressed innovations).  Measured over 20
-        seeds of aircraft_500s (gamma 10): IAKF position RMS N/E/D 1.30/1.61/1.01 m with
-        b = 0.98 against 1.25/1.55/1.02 m with b = 0.95, and only with 0.95 is the IAKF
-        below SageHusaFading on every position and velocity axis, as in paper 001.
-    reserve_gamma : gamma of eq. 11 (> 0).  Default 10: the test must fire on a real
-        divergence only, because every firing is costly.  Eq. 12 then gives lambda ~ 10-80
-        (tr(H P H') is a few m^2 against tr(R) = 75 m^2), and lambda multiplies the whole
-        P_{k-1}, including the weakly observable heading and bias variances, which the next
-        updates do not bring back down.  For a consistent filter v'v has mean exactly
+    forgetting_factor : b of paper 001 eq. 9, in (0, 1]; paper 001: 0.95-0.99.  Default 0.95,
+        the short end: a memory of about 1/(1-b) = 20 updates (20 s at 1 Hz), so R_hat
+        follows a step of the measurement noise quickly (the measurements behind the choice:
+        docs/aircraft_500s.md).
+    reserve_gamma : gamma of paper 001 eq. 11 (> 0).  Default 10: the test must fire on a
+        real divergence only, because every firing is costly: paper 001 eq. 12 multiplies the whole
+        P_{k-1} by lambda, including the weakly observable heading and bias variances, which
+        the next updates do not bring back down.  For a consistent filter v'v has mean exactly
         tr(E[v v']); with R in NED metres the three position innovations dominate the trace
         (the paper mixes radians and metres in its traces), so v'v / tr ~ chi2(3)/3 and the
         nominal false-alarm probability per epoch is P(chi2(3) > 3 gamma): 39 % for
         gamma = 1, 2.9 % for 3, 0.18 % for 5, 1.4e-6 for 10.  The real rate is higher early
-        in a run, when R_hat rests on a few samples (d_k ~ 1/(k+1)).  Measured on
-        aircraft_500s: gamma = 3 lets the heading sigma climb from 1 deg to over 100 deg
-        within 40 s of clean data and the filter ends with ~2 m/s velocity RMS; gamma = 5
-        fired falsely on clean data before the first noise step in 3 of 6 seeds (lambda
-        50-80 at 8-49 s), which made SageHusaFading worse than Kf in velocity over 20 seeds;
-        gamma = 10 never fired in 20 seeds and the filter beats Kf on every axis.
+        in a run, when R_hat rests on a few samples (d_k ~ 1/(k+1)); what smaller gammas did
+        on aircraft_500s: docs/aircraft_500s.md.
     r_floor_fraction : variance floor of the positive-definiteness guard as a fraction of
         diag(R0) (:func:`adaptive_laws.r_floor_from_initial`); default 1 % of the variance
         (10 % of the sigma): never binds while the estimator behaves, and keeps R invertible
         when a long quiet stretch or compressed innovations drive it towards H P H'.
-    max_fading_factor : optional cap on lambda (None = the paper's uncapped eq. 12).
+    max_fading_factor : optional cap on lambda (None = paper 001's uncapped eq. 12).
     """
 
     state_fields = ("R", "sage_husa_index")
@@ -119,15 +112,17 @@ class SageHusaFadingEngine(KfEngine):
 
     # -- pieces shared with IakfEngine ---------------------------------------------------------
     def faded_prediction(self, v, p_prop, q_acc):
-        """(lambda, P_pred): divergence test eq. 11, fading factor eq. 12, prediction eq. 10."""
+        """(lambda, P_pred): the divergence test, fading factor and faded prediction of
+        paper 001 (eqs. 11, 12, 10)."""
         m = self.m
         lam = laws.fading_factor(v, q_acc[:m, :m], self.R, p_prop[:m, :m], self.reserve_gamma,
                                  self.max_fading_factor)
-        P_pred = p_prop + q_acc if lam == 1.0 else lam * p_prop + q_acc
+        P_pred = laws.fading_predict(p_prop, q_acc, lam)
         return lam, P_pred
 
     def update_and_estimate_r(self, P_pred, v):
-        """Kalman update with R_hat (eqs. 4, 7, 8), then R_hat by eq. 9; applies feedback.
+        """Kalman update with R_hat (paper 001 eqs. 4, 7, 8), then R_hat by paper 001 eq. 9;
+        applies feedback.
 
         Returns (S, R_used).  ``v`` is the innovation to use -- compressed in the IAKF, so
         the same v drives the state and the R estimate (paper 001, text under eq. 14).
@@ -150,7 +145,7 @@ class SageHusaFadingEngine(KfEngine):
         p_prop, q_acc = self.predicted_parts()
         lam, P_pred = self.faded_prediction(v, p_prop, q_acc)
         S, R_used = self.update_and_estimate_r(P_pred, v)
-        return UpdateResult(v, S, nis_of(v, S), r_scale=float(np.trace(R_used) / np.trace(self.R0)),
+        return UpdateResult(v, S, nis(v, S), r_scale=float(np.trace(R_used) / np.trace(self.R0)),
                             fading_factor=lam)
 
 
@@ -161,30 +156,27 @@ class IakfEngine(SageHusaFadingEngine):
     Order of operations (paper 001 sec. 2; its flow chart, Fig. 1, is missing from our copy,
     so the order follows the text):
 
-    1. Outlier test and compression on the *unfaded* prediction (eqs. 13-14):
-       ``G = H P_{k,k-1} H' + R_hat`` with P_{k,k-1} from eq. 6 -- eq. 13 defines G from
-       P_{k,k-1}, and sec. 2 explains that the fading memory "cannot judge and handle"
-       outliers.  Testing first matters: eq. 12 chooses lambda so that tr(G) equals v'v,
-       so after fading an outlier would always look normal and pass with a large gain --
+    1. Outlier test and compression on the *unfaded* prediction (paper 001 eqs. 13-14):
+       ``G = H P_{k,k-1} H' + R_hat`` with P_{k,k-1} from paper 001 eq. 6 -- paper 001 eq. 13
+       defines G from P_{k,k-1}, and sec. 2 explains that the fading memory "cannot judge and
+       handle" outliers.  Testing first matters: paper 001 eq. 12 chooses lambda so that tr(G)
+       equals v'v, so after fading an outlier would always look normal and pass with a large gain --
        exactly the failure of Sage-Husa + fading at 350-360 s that the paper reports.
        ``tau = v' G^-1 v``; with the paper's threshold D = sqrt(lambda_max C_n^alpha) the
        gate is the chi2(n) quantile C (n = m, the measurement dimension) and
        ``Y = sqrt(C / tau)`` above it (see :func:`adaptive_laws.compression_factor`).
-    2. ``v <- Y v`` (eq. 13).
-    3. Divergence test and fading factor (eqs. 11-12) on the compressed innovation, faded
-       prediction eq. 10.  Without an outlier (Y = 1) the filter is exactly
+    2. ``v <- Y v`` (paper 001 eq. 13).
+    3. Divergence test and fading factor (paper 001 eqs. 11-12) on the compressed innovation,
+       faded prediction paper 001 eq. 10.  Without an outlier (Y = 1) the filter is exactly
        :class:`SageHusaFadingEngine`, as the paper says ("退化为普通简化的 Sage-Husa").
-    4. Kalman update with the compressed innovation and R_hat, then R_hat by eq. 9 from the
-       same compressed innovation ("用修正的新息去估计量测方差阵 R_k 和当前时刻的状态").
+    4. Kalman update with the compressed innovation and R_hat, then R_hat by paper 001 eq. 9
+       from the same compressed innovation ("用修正的新息去估计量测方差阵 R_k 和当前时刻的状态").
 
-    ``outlier_alpha``: alpha of the chi2 quantile, 0.05 or 0.02 in the paper; default 0.02.
-    The gate is tested against the scenario's shared tuning, which is optimistic early in
-    the flight (mean NIS ~ 9 for 6 dof in the first minute of aircraft_500s), so clean
-    epochs cross the gate more often than alpha: 15 of 80 at alpha 0.05 (b 0.98) on the
-    first 90 s.  Each false compression discards good position information; 0.02 halves
-    them (7 of 80; 10 of 80 with b 0.95), and over
-    20 seeds of aircraft_500s IAKF position RMS N/E/D went from 1.33/1.79/1.02 m (0.05)
-    to 1.30/1.61/1.01 m (0.02).
+    ``outlier_alpha``: alpha of the chi2 quantile, 0.05 or 0.02 in paper 001; default 0.02.
+    Each false compression of a clean epoch discards good position information, and a
+    filter whose tuning is optimistic early in a flight sees clean epochs cross the gate
+    more often than alpha; the smaller alpha compresses fewer of them (measured on
+    aircraft_500s: docs/aircraft_500s.md).
     After an update, ``compression`` holds Y and ``tau`` the statistic.
     """
 
@@ -193,7 +185,7 @@ class IakfEngine(SageHusaFadingEngine):
 
     def __init__(self, config, nav, *, outlier_alpha, **kwargs):
         super().__init__(config, nav, **kwargs)
-        self.outlier_gate = laws.chi2_threshold(outlier_alpha, self.m)
+        self.outlier_gate = chi2_gate(outlier_alpha, self.m)
         self.outlier_alpha = float(outlier_alpha)
         self.compression = 1.0
         self.tau = 0.0
@@ -203,11 +195,11 @@ class IakfEngine(SageHusaFadingEngine):
         v = np.asarray(z, dtype=float)
         m = self.m
         p_prop, q_acc = self.predicted_parts()
-        P_std = p_prop + q_acc                                   # eq. 6
+        P_std = p_prop + q_acc                                   # paper 001 eq. 6
         G = P_std[:m, :m] + self.R
-        K_std = np.linalg.solve(G, P_std[:, :m].T).T             # eq. 7, only for eq. 14's lambda
+        K_std = np.linalg.solve(G, P_std[:, :m].T).T             # paper 001 eq. 7, for eq. 14
         Y, tau, _ = laws.compression_factor(v, G, K_std, self.outlier_alpha)
-        v_used = v if Y == 1.0 else Y * v                        # eq. 13
+        v_used = v if Y == 1.0 else Y * v                        # paper 001 eq. 13
         lam, P_pred = self.faded_prediction(v_used, p_prop, q_acc)
         S, R_used = self.update_and_estimate_r(P_pred, v_used)
         self.compression = Y
@@ -234,7 +226,7 @@ class NewtonRobustKfEngine(KfEngine):
 
     1. ``S = H P_{k,k-1} H' + R`` (standard prediction, fixed R) and the per-observation
        statistics ``r_i = v_i^2 / S_ii`` (paper 004 sec. 2.1, "single observation chi-square
-       test", one degree of freedom; :func:`adaptive_laws.chi_square_per_observation`).
+       test", one degree of freedom; :func:`innovation_stats.chi_square_per_observation`).
     2. ``r_i > chi2_threshold`` (paper: 6.635, chi2(1) at alpha = 0.01) marks observation i
        as failed.
     3. A failed observation is replaced by the one-step Newton forward extrapolation of the
@@ -245,7 +237,7 @@ class NewtonRobustKfEngine(KfEngine):
        variance reaches ``UNUSABLE_VARIANCE_FACTOR`` R_ii (a long run of faults).
     4. Standard Kalman update; the observation used (measured or replaced) is appended to the
        history, and after the closed-loop feedback the stored observations are shifted by
-       the correction H dx (:meth:`adaptive_laws.ObservationHistory.apply_correction`) so
+       the correction H dx (:meth:`robust_laws.ObservationHistory.apply_correction`) so
        they read as if the INS had been corrected all along -- otherwise every feedback
        would put a step into the INS-minus-GNSS sequence that the polynomial extrapolates.
 
@@ -259,9 +251,9 @@ class NewtonRobustKfEngine(KfEngine):
       (:meth:`_extrapolated_variance`): R_ii times ``sum_j w_j^2 = C(2p+2, p+1) - 1`` for
       order p (1, 5, 19, 69, 251 for p = 0..4) when the p+1 samples were measured: the
       extrapolated value is a weighted sum of earlier observations whose white GNSS noise
-      it amplifies by that factor (see :func:`adaptive_laws.newton_forward_extrapolate`).  With 5 m position noise a
-      4th-order replacement has about 79 m of noise; feeding it with a 5 m sigma would do
-      more harm than most outliers it replaces.
+      it amplifies by that factor (see :func:`robust_laws.newton_forward_extrapolate`).
+      With 5 m position noise a 4th-order replacement has about 79 m of noise; feeding it
+      with a 5 m sigma would do more harm than most outliers it replaces.
 
     Equal spacing: the engine counts the time since its last update (in :meth:`propagate`)
     and gives the history the epoch index ``round(gap / interval)`` after the last one,
@@ -282,7 +274,7 @@ class NewtonRobustKfEngine(KfEngine):
         self.chi2_threshold = float(chi2_threshold)
         self.newton_order = int(newton_order)
         self.replacement_variance = replacement_variance
-        self.history = laws.ObservationHistory(maxlen=self.newton_order + 1)
+        self.history = robust_laws.ObservationHistory(maxlen=self.newton_order + 1)
         #: error variance of each stored observation, per component (R_ii for a measured
         #: one, the propagated variance for a replaced one), parallel to ``history``
         self.sample_variances = deque(maxlen=self.newton_order + 1)
@@ -317,7 +309,7 @@ class NewtonRobustKfEngine(KfEngine):
         """Error variance of the Newton extrapolation, per component (m,).
 
         The extrapolation is ``sum_j w_j f_{N-j}`` with ``w_j = (-1)^j C(p+1, j+1)``
-        (:func:`adaptive_laws.newton_forward_extrapolate`), so for independent sample errors
+        (:func:`robust_laws.newton_forward_extrapolate`), so for independent sample errors
         its variance is ``sum_j w_j^2 var_{N-j}`` -- ``(C(2p+2, p+1) - 1) R_ii`` when every
         sample was measured, more when some were themselves replacements (a run of faults
         extrapolates from extrapolations: the variance grows and the replacement's weight
@@ -333,7 +325,7 @@ class NewtonRobustKfEngine(KfEngine):
         """Chi-square test + Newton replacement (paper 004 secs. 2.1-2.2)."""
         z = np.asarray(z, dtype=float)
         P_pred, S = self.predicted_innovation()
-        chi2 = laws.chi_square_per_observation(z, S)
+        chi2 = chi_square_per_observation(z, S)
         faults = chi2 > self.chi2_threshold
         epoch = self._next_epoch()
         if self.history.last_epoch is not None and epoch != self.history.last_epoch + 1:
@@ -368,7 +360,7 @@ class NewtonRobustKfEngine(KfEngine):
         self.chi2_max = float(chi2.max())
         self.rejected = faults
         self.n_rejected = int(faults.sum())
-        return UpdateResult(z, S, nis_of(z, S), outlier=bool(faults.any()))
+        return UpdateResult(z, S, nis(z, S), outlier=bool(faults.any()))
 
 
 # ------------------------------------------------------------------------------------------
@@ -377,7 +369,7 @@ class Igg3RobustKfEngine(KfEngine):
 
     Per component, the standardized innovation ``u_i = v_i / sqrt(S_ii)`` with
     ``S = H P_{k,k-1} H' + R0`` gives the weight ``w_i`` of
-    :func:`adaptive_laws.igg3_weight` (1 up to k0, down-weighted up to k1, 0 beyond); the
+    :func:`robust_laws.igg3_weight` (1 up to k0, down-weighted up to k1, 0 beyond); the
     update uses the equivalent variance ``R_ii / w_i`` (a component with w_i = 0 is left out).
     The component's defaults k0 = 1.5, k1 = 3.0 (Yang Yuanxi's usual constants): 13 % of clean components
     are down-weighted a little, 0.3 % rejected.
@@ -400,7 +392,7 @@ class Igg3RobustKfEngine(KfEngine):
         z = np.asarray(z, dtype=float)
         P_pred, S = self.predicted_innovation()
         u = z / np.sqrt(np.diag(S))
-        w = laws.igg3_weight(u, self.igg_k0, self.igg_k1)
+        w = robust_laws.igg3_weight(u, self.igg_k0, self.igg_k1)
         keep = w > 0.0
         R = self.R0.copy()
         idx = np.flatnonzero(keep)
@@ -415,7 +407,7 @@ class Igg3RobustKfEngine(KfEngine):
         r0 = np.diag(self.R0)
         # trace(R_equivalent)/trace(R0) over the components kept (a dropped one has none)
         r_scale = float(np.sum(r0[idx] / w[idx]) / np.sum(r0[idx])) if idx.size else 1.0
-        return UpdateResult(z, S, nis_of(z, S), r_scale=r_scale,
+        return UpdateResult(z, S, nis(z, S), r_scale=r_scale,
                             outlier=bool((w < 1.0).any()))
 
 
@@ -432,4 +424,4 @@ class InsOnlyEngine(KfEngine):
         """Innovation diagnostics only; the state and covariance are left untouched."""
         z = np.asarray(z, dtype=float)
         _, S = self.predicted_innovation()
-        return UpdateResult(z, S, nis_of(z, S))
+        return UpdateResult(z, S, nis(z, S))

@@ -24,7 +24,7 @@ Process noise: the gyro angle random walk ``N_g`` maps through the MRP kinematic
 ``d sigma / dt = B omega / 4`` with ``B B^T = (1 + s)^2 I`` (Schaub & Junkins eq. 3.163),
 so ``Q_sigma = N_g^2 T (1 + s)^2 / 16 I``; the bias walks with ``Q_b = N_b^2 T I``.
 
-Measurement (eq. 24)::
+Measurement (paper 003 eq. 24)::
 
     z = [f_b, m_b / H] = [C_bn^T (0, 0, -g), C_bn^T (H cos I, 0, H sin I) / H] + v
 
@@ -33,7 +33,7 @@ reading scaled by the field intensity ``H`` (so both blocks are of order 1).
 ``R = diag(r_a^2 I_3, (r_m / H)^2 I_3)``.  After each step the MRP switches to its shadow
 when ``|sigma| > 1`` and the covariance follows (:func:`navcore.mrp.shadow_jacobian`).
 
-Fuzzy adaptive R (eqs. 15-19, 25): see :class:`FuzzyAdaptiveR`.
+Fuzzy adaptive R (paper 003 eqs. 15-19, 25): see :class:`FuzzyAdaptiveR`.
 """
 from __future__ import annotations
 
@@ -252,13 +252,14 @@ class UkfAhrsEngine:
 class FuzzyAdaptiveR:
     """Fuzzy adaptation of R, paper 003 eqs. 15-19 and 25.
 
-    At every update ``k`` with innovation ``r_k = z_k - h(x_k|k-1)`` (eq. 18):
+    At every update ``k`` with innovation ``r_k = z_k - h(x_k|k-1)`` (paper 003 eq. 18):
 
-    * ``C_z = 1/N sum_{i=k-N+1..k} r_i r_i^T`` (eq. 17, window ``N``), ``P_z = Pzz + R_(k-1)``
-      (eq. 16, the UKF's innovation covariance), ``E_k = C_z - P_z`` (eq. 19);
-    * per block b (accelerometer, magnetometer; eq. 25): ``e = tr E_k,b / tr P_z,b`` and
+    * ``C_z = 1/N sum_{i=k-N+1..k} r_i r_i^T`` (paper 003 eq. 17, window ``N``), ``P_z = Pzz
+    + R_(k-1)``
+      (paper 003 eq. 16, the UKF's innovation covariance), ``E_k = C_z - P_z`` (paper 003 eq. 19);
+    * per block b (accelerometer, magnetometer; paper 003 eq. 25): ``e = tr E_k,b / tr P_z,b`` and
       ``de = e_k - e_(k-1)`` go through :class:`~navcore.fuzzy.FuzzyRScale` to ``F_b``;
-    * ``R_k,b = F_b R_(k-1),b`` (eq. 15), the scale kept within
+    * ``R_k,b = F_b R_(k-1),b`` (paper 003 eq. 15), the scale kept within
       ``[r_scale_min, r_scale_max]`` times the nominal R, and used in this update.
 
     Until ``N`` innovations exist, ``F = 1``.  ``window`` >= 2 (the component's parameter

@@ -22,9 +22,9 @@ import numpy as np
 from . import signals
 from .ahrs import FuzzyAdaptiveR, UkfAhrsEngine, triad_attitude
 from .component import Component, Limits, integer, real, string
+from .constants import DPH, DPSH, G0
 from .errors import DivergenceError, ParameterError, StepSizeError
 from .fuzzy import FEET, OUTPUT_VERTICES, FuzzyRScale
-from .imu_errors import DPH, DPSH
 from .rotations import euler_to_dcm
 from .timing import same_time
 
@@ -37,7 +37,7 @@ _AHRS_PARAMETERS = (
     real("init_roll", "rad", "initial roll (init_attitude = 'parameters')", 0.0),
     real("init_pitch", "rad", "initial pitch (init_attitude = 'parameters')", 0.0),
     real("init_yaw", "rad", "initial yaw (init_attitude = 'parameters')", 0.0),
-    real("gravity_mps2", "m/s2", "local gravity magnitude g of the measurement model", 9.80665,
+    real("gravity_mps2", "m/s2", "local gravity magnitude g of the measurement model", G0,
          Limits(0.0, 100.0, low_open=True)),
     real("mag_field_T", "T", "earth field intensity H of the measurement model", 5.0e-5,
          Limits(0.0, 1e-3, low_open=True)),

@@ -329,14 +329,8 @@ class Component(ABC):
         notices, self.notices = self.notices, []
         return notices
 
-
     def set_state(self, state: Any) -> None:
         """Become the component of ``state`` (see :meth:`from_state`); unchanged on error."""
         restored = self.from_state(state)
         self.__dict__.clear()
         self.__dict__.update(restored.__dict__)
-
-    # -- helpers ----------------------------------------------------------------------
-    @classmethod
-    def default_inputs(cls) -> Dict[str, Any]:
-        return {p.name: p.default() for p in cls.inputs}

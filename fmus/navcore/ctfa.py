@@ -1,14 +1,14 @@
 """Chi-square-test fuzzy adaptive (CTFA) process-noise schedule, paper 000 eqs. 24-25.
 
 Yang et al. evaluate the process model after every measurement update with the chi-square
-statistic of the innovation (eq. 24)::
+statistic of the innovation (paper 000 eq. 24)::
 
     q_k = (z_k - z_pred)^T P_zz^-1 (z_k - z_pred)
 
 (the paper prints it as a quotient ``v v^T / P_zz``; for a vector measurement that means
 ``v^T P_zz^-1 v``, and the paper's ``P_zz`` contains the measurement noise through its augmented
 sigma points, i.e. it is the innovation covariance ``S``).  It then sets the process noise for
-the next step with the piecewise-linear "fuzzy membership" function of eq. 25::
+the next step with the piecewise-linear "fuzzy membership" function of paper 000 eq. 25::
 
     Q_est = Q_{k-1}                                             q_k < q_min
           = (q_k - q_min) / (q_max - q_min) (Q_max - Q_min) + Q_min   q_min <= q_k <= q_max
@@ -16,61 +16,40 @@ the next step with the piecewise-linear "fuzzy membership" function of eq. 25::
 
 with ``Q_0 = Q_min``.  The paper writes the slope as ``1/5.1``, which is ``1/(q_max - q_min)``
 for its thresholds ``q_min = 6.25`` and ``q_max = 11.35`` (chi-square quantiles at 90 % and 99 %
-for 3 degrees of freedom, the dimension of its GPS position measurement, eqs. 3-4).
+for 3 degrees of freedom, the dimension of its GPS position measurement, paper 000 eqs. 3-4).
 
 Note the memory in the first branch: below ``q_min`` the paper *keeps* the previous Q ("the
 model is not adjusted"), it does not fall back to ``Q_min``.  Because every Q the schedule
 produces has the form ``Q_min + w (Q_max - Q_min)``, the schedule is carried exactly by the
 scalar weight ``w in [0, 1]``: :func:`ctfa_q_scale` maps ``(q_k, w_{k-1})`` to ``w_k`` and
-:func:`ctfa_q` / :class:`CtfaQSchedule` turn it into Q.  Passing ``previous_weight=0`` (or
-``Q_previous=None``) gives the memoryless variant "Q_min below q_min", which equals eq. 25 as
-long as nothing above ``q_min`` has been seen since ``Q_0 = Q_min``.
+:class:`CtfaQSchedule` turns it into Q.  Passing ``previous_weight=0`` gives the memoryless
+variant "Q_min below q_min", which equals paper 000 eq. 25 as long as nothing above ``q_min`` has
+been seen since ``Q_0 = Q_min``.  The statistic itself is :mod:`navcore.innovation_stats`'s.
 
-Ours, not the paper's: :class:`CtfaQSchedule` takes a ``pass_decay`` factor ``d in [0, 1]``
-applied while the test passes, ``w_k = d w_{k-1}`` for ``q_k < q_min``.  ``d = 1`` is eq. 25
-as printed (the default), ``d = 0`` the memoryless variant; in between Q returns
-exponentially towards ``Q_min`` (time constant ``-T_fix / ln d`` for fixes every ``T_fix``)
-once the manoeuvre that raised it is over, instead of staying wherever the last exceedance
-put it (with 3 degrees of freedom ``q_k >= 6.25`` on 10 % of the epochs of a correct model).
+Ours, not the paper's: :class:`CtfaQSchedule` takes a ``pass_decay`` factor ``d in [0, 1]`` applied
+while the test passes, ``w_k = d w_{k-1}`` for ``q_k < q_min``.  ``d = 1`` is paper 000 eq. 25 as
+printed (the default), ``d = 0`` the memoryless variant; in between Q returns exponentially towards
+``Q_min`` (time constant ``-T_fix / ln d`` for fixes every ``T_fix``) once the manoeuvre that
+raised it is over, instead of staying wherever the last exceedance put it (with 3 degrees of
+freedom ``q_k >= 6.25`` on 10 % of the epochs of a correct model).
 """
 from __future__ import annotations
 
 import math
-from typing import Optional, Tuple
+from typing import Tuple
 
 import numpy as np
-from navcore.chisquare import chi2
 
 from navcore.component import InputError, ParameterError
+from navcore.innovation_stats import CTFA_THRESHOLDS_PAPER_000, chi2_lower_quantile
 
 #: thresholds printed in paper 000 (eq. 25) for a 3-dimensional measurement
-PAPER_T1 = 6.25
-PAPER_T2 = 11.35
-
-
-def chi_square_statistic(innovation: np.ndarray, S: np.ndarray) -> float:
-    """Chi-square statistic ``v^T S^-1 v`` of an innovation (paper 000 eq. 24; the NIS).
-
-    ``S`` is the innovation covariance (``P_zz`` of eq. 19 including R).  Solved through the
-    Cholesky factor of ``S``; raises :class:`InputError` if ``S`` is not positive definite or the
-    inputs are not finite.
-    """
-    v = np.atleast_1d(np.asarray(innovation, dtype=float))
-    S = np.atleast_2d(np.asarray(S, dtype=float))
-    if S.shape != (v.shape[0], v.shape[0]):
-        raise InputError(f"chi_square_statistic: 'S' must be {v.shape[0]}x{v.shape[0]}, got {S.shape}")
-    if not (np.isfinite(v).all() and np.isfinite(S).all()):
-        raise InputError("chi_square_statistic: 'innovation' and 'S' must be finite")
-    try:
-        L = np.linalg.cholesky(0.5 * (S + S.T))
-    except np.linalg.LinAlgError:
-        raise InputError("chi_square_statistic: innovation covariance 'S' is not positive definite") from None
-    u = np.linalg.solve(L, v)
-    return float(u @ u)
+PAPER_T1, PAPER_T2 = CTFA_THRESHOLDS_PAPER_000
 
 
 def ctfa_thresholds(dof: int, p_low: float = 0.90, p_high: float = 0.99) -> Tuple[float, float]:
-    """Thresholds ``(q_min, q_max)`` of eq. 25: chi-square quantiles at ``p_low`` and ``p_high``.
+    """Thresholds ``(q_min, q_max)`` of paper 000 eq. 25: chi-square quantiles at ``p_low``
+    and ``p_high``.
 
     For ``dof = 3`` this gives ``(6.2514, 11.3449)``; the paper prints 6.25 and 11.35 (11.345
     rounded up).  ``dof`` is the measurement dimension.
@@ -80,7 +59,7 @@ def ctfa_thresholds(dof: int, p_low: float = 0.90, p_high: float = 0.99) -> Tupl
     if not (0.0 < p_low < p_high < 1.0):
         raise ParameterError(
             f"ctfa_thresholds: need 0 < p_low < p_high < 1, got p_low={p_low}, p_high={p_high}")
-    return float(chi2.ppf(p_low, dof)), float(chi2.ppf(p_high, dof))
+    return float(chi2_lower_quantile(p_low, dof)), float(chi2_lower_quantile(p_high, dof))
 
 
 def _check_thresholds(T1: float, T2: float, where: str) -> None:
@@ -97,7 +76,7 @@ def _check_stat(stat: float, where: str) -> float:
 
 def ctfa_q_scale(stat: float, T1: float = PAPER_T1, T2: float = PAPER_T2,
                  previous_weight: float = 0.0) -> float:
-    """Weight ``w`` of eq. 25 with ``Q = Q_min + w (Q_max - Q_min)``.
+    """Weight ``w`` of paper 000 eq. 25 with ``Q = Q_min + w (Q_max - Q_min)``.
 
     ``w = previous_weight`` if ``stat < T1`` (the paper keeps ``Q_{k-1}``; with the default 0
     this is the memoryless "Q_min below T1"), ``(stat - T1) / (T2 - T1)`` for
@@ -115,34 +94,11 @@ def ctfa_q_scale(stat: float, T1: float = PAPER_T1, T2: float = PAPER_T2,
     return (stat - T1) / (T2 - T1)
 
 
-def ctfa_q(stat: float, Qmin: np.ndarray, Qmax: np.ndarray, T1: float = PAPER_T1,
-           T2: float = PAPER_T2, Q_previous: Optional[np.ndarray] = None) -> np.ndarray:
-    """Process noise covariance of eq. 25 for chi-square statistic ``stat``.
-
-    ``Q_previous`` is ``Q_{k-1}``, returned unchanged when ``stat < T1``; ``None`` means
-    ``Q_0 = Q_min``.  Between the thresholds the result is
-    ``(stat - T1) / (T2 - T1) (Qmax - Qmin) + Qmin`` (the paper's ``1/5.1`` slope for
-    T1 = 6.25, T2 = 11.35); above ``T2`` it is ``Qmax``.  Returns a new array.
-    """
-    where = "ctfa_q"
-    _check_thresholds(T1, T2, where)
-    stat = _check_stat(stat, where)
-    Qmin = np.asarray(Qmin, dtype=float)
-    Qmax = np.asarray(Qmax, dtype=float)
-    if Qmin.shape != Qmax.shape:
-        raise ParameterError(f"{where}: 'Qmin' {Qmin.shape} and 'Qmax' {Qmax.shape} differ in shape")
-    if stat < T1:
-        return Qmin.copy() if Q_previous is None else np.array(Q_previous, dtype=float)
-    if stat > T2:
-        return Qmax.copy()
-    return (stat - T1) / (T2 - T1) * (Qmax - Qmin) + Qmin
-
-
 class CtfaQSchedule:
-    """Stateful eq. 25 schedule: holds the weight ``w`` so that ``Q = Qmin + w (Qmax - Qmin)``.
+    """Stateful paper 000 eq. 25 schedule: holds the weight ``w`` so that ``Q = Qmin + w (Qmax - Qmin)``.
 
-    ``update(stat)`` applies eq. 25 after a measurement update and returns the Q for the next
-    prediction; ``pass_decay`` < 1 is our return towards Qmin while the test passes (module
+    ``update(stat)`` applies paper 000 eq. 25 after a measurement update and returns the Q for the
+    next prediction; ``pass_decay`` < 1 is our return towards Qmin while the test passes (module
     docstring).  Starts at ``Q_0 = Qmin`` (``w = 0``).  Plain attributes, deep-copyable.
     ``Qmin`` and ``Qmax`` are validated: same square shape, finite, symmetric, and
     ``Qmax - Qmin`` positive semi-definite (so every scheduled Q lies between them).

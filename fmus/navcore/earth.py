@@ -1,31 +1,28 @@
 """WGS-84 earth model in the local NED navigation frame.
 
 Functions take latitude in rad and height in m above the ellipsoid and work on scalars or
-numpy arrays.  References: Groves, *Principles of GNSS, Inertial, and Multisensor Integrated
-Navigation Systems*, 2nd ed., eqs. (2.105)-(2.106) (radii), (2.134) (normal gravity with
+numpy arrays; the WGS-84 constants are those of :mod:`navcore.constants`.  References:
+Groves, *Principles of GNSS, Inertial, and Multisensor Integrated Navigation Systems*,
+2nd ed., eqs. (2.105)-(2.106) (radii), (2.134) (normal gravity with
 height, Somigliana + free-air series), (5.41)-(5.44) (earth and transport rates in NED).
 """
 from __future__ import annotations
 
 import numpy as np
 
-#: semi-major axis [m]
-A = 6378137.0
-#: flattening [-]
-F = 1.0 / 298.257223563
-#: first eccentricity squared [-]
-E2 = F * (2.0 - F)
-#: semi-minor axis [m]
-B = A * (1.0 - F)
-#: earth rotation rate [rad/s]
-OMEGA_IE = 7.292115e-5
-#: earth gravitational constant GM [m^3/s^2]
-GM = 3.986004418e14
-#: normal gravity at the equator and at the poles [m/s^2] (Somigliana)
-GAMMA_E = 9.7803253359
-GAMMA_P = 9.8321849378
-_K_SOMIGLIANA = (B * GAMMA_P - A * GAMMA_E) / (A * GAMMA_E)
-_M = OMEGA_IE**2 * A**2 * B / GM
+from .constants import WGS84_A as A
+from .constants import WGS84_B as B
+from .constants import WGS84_E2 as E2
+from .constants import WGS84_F as F
+from .constants import WGS84_GAMMA_E as GAMMA_E
+from .constants import WGS84_GAMMA_P as GAMMA_P
+from .constants import WGS84_GM as GM
+from .constants import WGS84_OMEGA_IE as OMEGA_IE
+
+#: Somigliana's constant k = (b gamma_p - a gamma_e) / (a gamma_e) of normal gravity [-]
+SOMIGLIANA_K = (B * GAMMA_P - A * GAMMA_E) / (A * GAMMA_E)
+#: m = omega_ie^2 a^2 b / GM of the free-air height correction [-]
+GRAVITY_M = OMEGA_IE**2 * A**2 * B / GM
 
 
 def radii(lat):
@@ -47,8 +44,8 @@ def gravity(lat, h):
     (Groves 2.134, WGS-84 constants).  In NED the gravity vector is (0, 0, gravity).
     """
     s2 = np.sin(lat) ** 2
-    g0 = GAMMA_E * (1.0 + _K_SOMIGLIANA * s2) / np.sqrt(1.0 - E2 * s2)
-    return g0 * (1.0 - 2.0 / A * (1.0 + F + _M - 2.0 * F * s2) * h + 3.0 * h**2 / A**2)
+    g0 = GAMMA_E * (1.0 + SOMIGLIANA_K * s2) / np.sqrt(1.0 - E2 * s2)
+    return g0 * (1.0 - 2.0 / A * (1.0 + F + GRAVITY_M - 2.0 * F * s2) * h + 3.0 * h**2 / A**2)
 
 
 def gravity_ned(lat, h):
@@ -66,16 +63,6 @@ def transport_rate_ned(lat, h, v_ned):
     rn, re = radii(lat)
     vn, ve = v_ned[0], v_ned[1]
     return np.array([ve / (re + h), -vn / (rn + h), -ve * np.tan(lat) / (re + h)])
-
-
-def lla_rates(lat, h, v_ned):
-    """Time derivatives (dlat/dt, dlon/dt, dh/dt) [rad/s, rad/s, m/s] for NED velocity."""
-    rn, re = radii(lat)
-    return np.array([
-        v_ned[0] / (rn + h),
-        v_ned[1] / ((re + h) * np.cos(lat)),
-        -v_ned[2],
-    ])
 
 
 def ned_to_lla_delta(lat, h, d_ned):

@@ -18,8 +18,8 @@ from . import state as _state
 from .component import Component, Limits, real, string
 from .errors import DivergenceError, StepSizeError
 from .gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS
-from .imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, DPH, DPSH, GYRO_ARW_LIMITS,
-                         GYRO_BIAS_LIMITS, UG)
+from .constants import DPH, DPSH, UG
+from .imu_errors import ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_LIMITS, GYRO_BIAS_LIMITS
 from .ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from .latency import SolutionHistory
 from .rotations import dcm_to_euler

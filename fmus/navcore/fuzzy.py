@@ -10,7 +10,8 @@ For one sensor block (accelerometer or magnetometer) the adaptive filter gives t
   measured innovations match the filter's prediction, > 0 when R is too small;
 * ``de``: its change since the previous update, ``e_k - e_(k-1)``.
 
-The output is the factor ``F`` of ``R_k = F_k R_(k-1)`` (eq. 15) for the block (eq. 25).
+The output is the factor ``F`` of ``R_k = F_k R_(k-1)`` (paper 003 eq. 15) for the block
+(paper 003 eq. 25).
 
 Membership functions (triangular, as in the paper)
 --------------------------------------------------

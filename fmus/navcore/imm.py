@@ -35,42 +35,26 @@ next update.
 """
 from __future__ import annotations
 
-import math
 from typing import Any, Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from navcore.component import InputError, ParameterError
-
-_LOG_2PI = math.log(2.0 * math.pi)
+from navcore.innovation_stats import (checked_cholesky, gaussian_log_likelihood,
+                                      log_det_from_cholesky, nis_from_cholesky)
 
 #: default lower bound of a model probability after the update (see module docstring)
 DEFAULT_PROBABILITY_FLOOR = 1e-12
 
 
 def log_likelihood(innovation: np.ndarray, S: np.ndarray) -> float:
-    """``log N(v; 0, S) = -(v^T S^-1 v + log det S + m log 2 pi) / 2`` via Cholesky of ``S``.
+    """``log N(v; 0, S) = -(v^T S^-1 v + log det S + m log 2 pi) / 2`` via Cholesky of ``S``
+    (the same arithmetic as the UKF update's likelihood).
 
     Raises :class:`InputError` if ``S`` is not positive definite or the inputs are not finite.
     """
-    v = np.atleast_1d(np.asarray(innovation, dtype=float))
-    S = np.atleast_2d(np.asarray(S, dtype=float))
-    if S.shape != (v.shape[0], v.shape[0]):
-        raise InputError(f"log_likelihood: 'S' must be {v.shape[0]}x{v.shape[0]}, got {S.shape}")
-    if not (np.isfinite(v).all() and np.isfinite(S).all()):
-        raise InputError("log_likelihood: 'innovation' and 'S' must be finite")
-    try:
-        L = np.linalg.cholesky(0.5 * (S + S.T))
-    except np.linalg.LinAlgError:
-        raise InputError("log_likelihood: innovation covariance 'S' is not positive definite") from None
-    u = np.linalg.solve(L, v)
-    return -0.5 * (float(u @ u) + 2.0 * float(np.log(np.diagonal(L)).sum()) + v.shape[0] * _LOG_2PI)
-
-
-def gaussian_likelihood(innovation: np.ndarray, S: np.ndarray) -> float:
-    """``N(v; 0, S)``, the model likelihood of the IMM update (may underflow to 0: prefer
-    :func:`log_likelihood` with ``imm_update_probabilities(..., log=True)``)."""
-    return math.exp(log_likelihood(innovation, S))
+    v, L = checked_cholesky(innovation, S, "log_likelihood")
+    return gaussian_log_likelihood(nis_from_cholesky(L, v), log_det_from_cholesky(L), v.shape[0])
 
 
 def check_transition_matrix(Pi: np.ndarray, r: Optional[int] = None) -> np.ndarray:

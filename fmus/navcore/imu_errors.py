@@ -44,18 +44,10 @@ from typing import Any, Dict, List, Tuple
 import numpy as np
 
 from .component import InputError, Limits, ParameterError
+from .constants import DPH, DPSH, G0, UG
 from .gnss_errors import (TIME_LIMITS, bounded_float, check_known, parse_records,
                           read_declared)
 
-#: standard gravity [m/s^2], the "g" of datasheet units (ug, deg/h/g)
-G0 = 9.80665
-DEG = math.pi / 180.0
-#: deg/h -> rad/s
-DPH = DEG / 3600.0
-#: deg/sqrt(h) -> rad/sqrt(s)
-DPSH = DEG / 60.0
-#: ug -> m/s^2 (also ug/sqrt(Hz) -> m/s/sqrt(s))
-UG = 1e-6 * G0
 #: reference angular rate [rad/s] of the recommended intensity measure (see ImuErrorModel)
 INTENSITY_REFERENCE_RATE = 0.1
 
@@ -91,6 +83,27 @@ def parse_windows(text: Any, name: str) -> List[Tuple[float, float, float]]:
     time_field = bounded_float(TIME_LIMITS, "s")
     return parse_records(text, name, (("t0", time_field), ("t1", time_field),
                                       ("factor", bounded_float(NOISE_FACTOR_LIMITS))))
+
+
+def _sensor_parameters(prefix: str, noun: str, bias_suffix: str, bias_unit: str,
+                       bias_limits: Limits, white_noise: Tuple[str, str, str, Limits]
+                       ) -> Dict[str, Tuple[Any, str, str, Limits]]:
+    """The parameter declarations one sensor triad (gyro or accelerometer) shares in form:
+    constant bias, white noise, Gauss-Markov bias, scale factor, misalignment, in this order."""
+    noise_name, noise_unit, noise_description, noise_limits = white_noise
+    return {
+        f"{prefix}_bias_{bias_suffix}": (0.0, bias_unit, f"1-sigma constant {noun} bias, "
+                                                         "drawn per axis", bias_limits),
+        noise_name: (0.0, noise_unit, noise_description, noise_limits),
+        f"{prefix}_bias_instability_{bias_suffix}": (
+            0.0, bias_unit, f"steady-state sigma of the Gauss-Markov {noun} bias", bias_limits),
+        f"{prefix}_bias_tau_s": (0.0, "s", f"correlation time of the Gauss-Markov {noun} bias "
+                                           "(<= 0 disables)", TAU_LIMITS),
+        f"{prefix}_scale_factor_ppm": (0.0, "ppm", f"1-sigma {noun} scale-factor error, per "
+                                                   "axis", SCALE_FACTOR_LIMITS),
+        f"{prefix}_misalignment_urad": (0.0, "urad", f"1-sigma {noun} misalignment, per "
+                                                     "off-diagonal element", MISALIGNMENT_LIMITS),
+    }
 
 
 class ImuErrorModel:
@@ -173,31 +186,14 @@ class ImuErrorModel:
 
     #: name -> (default, unit, description) of every parameter, for components declaring them
     PARAMETERS: Dict[str, Tuple[Any, str, str, Limits]] = {
-        "gyro_bias_dph": (0.0, "deg/h", "1-sigma constant gyro bias, drawn per axis",
-                          GYRO_BIAS_LIMITS),
-        "gyro_arw_dpsh": (0.0, "deg/sqrt(h)", "gyro angle random walk", GYRO_ARW_LIMITS),
-        "gyro_bias_instability_dph": (0.0, "deg/h", "steady-state sigma of the Gauss-Markov "
-                                                    "gyro bias", GYRO_BIAS_LIMITS),
-        "gyro_bias_tau_s": (0.0, "s", "correlation time of the Gauss-Markov gyro bias "
-                                      "(<= 0 disables)", TAU_LIMITS),
-        "gyro_scale_factor_ppm": (0.0, "ppm", "1-sigma gyro scale-factor error, per axis",
-                                  SCALE_FACTOR_LIMITS),
-        "gyro_misalignment_urad": (0.0, "urad", "1-sigma gyro misalignment, per off-diagonal "
-                                                "element", MISALIGNMENT_LIMITS),
+        **_sensor_parameters("gyro", "gyro", "dph", "deg/h", GYRO_BIAS_LIMITS,
+                             ("gyro_arw_dpsh", "deg/sqrt(h)", "gyro angle random walk",
+                              GYRO_ARW_LIMITS)),
         "g_sensitivity_dphpg": (0.0, "deg/h/g", "1-sigma gyro g-sensitivity, per element of "
                                                 "a 3x3 matrix", G_SENSITIVITY_LIMITS),
-        "accel_bias_ug": (0.0, "ug", "1-sigma constant accelerometer bias, drawn per axis",
-                          ACCEL_BIAS_LIMITS),
-        "accel_vrw_ugpsHz": (0.0, "ug/sqrt(Hz)", "accelerometer velocity random walk",
-                             ACCEL_VRW_LIMITS),
-        "accel_bias_instability_ug": (0.0, "ug", "steady-state sigma of the Gauss-Markov "
-                                                 "accelerometer bias", ACCEL_BIAS_LIMITS),
-        "accel_bias_tau_s": (0.0, "s", "correlation time of the Gauss-Markov accelerometer "
-                                       "bias (<= 0 disables)", TAU_LIMITS),
-        "accel_scale_factor_ppm": (0.0, "ppm", "1-sigma accelerometer scale-factor error, "
-                                               "per axis", SCALE_FACTOR_LIMITS),
-        "accel_misalignment_urad": (0.0, "urad", "1-sigma accelerometer misalignment, per "
-                                                 "off-diagonal element", MISALIGNMENT_LIMITS),
+        **_sensor_parameters("accel", "accelerometer", "ug", "ug", ACCEL_BIAS_LIMITS,
+                             ("accel_vrw_ugpsHz", "ug/sqrt(Hz)",
+                              "accelerometer velocity random walk", ACCEL_VRW_LIMITS)),
         "level_reference_g": (0.0, "", "specific force [g] along body -z at which the constant "
                                         "biases are specified; scale factor, misalignment and "
                                         "g-sensitivity act on f minus it (0 = on all of f)",
@@ -217,49 +213,69 @@ class ImuErrorModel:
 
     def __init__(self, params: Dict[str, Any], seed: int):
         check_known(params, self.PARAMETERS, "ImuErrorModel")
-
-        def sigma(name: str) -> float:
-            return read_declared(params, name, self.PARAMETERS)
-
-        tau = sigma
-
-        # datasheet units -> SI, once
-        gyro_bias = sigma("gyro_bias_dph") * DPH
-        accel_bias = sigma("accel_bias_ug") * UG
-        gyro_arw = sigma("gyro_arw_dpsh") * DPSH                 # rad/sqrt(s)
-        accel_vrw = sigma("accel_vrw_ugpsHz") * UG               # m/s/sqrt(s)
-        gyro_gm_sigma = sigma("gyro_bias_instability_dph") * DPH
-        accel_gm_sigma = sigma("accel_bias_instability_ug") * UG
-        gyro_tau = tau("gyro_bias_tau_s")
-        accel_tau = tau("accel_bias_tau_s")
-        gyro_sf = sigma("gyro_scale_factor_ppm") * 1e-6
-        accel_sf = sigma("accel_scale_factor_ppm") * 1e-6
-        gyro_mis = sigma("gyro_misalignment_urad") * 1e-6
-        accel_mis = sigma("accel_misalignment_urad") * 1e-6
-        g_sens = sigma("g_sensitivity_dphpg") * DPH / G0         # rad/s per m/s^2
-        self.noise_intensity_gain = sigma("noise_intensity_gain")
+        si = self._si_values(params)
+        self.noise_intensity_gain = si["noise_intensity_gain"]
         self.noise_level_windows = parse_windows(params.get("noise_level_windows", ""),
                                                  "noise_level_windows")
-        vib_gyro = sigma("vibration_gyro_rps")
-        vib_accel = sigma("vibration_accel_mps2")
-
         try:
             self.seed = int(seed)
         except (TypeError, ValueError):
             raise ParameterError(f"parameter 'seed' must be an integer, got {seed!r}") from None
         self.rng = np.random.default_rng(self.seed)
-        rng = self.rng
+        gm_initial = self._draw_errors(si)
+        self._build_increment_map(si["level_reference_g"])
+        self._init_gauss_markov(si, gm_initial)
 
-        # Fixed draw order and count (module docstring).
+        # white noise densities (rad/sqrt(s), m/s/sqrt(s)) and vibration sigmas per sample
+        self._white_density = np.repeat([si["gyro_arw"], si["accel_vrw"]], 3)
+        self._vibration_sigma = np.repeat([si["vib_gyro"], si["vib_accel"]], 3)
+        self._vibration_on = bool(si["vib_gyro"] > 0.0 or si["vib_accel"] > 0.0)
+
+        # coefficients that depend on dt only, recomputed when dt changes
+        self._cached_dt = None
+        self._gm_phi = np.ones(6)
+        self._gm_drive = np.zeros(6)
+        self._white_sigma_dt = np.zeros(6)
+        self._vibration_sigma_dt = np.zeros(6)
+
+    def _si_values(self, params: Dict[str, Any]) -> Dict[str, float]:
+        """The numeric parameters, checked, in SI units (datasheet units converted once)."""
+        def value(name: str) -> float:
+            return read_declared(params, name, self.PARAMETERS)
+
+        return {
+            "gyro_bias": value("gyro_bias_dph") * DPH,
+            "accel_bias": value("accel_bias_ug") * UG,
+            "gyro_arw": value("gyro_arw_dpsh") * DPSH,                 # rad/sqrt(s)
+            "accel_vrw": value("accel_vrw_ugpsHz") * UG,               # m/s/sqrt(s)
+            "gyro_gm_sigma": value("gyro_bias_instability_dph") * DPH,
+            "accel_gm_sigma": value("accel_bias_instability_ug") * UG,
+            "gyro_tau": value("gyro_bias_tau_s"),
+            "accel_tau": value("accel_bias_tau_s"),
+            "gyro_sf": value("gyro_scale_factor_ppm") * 1e-6,
+            "accel_sf": value("accel_scale_factor_ppm") * 1e-6,
+            "gyro_mis": value("gyro_misalignment_urad") * 1e-6,
+            "accel_mis": value("accel_misalignment_urad") * 1e-6,
+            "g_sens": value("g_sensitivity_dphpg") * DPH / G0,         # rad/s per m/s^2
+            "noise_intensity_gain": value("noise_intensity_gain"),
+            "vib_gyro": value("vibration_gyro_rps"),
+            "vib_accel": value("vibration_accel_mps2"),
+            "level_reference_g": value("level_reference_g"),
+        }
+
+    def _draw_errors(self, si: Dict[str, float]) -> np.ndarray:
+        """Draw the turn-on errors in the fixed order and count of the module docstring;
+        returns the 6 standard normals of the initial Gauss-Markov state."""
+        rng = self.rng
         #: constant biases, gyro [rad/s] then accel [m/s^2]
-        self.constant_bias = np.concatenate((gyro_bias * rng.standard_normal(3),
-                                             accel_bias * rng.standard_normal(3)))
-        gyro_scale = gyro_sf * rng.standard_normal(3)
-        accel_scale = accel_sf * rng.standard_normal(3)
-        gyro_mis_draw = gyro_mis * rng.standard_normal(6)
-        accel_mis_draw = accel_mis * rng.standard_normal(6)
+        self.constant_bias = np.concatenate((si["gyro_bias"] * rng.standard_normal(3),
+                                             si["accel_bias"] * rng.standard_normal(3)))
+        gyro_scale = si["gyro_sf"] * rng.standard_normal(3)
+        accel_scale = si["accel_sf"] * rng.standard_normal(3)
+        gyro_mis_draw = si["gyro_mis"] * rng.standard_normal(6)
+        accel_mis_draw = si["accel_mis"] * rng.standard_normal(6)
         #: gyro g-sensitivity matrix G_g [rad/s per m/s^2]
-        self.g_sensitivity = g_sens * rng.standard_normal((3, 3))
+        self.g_sensitivity = si["g_sens"] * rng.standard_normal((3, 3))
         gm_initial = rng.standard_normal(6)
 
         #: I + S_g + M_g and I + S_a + M_a
@@ -268,39 +284,32 @@ class ImuErrorModel:
         for (i, j), mg, ma in zip(_OFF_DIAGONAL, gyro_mis_draw, accel_mis_draw):
             self.gyro_matrix[i, j] = mg
             self.accel_matrix[i, j] = ma
-        # One 6x6 map from the stacked ideal increments (dtheta, dvel) to the measured ones
-        # without bias and noise: the g-sensitivity term G_g f dt equals G_g dvel.
+        return gm_initial
+
+    def _build_increment_map(self, level_reference_g: float) -> None:
+        """One 6x6 map from the stacked ideal increments (dtheta, dvel) to the measured ones
+        without bias and noise (the g-sensitivity term G_g f dt equals G_g dvel), and the
+        rate / specific-force error already contained in the biases of a level calibration."""
         self._increment_matrix = np.zeros((6, 6))
         self._increment_matrix[:3, :3] = self.gyro_matrix
         self._increment_matrix[:3, 3:] = self.g_sensitivity
         self._increment_matrix[3:, 3:] = self.accel_matrix
-        # rate / specific-force error already contained in the biases of a level calibration
-        f_ref = np.array([0.0, 0.0, -sigma("level_reference_g") * G0])
+        f_ref = np.array([0.0, 0.0, -level_reference_g * G0])
         self._reference_offset = np.concatenate((self.g_sensitivity @ f_ref,
                                                  (self.accel_matrix - np.eye(3)) @ f_ref))
 
-        # Gauss-Markov biases (gyro 3, accel 3): steady-state sigma and correlation time;
-        # disabled axes get sigma 0 and tau = inf (phi = 1, no driving noise, state stays 0).
-        gm_on_gyro = gyro_tau > 0.0 and gyro_gm_sigma > 0.0
-        gm_on_accel = accel_tau > 0.0 and accel_gm_sigma > 0.0
-        self._gm_sigma = np.repeat([gyro_gm_sigma if gm_on_gyro else 0.0,
-                                    accel_gm_sigma if gm_on_accel else 0.0], 3)
+    def _init_gauss_markov(self, si: Dict[str, float], gm_initial: np.ndarray) -> None:
+        """Gauss-Markov biases (gyro 3, accel 3): steady-state sigma and correlation time;
+        disabled axes get sigma 0 and tau = inf (phi = 1, no driving noise, state stays 0)."""
+        gyro_tau, accel_tau = si["gyro_tau"], si["accel_tau"]
+        gm_on_gyro = gyro_tau > 0.0 and si["gyro_gm_sigma"] > 0.0
+        gm_on_accel = accel_tau > 0.0 and si["accel_gm_sigma"] > 0.0
+        self._gm_sigma = np.repeat([si["gyro_gm_sigma"] if gm_on_gyro else 0.0,
+                                    si["accel_gm_sigma"] if gm_on_accel else 0.0], 3)
         self._gm_tau = np.repeat([gyro_tau if gm_on_gyro else math.inf,
                                   accel_tau if gm_on_accel else math.inf], 3)
         #: current Gauss-Markov bias state, gyro [rad/s] then accel [m/s^2]
         self.gm_bias = self._gm_sigma * gm_initial     # stationary start
-
-        # white noise densities (rad/sqrt(s), m/s/sqrt(s)) and vibration sigmas per sample
-        self._white_density = np.repeat([gyro_arw, accel_vrw], 3)
-        self._vibration_sigma = np.repeat([vib_gyro, vib_accel], 3)
-        self._vibration_on = bool(vib_gyro > 0.0 or vib_accel > 0.0)
-
-        # coefficients that depend on dt only, recomputed when dt changes
-        self._cached_dt = None
-        self._gm_phi = np.ones(6)
-        self._gm_drive = np.zeros(6)
-        self._white_sigma_dt = np.zeros(6)
-        self._vibration_sigma_dt = np.zeros(6)
 
     # -- queries ------------------------------------------------------------------------
     def true_biases(self) -> Tuple[np.ndarray, np.ndarray]:

@@ -26,6 +26,7 @@ import numpy as np
 
 from . import earth
 from .error_model import ATT, BA, BG, N_STATES, POS, VEL, process_noise_density, system_matrix
+from .innovation_stats import nis
 from .strapdown import Strapdown
 
 #: measurement modes and their dimension
@@ -123,7 +124,7 @@ class KfEngine:
         return p_prop + q_acc
 
     def predicted_innovation(self, R=None):
-        """(P_{k,k-1}, S): the unfaded prediction (eq. 6) and the innovation covariance
+        """(P_{k,k-1}, S): the unfaded prediction (paper 001 eq. 6) and the innovation covariance
         ``S = H P_{k,k-1} H' + R`` (``R`` defaults to the fixed R0).  H selects the first m
         states, so H P H' is the leading m x m block."""
         P_pred = self.covariance()
@@ -162,7 +163,7 @@ class KfEngine:
         P_pred = p_prop + q_acc
         dx, P, v, S, _ = self.kalman_update(P_pred, z, self.R0)
         self.apply(dx, P)
-        return UpdateResult(v, S, nis_of(v, S))
+        return UpdateResult(v, S, nis(v, S))
 
     def apply(self, dx, P):
         """Closed-loop feedback of the estimated errors and reset of the accumulators."""
@@ -172,7 +173,3 @@ class KfEngine:
         self.close_prediction(P)
         self.n_updates += 1
 
-
-def nis_of(v, S):
-    """Normalized innovation squared v' S^-1 v."""
-    return float(v @ np.linalg.solve(S, v))

@@ -11,9 +11,10 @@ from __future__ import annotations
 from . import signals
 from .adaptive_filters import (REPLACEMENT_VARIANCES, IakfEngine, Igg3RobustKfEngine,
                                InsOnlyEngine, NewtonRobustKfEngine, SageHusaFadingEngine)
-from .adaptive_laws import CHI2_THRESHOLD_PAPER_004, DEFAULT_R_FLOOR_FRACTION
+from .adaptive_laws import DEFAULT_R_FLOOR_FRACTION
 from .component import Limits, integer, real, string
 from .filter_component import InsGnssFilter
+from .innovation_stats import CHI2_THRESHOLD_PAPER_004
 
 class Kf(InsGnssFilter):
     """Baseline 15-state loosely coupled error-state Kalman filter (closed loop)."""

@@ -24,18 +24,17 @@ difference of consecutive times.
 """
 from __future__ import annotations
 
-import math
 import re
 from pathlib import Path
 from typing import Dict, Optional, Sequence
 
 import numpy as np
 
+from .constants import DEG as _D2R
 from .rotations import wrap_angle
 from .sensorlog import (GNSS_FILE, IMU_FILE, TRUTH_FILE, LogError, SensorLog, check_log,
                         parse_numbers, parse_rows, read_lines)
 
-_D2R = math.pi / 180.0
 _TITLE = re.compile(r"^\s*(?P<name>[^()]*?)\s*(?:\((?P<unit>[^)]*)\))?\s*$")
 
 

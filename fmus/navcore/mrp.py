@@ -16,9 +16,9 @@ eq. 20)::
 
     d sigma_S / d sigma = (2 sigma sigma^T - s I) / s^2
 
-Paper 003 (Xiao & Lu) uses the MRP as the attitude state (eq. 23) and turns it into Euler
-angles for display (eq. 26, whose body is lost in our copy): here MRP -> quaternion -> C_bn ->
-ZYX Euler angles, the same map in closed form.
+Paper 003 (Xiao & Lu) uses the MRP as the attitude state (paper 003 eq. 23) and turns it into Euler
+angles for display (paper 003 eq. 26, whose body is lost in our copy): here MRP -> quaternion ->
+C_bn -> ZYX Euler angles, the same map in closed form.
 
 Every function takes a 3-vector or an ``(N, 3)`` array of MRPs (``(N, 4)`` quaternions).
 """

@@ -11,8 +11,7 @@ Conventions (shared by all of navcore):
   Groves eq. 2.26 / Savage 1998 eq. 7.1.1-4); a body frame turning through ``phi`` relative to
   a reference frame gives ``C_b(new)^(ref) = exp([phi x])``.
 * Quaternions are scalar-first ``[w, x, y, z]`` (Hamilton), with ``quat_to_dcm(q)`` equal to
-  the DCM of the same rotation and ``quat_to_dcm(quat_multiply(p, q)) ==
-  quat_to_dcm(p) @ quat_to_dcm(q)``.
+  the DCM of the same rotation.
 
 The public functions work on numpy arrays.  The underscore helpers work on Python floats and
 nested lists: the strapdown mechanization calls them once per IMU sample, where a numpy call
@@ -34,9 +33,11 @@ _SMALL_ANGLE = 1e-3
 # ---------------------------------------------------------------------------------------
 # scalar helpers (Python floats, row lists)
 # ---------------------------------------------------------------------------------------
-def _rodrigues_rows(x, y, z):
-    """Rows of exp([phi x]) for phi = (x, y, z): I + a [phi x] + b [phi x]^2 with
-    a = sin(t)/t, b = (1 - cos t)/t^2 = 2 sin^2(t/2)/t^2 (no cancellation at small t)."""
+def _rodrigues_delta_rows(x, y, z):
+    """Rows of exp([phi x]) - I for phi = (x, y, z): a [phi x] + b [phi x]^2 with
+    a = sin(t)/t, b = (1 - cos t)/t^2 = 2 sin^2(t/2)/t^2 (no cancellation at small t).  Kept
+    apart from the identity so that a DCM update C + dC rounds once, relative to dC, instead
+    of once per product term relative to 1 (which biases the DCM by ~1e-16 per step)."""
     t2 = x * x + y * y + z * z
     if t2 < _SMALL_ANGLE * _SMALL_ANGLE:
         a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
@@ -52,34 +53,20 @@ def _rodrigues_rows(x, y, z):
     byz = b * y * z
     ax, ay, az = a * x, a * y, a * z
     return [
-        [1.0 - b * (y * y + z * z), bxy - az, bxz + ay],
-        [bxy + az, 1.0 - b * (x * x + z * z), byz - ax],
-        [bxz - ay, byz + ax, 1.0 - b * (x * x + y * y)],
-    ]
-
-
-def _rodrigues_delta_rows(x, y, z):
-    """Rows of exp([phi x]) - I, i.e. a [phi x] + b [phi x]^2 (see _rodrigues_rows).  Kept
-    apart from the identity so that a DCM update C + dC rounds once, relative to dC, instead
-    of once per product term relative to 1 (which biases the DCM by ~1e-16 per step)."""
-    t2 = x * x + y * y + z * z
-    if t2 < _SMALL_ANGLE * _SMALL_ANGLE:
-        a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0
-        b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0
-    else:
-        t = math.sqrt(t2)
-        a = math.sin(t) / t
-        s = math.sin(0.5 * t) / t
-        b = 2.0 * s * s
-    bxy = b * x * y
-    bxz = b * x * z
-    byz = b * y * z
-    ax, ay, az = a * x, a * y, a * z
-    return [
         [-b * (y * y + z * z), bxy - az, bxz + ay],
         [bxy + az, -b * (x * x + z * z), byz - ax],
         [bxz - ay, byz + ax, -b * (x * x + y * y)],
     ]
+
+
+def _rodrigues_rows(x, y, z):
+    """Rows of exp([phi x]) = I + (exp([phi x]) - I) (see _rodrigues_delta_rows); adding 1 to
+    the diagonal gives the same floats as 1 - b (y^2 + z^2) written out."""
+    d = _rodrigues_delta_rows(x, y, z)
+    d[0][0] += 1.0
+    d[1][1] += 1.0
+    d[2][2] += 1.0
+    return d
 
 
 def _quat_from_rows(m):
@@ -173,12 +160,6 @@ def wrap_angle(a):
 # ---------------------------------------------------------------------------------------
 # public numpy API
 # ---------------------------------------------------------------------------------------
-def skew(v):
-    """Skew-symmetric (cross-product) matrix: ``skew(a) @ b == np.cross(a, b)``."""
-    x, y, z = (float(c) for c in v)
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
 def euler_to_dcm(roll, pitch, yaw):
     """C_bn (body -> NED) from ZYX Euler angles [rad]: ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     return np.array(_euler_rows(float(roll), float(pitch), float(yaw)))
@@ -217,32 +198,6 @@ def quat_to_dcm(q):
     ])
 
 
-def quat_multiply(p, q):
-    """Hamilton product p (x) q, so that ``quat_to_dcm(p (x) q) = quat_to_dcm(p) @ quat_to_dcm(q)``."""
-    pw, px, py, pz = (float(c) for c in p)
-    qw, qx, qy, qz = (float(c) for c in q)
-    return np.array([
-        pw * qw - px * qx - py * qy - pz * qz,
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-    ])
-
-
-def quat_from_rotvec(phi):
-    """Quaternion [cos(t/2), sin(t/2) phi/t] of a rotation vector (series for tiny t)."""
-    x, y, z = (float(c) for c in phi)
-    t2 = x * x + y * y + z * z
-    if t2 < _SMALL_ANGLE * _SMALL_ANGLE:
-        s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0  # sin(t/2)/t
-        c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0
-    else:
-        t = math.sqrt(t2)
-        s = math.sin(0.5 * t) / t
-        c = math.cos(0.5 * t)
-    return np.array([c, s * x, s * y, s * z])
-
-
 def quat_normalize(q):
     """Unit quaternion with the same direction; raises ValueError for a zero quaternion."""
     q = np.asarray(q, dtype=float)
@@ -251,13 +206,3 @@ def quat_normalize(q):
         raise ValueError(f"quaternion {q} cannot be normalised")
     return q / n
 
-
-def orthonormalize(C):
-    """Nearest proper rotation matrix to C in the Frobenius norm (polar decomposition
-    via SVD: U V^T, with the sign fixed so det = +1)."""
-    u, _, vt = np.linalg.svd(np.asarray(C, dtype=float))
-    r = u @ vt
-    if np.linalg.det(r) < 0.0:
-        u[:, -1] = -u[:, -1]
-        r = u @ vt
-    return r

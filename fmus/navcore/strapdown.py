@@ -68,10 +68,10 @@ _A = earth.A
 _E2 = earth.E2
 _F = earth.F
 _W_IE = earth.OMEGA_IE
-# the same constants as earth.gravity (Somigliana + free-air series, Groves 2.134), computed
-# with the same expressions; tests check _radii/_gravity against earth.radii/earth.gravity
-_K_SOMIGLIANA = (earth.B * earth.GAMMA_P - earth.A * earth.GAMMA_E) / (earth.A * earth.GAMMA_E)
-_M = earth.OMEGA_IE ** 2 * earth.A ** 2 * earth.B / earth.GM
+# the constants of earth.gravity (Somigliana + free-air series, Groves 2.134); tests check
+# _radii/_gravity against earth.radii/earth.gravity
+_K_SOMIGLIANA = earth.SOMIGLIANA_K
+_M = earth.GRAVITY_M
 
 #: tolerance [m] on the position handed to inverse_update vs integrate_position
 POSITION_TOLERANCE = 1e-6

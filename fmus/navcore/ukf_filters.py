@@ -9,8 +9,8 @@ Nominal navigation and error state
 ----------------------------------
 The strapdown mechanization (:class:`navcore.strapdown.Strapdown`) runs at the IMU rate on the
 bias-compensated increments.  The UKF (:class:`navcore.unscented.UnscentedKalmanFilter`,
-paper eqs. 11-23) estimates the 15-state error of :mod:`navcore.error_model` with the same order,
-units and signs::
+paper 000 eqs. 11-23) estimates the 15-state error of :mod:`navcore.error_model` with the same
+order, units and signs::
 
     x = [dr (NED m), dv (m/s), phi (rad), dbg (rad/s), dba (m/s^2)]
 
@@ -44,7 +44,7 @@ the position/velocity error of each sigma point.
     d(dv)/dt = (I - exp([phi x])) f^{n'} + exp([phi x]) C_bn' dba
                - [(2 w_ie' + w_en') x v' - (2 w_ie + w_en) x v] + (2 g / R) dr_d e_d
 
-(``(I - exp([phi x])) f`` is ``f x phi = [f x] phi`` to first order, the paper's eq. 1
+(``(I - exp([phi x])) f`` is ``f x phi = [f x] phi`` to first order, paper 000 eq. 1
 ``-[psi x] f`` and error_model's ``[f^n x] phi``).
 
 *position and biases* as in error_model: ``d(dr)/dt = dv``, ``d(db)/dt = -db / tau`` (random
@@ -54,8 +54,8 @@ Time update at a coarser rate
 -----------------------------
 Propagating 31 sigma points at 100 Hz would cost more than the rest of the filter, and the error
 dynamics are slow (Schuler 84 min, earth rate, transport rate: all below 1e-3 rad/s), so the UKF
-prediction (eqs. 14-16) runs every ``ukf_predict_interval`` ``T`` seconds (default 0.1 s; always
-also right before a measurement update) with the *interval means* of the nominal quantities:
+prediction (paper 000 eqs. 14-16) runs every ``ukf_predict_interval`` ``T`` seconds (default 0.1 s;
+always also right before a measurement update) with the *interval means* of the nominal quantities:
 ``f^{n'}`` (sum of ``C_bn' dvel`` over the interval divided by ``T``, exact for the term linear in
 ``f``), ``C_bn'`` (time mean, exact for a constant bias), position and velocity.  Each point is
 advanced by one step ``x+ = x + T x_dot`` with the position error taken to second order,
@@ -63,7 +63,7 @@ advanced by one step ``x+ = x + T x_dot`` with the position error taken to secon
 
 Process noise is additive, ``Q_d(T)`` with ``Q_d = diag(q) T`` plus the velocity noise integrated
 into position (``q_v T^3/3`` and the ``q_v T^2/2`` cross terms); ``q`` is the spectral density of
-error_model (ARW^2, VRW^2, bias drivers).  This equals the augmented-noise form of the paper (eqs.
+error_model (ARW^2, VRW^2, bias drivers).  This equals the augmented-noise form of paper 000 (eqs.
 9-10) to second order: the noise enters the model above as ``-J^-1 R C_bn' w_g`` and ``R C_bn'
 w_a``, i.e. through rotations of an isotropic white noise (``R C Q C^T R^T = Q`` for
 ``Q = sigma^2 I``) multiplied by ``J^-1 = I + O(phi)``; the dropped noise-state cross terms are of
@@ -72,11 +72,11 @@ docstring on additive versus augmented noise).
 
 Measurement and feedback
 ------------------------
-GPS position, paper eqs. 3-4: ``z = r_INS - r_GPS = H x + xi`` with ``H = [I_3 0]`` (NED metres;
+GPS position, paper 000 eqs. 3-4: ``z = r_INS - r_GPS = H x + xi`` with ``H = [I_3 0]`` (NED metres;
 ``measurement='position_velocity'`` appends velocity, ``H = [I_6 0]``).  The UKF measurement
-update (eqs. 17-23) gives the innovation, ``S = P_zz + R`` and the chi-square statistic / NIS
-``v^T S^-1 v`` (eq. 24).  After every update the estimated errors are fed back (closed loop:
-:meth:`Strapdown.correct`, biases accumulated) and the error mean is reset to zero.
+update (paper 000 eqs. 17-23) gives the innovation, ``S = P_zz + R`` and the chi-square statistic /
+NIS ``v^T S^-1 v`` (paper 000 eq. 24).  After every update the estimated errors are fed back (closed
+loop: :meth:`Strapdown.correct`, biases accumulated) and the error mean is reset to zero.
 """
 from __future__ import annotations
 
@@ -88,6 +88,7 @@ from . import earth
 from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from .error_model import ATT, BA, BG, N_STATES, POS, VEL
 from .imm import ImmBank
+from .innovation_stats import nis
 from .ins_gnss_kf import KfEngine, UpdateResult
 from .strapdown import _gravity, _radii
 from .unscented import UnscentedKalmanFilter
@@ -188,7 +189,8 @@ def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
 
 
 def propagate_points(X, nom, tau_g=0.0, tau_a=0.0):
-    """Process model f of eq. 14 over one interval: one step with second-order position."""
+    """Process model f of paper 000 eq. 14 over one interval: one step with
+    second-order position."""
     Xdot = error_dynamics(X, nom, tau_g, tau_a)
     T = nom.T
     Y = X + T * Xdot
@@ -211,11 +213,12 @@ def discrete_process_noise(q_density, T):
 class UkfEngine(KfEngine):
     """15-state INS/GNSS UKF with the nonlinear error model of the module docstring.
 
-    Paper 000's plain "UKF" (fixed Q): eqs. 11-23 on the error model above, position measurement
-    eqs. 3-4, closed-loop feedback.  ``predict_interval`` [s] is the UKF prediction interval;
-    ``alpha``, ``beta``, ``kappa`` the scaled-UT parameters (eqs. 11-13; the components'
-    defaults 1, 2, 0, see navcore.unscented).  ``q_scale`` multiplies the configured process noise density (the
-    adaptive subclasses change it between predictions).
+    Paper 000's plain "UKF" (fixed Q): paper 000 eqs. 11-23 on the error model above, position
+    measurement paper 000 eqs. 3-4, closed-loop feedback.  ``predict_interval`` [s] is the UKF
+    prediction interval; ``alpha``, ``beta``, ``kappa`` the scaled-UT parameters (paper 000
+    eqs. 11-13; the components' defaults 1, 2, 0, see navcore.unscented).  ``q_scale``
+    multiplies the configured process noise density (the adaptive subclasses change it between
+    predictions).
     """
 
     state_fields = ("ukf", "q_scale", "_q_cache", "_T", "_sum_lat", "_sum_h", "_sum_v",
@@ -277,7 +280,7 @@ class UkfEngine(KfEngine):
         return Q
 
     def _predict(self):
-        """UKF time update (eqs. 14-16) over the accumulated interval."""
+        """UKF time update (paper 000 eqs. 14-16) over the accumulated interval."""
         if self._T <= 0.0:
             return
         nom = self._interval()
@@ -299,11 +302,11 @@ class UkfEngine(KfEngine):
 
     # -- measurement update ------------------------------------------------------------
     def _h(self, X):
-        """Measurement model of eqs. 3-4 (linear: H = [I_m 0]) over the sigma points."""
+        """Measurement model of paper 000 eqs. 3-4 (linear: H = [I_m 0]) over the sigma points."""
         return X[:, :self.m]
 
     def update(self, z):
-        """UKF measurement update (eqs. 17-23) then closed-loop feedback."""
+        """UKF measurement update (paper 000 eqs. 17-23) then closed-loop feedback."""
         self._predict()
         res = self.ukf.update(z, self._h, self.R0, vectorized=True)
         self._feedback(self.ukf.x)
@@ -318,10 +321,11 @@ class UkfEngine(KfEngine):
 
 
 class CtfaUkfEngine(UkfEngine):
-    """Paper 000's CTFA-UKF: the UKF plus the chi-square fuzzy adaptive Q schedule (eqs. 24-25).
+    """Paper 000's CTFA-UKF: the UKF plus the chi-square fuzzy adaptive Q schedule (paper 000
+    eqs. 24-25).
 
-    After every update the chi-square statistic ``q_k = v^T S^-1 v`` (eq. 24, the NIS of the
-    UKF update, ``S = P_zz + R``) sets the process noise of the following predictions::
+    After every update the chi-square statistic ``q_k = v^T S^-1 v`` (paper 000 eq. 24, the NIS of
+    the UKF update, ``S = P_zz + R``) sets the process noise of the following predictions::
 
         Q = Q_{k-1}                                      q_k < T1   (the previous Q is kept)
           = Qmin + (q_k - T1)/(T2 - T1) (Qmax - Qmin)     T1 <= q_k <= T2
@@ -332,8 +336,8 @@ class CtfaUkfEngine(UkfEngine):
     3-dimensional position measurement; for another dimension (or when ``t1``/``t2`` are 0) the
     90 %/99 % chi-square quantiles of the measurement dimension (``ctfa_thresholds``).
     ``q_scale`` is the current Q relative to Qmin, ``chi2`` the latest statistic.
-    ``pass_decay`` (ours, not the paper's; 1 = eq. 25 as printed): factor on ``Q - Qmin`` at
-    every update that passes the test, so Q returns towards Qmin after a manoeuvre.
+    ``pass_decay`` (ours, not the paper's; 1 = paper 000 eq. 25 as printed): factor on ``Q - Qmin``
+    at every update that passes the test, so Q returns towards Qmin after a manoeuvre.
     """
 
     state_fields = ("schedule", "chi2")
@@ -355,8 +359,8 @@ class CtfaUkfEngine(UkfEngine):
 
     def update(self, z):
         result = super().update(z)
-        self.chi2 = result.nis                       # eq. 24
-        self.q_scale = float(self.schedule.update(self.chi2)[0, 0])   # eq. 25, next predictions
+        self.chi2 = result.nis                       # paper 000 eq. 24
+        self.q_scale = float(self.schedule.update(self.chi2)[0, 0])   # paper 000 eq. 25, next steps
         result.q_scale = self.q_scale
         return result
 
@@ -419,11 +423,11 @@ class ImmUkfEngine(UkfEngine):
         # chi-square statistic of the combined (mixture) prediction
         v = z - bank.x[:m]
         S = bank.P[:m, :m] + self.R0
-        nis = float(v @ np.linalg.solve(S, v))
+        statistic = nis(v, S)
         h, R = self._h, self.R0
         bank.update(lambda flt, j: flt.update(z, h, R, vectorized=True))
         dx = bank.x.copy()
         self._feedback(dx)
         bank.subtract_from_states(dx)
         self.q_scale = float(bank.mu @ self.q_scales)
-        return UpdateResult(v, S, nis, q_scale=self.q_scale)
+        return UpdateResult(v, S, statistic, q_scale=self.q_scale)

@@ -2,8 +2,8 @@
 
 This module is plain numpy: the model is given as callables ``f(x, *args)`` (process) and
 ``h(x, *args)`` (measurement) over numpy arrays, so the same core serves the 15-state INS/GNSS
-error filter of paper 000 (nonlinear large-misalignment attitude error propagation, eq. 1,
-position measurement eqs. 3-4), the AHRS filters and the tests' linear models.
+error filter of paper 000 (nonlinear large-misalignment attitude error propagation, paper 000 eq. 1,
+position measurement paper 000 eqs. 3-4), the AHRS filters and the tests' linear models.
 
 Scaled unscented transform (paper 000 eqs. 11-13, after Julier 2002, ref. [17])
 ------------------------------------------------------------------------------
@@ -12,15 +12,15 @@ For a state of dimension ``n`` with mean ``x`` and covariance ``P``::
     lambda = alpha^2 (n + kappa) - n
     chi_0      = x
     chi_i      = x + (sqrt((n + lambda) P))_i          i = 1..n
-    chi_{n+i}  = x - (sqrt((n + lambda) P))_i          i = 1..n        (eq. 11)
-    Wm_0 = lambda / (n + lambda),  Wm_i = 1 / (2 (n + lambda))          (eq. 12)
-    Wc_0 = lambda / (n + lambda) + 1 + beta - alpha^2,  Wc_i = Wm_i     (eq. 13)
+    chi_{n+i}  = x - (sqrt((n + lambda) P))_i          i = 1..n        (paper 000 eq. 11)
+    Wm_0 = lambda / (n + lambda),  Wm_i = 1 / (2 (n + lambda))          (paper 000 eq. 12)
+    Wc_0 = lambda / (n + lambda) + 1 + beta - alpha^2,  Wc_i = Wm_i     (paper 000 eq. 13)
 
 ``(sqrt(A))_i`` is the i-th *column* of a matrix square root ``L`` with ``L L^T = A`` (the paper's
 text says "i-th diagonal element", a slip: the columns are what makes the transform reproduce
-``P``).  The paper also writes ``n = 2(n_x + n_v + n_xi)`` and sums eqs. 15-20 over ``i = 0..n``;
-the scaled UT uses ``n = n_x + n_v + n_xi`` (augmented dimension) and ``2n + 1`` points, which
-is what is implemented here.
+``P``).  The paper also writes ``n = 2(n_x + n_v + n_xi)`` and sums paper 000 eqs. 15-20 over ``i =
+0..n``; the scaled UT uses ``n = n_x + n_v + n_xi`` (augmented dimension) and ``2n + 1`` points,
+which is what is implemented here.
 
 Parameters alpha, beta, kappa
 -----------------------------
@@ -38,28 +38,29 @@ of outer products, PSD by construction.  Any other set with ``n + lambda > 0`` c
 
 Additive versus augmented noise
 -------------------------------
-The paper augments the state with process and measurement noise (eqs. 9-10) so that noise may
-enter ``f`` and ``h`` nonlinearly.  This core uses the additive form
-``x_{k+1} = f(x_k) + w_k``, ``z_k = h(x_k) + xi_k``: the predicted covariance is the transformed
-covariance plus ``Q`` and the innovation covariance is the transformed one plus ``R``.  The two
-forms give identical first and second moments whenever the noise enters the discrete model
-linearly and additively (``f(x, w) = f(x) + G w`` with ``G Q G^T`` passed as ``Q``), which is the
-case of the paper's error model (eq. 1: the sensor noises enter through ``C delta f^b`` and
-``C delta omega^b``, linear in the noise for a given attitude; eq. 3: ``z = H x + xi``).  When noise
-enters nonlinearly (e.g. multiplied by an attitude error state) the augmented form additionally
-captures the state-noise cross terms, which are of higher order in the (small) noise; the
-additive form drops them and costs ``2 n_x + 1`` instead of ``2 (n_x + n_v + n_xi) + 1`` model
-evaluations (31 instead of 67 for the paper's 15 + 15 + 3 dimensions).
+The paper augments the state with process and measurement noise (paper 000 eqs. 9-10) so that noise
+may enter ``f`` and ``h`` nonlinearly.  This core uses the additive form ``x_{k+1} = f(x_k) +
+w_k``, ``z_k = h(x_k) + xi_k``: the predicted covariance is the transformed covariance plus ``Q``
+and the innovation covariance is the transformed one plus ``R``.  The two forms give identical
+first and second moments whenever the noise enters the discrete model linearly and additively
+(``f(x, w) = f(x) + G w`` with ``G Q G^T`` passed as ``Q``), which is the case of the paper's error
+model (paper 000 eq. 1: the sensor noises enter through ``C delta f^b`` and ``C delta omega^b``,
+linear in the noise for a given attitude; paper 000 eq. 3: ``z = H x + xi``).  When noise enters
+nonlinearly (e.g. multiplied by an attitude error state) the augmented form additionally captures
+the state-noise cross terms, which are of higher order in the (small) noise; the additive form
+drops them and costs ``2 n_x + 1`` instead of ``2 (n_x + n_v + n_xi) + 1`` model evaluations (31
+instead of 67 for the paper's 15 + 15 + 3 dimensions).
 
 Prediction and update
 ---------------------
-``predict`` draws sigma points from ``(x, P)``, propagates them through ``f`` (eq. 14) and forms
-the mean and covariance (eqs. 15-16) plus ``Q``.  ``update`` draws a fresh set of points from the
-predicted ``(x, P)`` (needed because with additive noise the propagated points do not carry
-``Q``, and because several predictions may run between two measurements), maps them through
-``h`` (eq. 17) and applies eqs. 18-23 with ``P_zz`` including ``R``.  It returns the innovation,
-its covariance ``S`` and the normalized innovation squared ``NIS = v^T S^-1 v`` (the paper's
-chi-square statistic, eq. 24) and the Gaussian log-likelihood of the innovation (for IMM).
+``predict`` draws sigma points from ``(x, P)``, propagates them through ``f`` (paper 000 eq. 14)
+and forms the mean and covariance (paper 000 eqs. 15-16) plus ``Q``.  ``update`` draws a fresh set
+of points from the predicted ``(x, P)`` (needed because with additive noise the propagated points
+do not carry ``Q``, and because several predictions may run between two measurements), maps them
+through ``h`` (paper 000 eq. 17) and applies paper 000 eqs. 18-23 with ``P_zz`` including ``R``.
+It returns the innovation, its covariance ``S`` and the normalized innovation squared ``NIS = v^T
+S^-1 v`` (the paper's chi-square statistic, paper 000 eq. 24) and the Gaussian log-likelihood of
+the innovation (for IMM).
 """
 from __future__ import annotations
 
@@ -70,8 +71,9 @@ import numpy as np
 from scipy.linalg import lapack
 
 from navcore.component import InputError, ParameterError
+from navcore.innovation_stats import (gaussian_log_likelihood, log_det_from_cholesky,
+                                      nis_from_cholesky)
 
-_LOG_2PI = math.log(2.0 * math.pi)
 
 
 # ---------------------------------------------------------------------------------------
@@ -82,7 +84,7 @@ def sigma_weights(n: int, alpha: float = 1.0, beta: float = 2.0,
     """Weights of the scaled unscented transform, paper 000 eqs. 12-13.
 
     Returns ``(Wm, Wc, lambda_)`` with ``Wm``, ``Wc`` of length ``2n + 1`` and
-    ``lambda_ = alpha^2 (n + kappa) - n`` (eq. 11).  ``Wm`` sums to 1; ``Wc`` sums to
+    ``lambda_ = alpha^2 (n + kappa) - n`` (paper 000 eq. 11).  ``Wm`` sums to 1; ``Wc`` sums to
     ``2 + beta - alpha^2``.  Raises :class:`ParameterError` unless ``n >= 1``, ``alpha > 0`` and
     ``n + lambda_ > 0`` (the points are spread by ``sqrt(n + lambda_)``).
     """
@@ -130,7 +132,7 @@ def _sqrt_symmetric(A: np.ndarray) -> Tuple[np.ndarray, bool]:
 
 
 def sigma_points(x: np.ndarray, P: np.ndarray, lambda_: float) -> np.ndarray:
-    """Sigma points of eq. 11 as an array of shape ``(2n + 1, n)`` (one point per row).
+    """Sigma points of paper 000 eq. 11 as an array of shape ``(2n + 1, n)`` (one point per row).
 
     Row 0 is ``x``; rows ``1..n`` are ``x + L[:, i]`` and rows ``n+1..2n`` are ``x - L[:, i]``
     with ``L L^T = (n + lambda_) P`` (Cholesky, eigen-decomposition fallback: see
@@ -161,7 +163,7 @@ def _points_from_sqrt(x: np.ndarray, L: np.ndarray) -> np.ndarray:
 
 def unscented_transform(points: np.ndarray, Wm: np.ndarray, Wc: np.ndarray,
                         noise_cov: Optional[np.ndarray] = None) -> Tuple[np.ndarray, np.ndarray]:
-    """Weighted mean and covariance of transformed sigma points (eqs. 15-16, 18-19).
+    """Weighted mean and covariance of transformed sigma points (paper 000 eqs. 15-16, 18-19).
 
     ``points`` has shape ``(2n + 1, m)`` (one transformed point per row).  Returns
     ``(mean, cov)`` with ``cov = sum_i Wc_i (Y_i - mean)(Y_i - mean)^T + noise_cov``
@@ -197,7 +199,8 @@ def _apply_model(func: Callable, X: np.ndarray, args: tuple, vectorized: bool) -
 # Filter
 # ---------------------------------------------------------------------------------------
 class MeasurementPrediction(NamedTuple):
-    """Predicted measurement of :meth:`UnscentedKalmanFilter.predict_measurement` (eqs. 17-20).
+    """Predicted measurement of :meth:`UnscentedKalmanFilter.predict_measurement` (paper 000
+    eqs. 17-20).
 
     ``Pzz`` is the transformed spread only, *without* R, so that the caller can pick or scale
     R after seeing the prediction; ``S = Pzz + R`` is formed in ``correct``.
@@ -214,14 +217,15 @@ class UnscentedKalmanFilter:
     State lives in the plain attributes ``x`` (shape ``(n,)``) and ``P`` (``(n, n)``), which the
     caller may read, overwrite (e.g. reset the error state to zero after feedback to the INS)
     and deep-copy.  After each update ``last_nis`` and ``last_log_likelihood`` hold the chi-square
-    statistic (eq. 24) and the Gaussian log-likelihood of that innovation (for IMM; both 0
+    statistic (paper 000 eq. 24) and the Gaussian log-likelihood of that innovation (for IMM; both 0
     before the first update);
     ``sqrt_fallbacks`` counts the square roots that needed the eigenvalue fallback.
 
     Parameters
     ----------
     n : state dimension.
-    alpha, beta, kappa : scaled UT parameters (eqs. 11-13).  Default ``1, 2, 0``: why, in the
+    alpha, beta, kappa : scaled UT parameters (paper 000 eqs. 11-13).  Default ``1, 2, 0``: why,
+    in the
         module docstring (the paper gives no values).
     x0, P0 : initial state and covariance (default zeros and identity).
     """
@@ -251,7 +255,7 @@ class UnscentedKalmanFilter:
 
     # -- helpers --------------------------------------------------------------------------
     def sigma_points(self) -> np.ndarray:
-        """Sigma points (eq. 11) of the current ``(x, P)``, shape ``(2n + 1, n)``.
+        """Sigma points (paper 000 eq. 11) of the current ``(x, P)``, shape ``(2n + 1, n)``.
 
         ``P`` is symmetrized here only if the caller replaced it by a non-symmetric matrix
         (``predict``/``correct`` always store it symmetric).
@@ -273,13 +277,13 @@ class UnscentedKalmanFilter:
     # -- time update ----------------------------------------------------------------------
     def predict(self, f: Callable, Q: np.ndarray, *args: Any, q_scale: float = 1.0,
                 vectorized: bool = False) -> None:
-        """Time update, eqs. 14-16 with additive process noise.
+        """Time update, paper 000 eqs. 14-16 with additive process noise.
 
         ``f(x, *args) -> x_next`` maps one state (shape ``(n,)``); with ``vectorized=True`` it
         maps all points at once, ``f(X, *args)`` with ``X`` of shape ``(2n + 1, n)``, one point
         per row, returning the same shape (much cheaper in Python for n = 15).  ``Q`` is the
         discrete process noise covariance of the step; ``q_scale`` multiplies it (adaptive
-        schemes; CTFA instead passes its scheduled ``Q`` directly, eq. 25).
+        schemes; CTFA instead passes its scheduled ``Q`` directly, paper 000 eq. 25).
         """
         X = self.sigma_points()
         Y = _apply_model(f, X, args, vectorized)
@@ -303,7 +307,7 @@ class UnscentedKalmanFilter:
     # -- measurement update ---------------------------------------------------------------
     def predict_measurement(self, h: Callable, *args: Any,
                             vectorized: bool = False) -> MeasurementPrediction:
-        """Predicted measurement, its spread ``Pzz`` (without R) and ``Pxz``, eqs. 17-20.
+        """Predicted measurement, its spread ``Pzz`` (without R) and ``Pxz``, paper 000 eqs. 17-20.
 
         ``h(x, *args) -> z`` (shape ``(m,)``), or with ``vectorized=True`` ``h(X, *args)`` over
         the ``(2n + 1, n)`` points returning ``(2n + 1, m)``.  Does not change the filter.
@@ -325,7 +329,7 @@ class UnscentedKalmanFilter:
         ``K Pxz^T`` (the same matrix, ``Pxz S^-1 Pxz^T``) and symmetrized so round-off never
         leaves an asymmetric ``P``.
         Returns a dict with ``innovation`` (``v = z - z_pred``), ``S``, ``nis`` (``v^T S^-1 v``,
-        eq. 24), ``log_likelihood`` (``log N(v; 0, S)``), ``K`` and ``z_pred``.
+        paper 000 eq. 24), ``log_likelihood`` (``log N(v; 0, S)``), ``K`` and ``z_pred``.
         Raises :class:`InputError` if ``z`` is not finite or ``S`` is not positive definite.
         """
         z = np.asarray(z, dtype=float)
@@ -352,11 +356,8 @@ class UnscentedKalmanFilter:
                              "positive definite (check R)")
         Kt, _ = lapack.dpotrs(Ls, Pxz.T, lower=1)
         K = Kt.T
-        u, _ = lapack.dtrtrs(Ls, v, lower=1)
-        nis = float(u @ u)
-        m = v.shape[0]
-        log_det = 2.0 * sum(math.log(Ls[i, i]) for i in range(m))
-        log_likelihood = -0.5 * (nis + log_det + m * _LOG_2PI)
+        nis = nis_from_cholesky(Ls, v)
+        log_likelihood = gaussian_log_likelihood(nis, log_det_from_cholesky(Ls), v.shape[0])
         self.x = self.x + K @ v
         P = self.P - K @ Pxz.T
         self.P = 0.5 * (P + P.T)
@@ -367,9 +368,10 @@ class UnscentedKalmanFilter:
 
     def update(self, z: np.ndarray, h: Callable, R: np.ndarray, *args: Any, r_scale: float = 1.0,
                vectorized: bool = False) -> Dict[str, Any]:
-        """Measurement update, eqs. 17-23: :meth:`predict_measurement` then :meth:`correct`.
+        """Measurement update, paper 000 eqs. 17-23: :meth:`predict_measurement` then
+        :meth:`correct`.
 
         Returns ``dict(innovation, S, nis, log_likelihood, K, z_pred)``; ``nis`` is the
-        chi-square statistic of eq. 24 (``v^T S^-1 v``).
+        chi-square statistic of paper 000 eq. 24 (``v^T S^-1 v``).
         """
         return self.correct(z, self.predict_measurement(h, *args, vectorized=vectorized), R, r_scale)
