@@ -13,7 +13,7 @@ _EXPORTS = {
     "SimulationError": "errors",
     "SystemModel": "ssp", "ComponentSpec": "ssp", "Connection": "ssp", "load_ssd": "ssp",
     "Results": "results",
-    "Instance": "backends", "FmuInstance": "backends", "DirectInstance": "backends",
+    "Instance": "backends", "FmuInstance": "fmu_instance", "DirectInstance": "direct_instance",
     "VarInfo": "backends",
     "Simulation": "master", "simulate": "master",
 }

@@ -44,6 +44,7 @@ from . import metrics as nav_metrics
 from . import recorder
 from .errors import NavfmuError
 from .executor import Executor, Task
+from .jsonsafe import jsonable
 from .results import atomic_write
 
 MANIFEST = "campaign.json"
@@ -102,8 +103,11 @@ def scenario_hash(model) -> str:
 
 #: the files whose code decides a run's numbers (a change in any refuses a resume)
 NUMERIC_CODE = ("fmus/*.py", "fmus/navcore/*.py", "orchestrator/backends.py",
+                "orchestrator/fmu_instance.py", "orchestrator/direct_instance.py",
+                "orchestrator/component_description.py", "orchestrator/exchange.py",
                 "orchestrator/master.py", "orchestrator/metrics.py", "orchestrator/recorder.py",
-                "orchestrator/ssp.py", "orchestrator/campaign.py", "orchestrator/results.py")
+                "orchestrator/ssp.py", "orchestrator/ssp_xml.py", "orchestrator/campaign.py",
+                "orchestrator/results.py")
 
 
 def code_hash() -> str:
@@ -218,7 +222,7 @@ def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
 def write_run(out: Path, record: Dict[str, Any]) -> Path:
     path = run_path(out, record["filter"], record["index"])
     path.parent.mkdir(parents=True, exist_ok=True)
-    return atomic_write(path, lambda f: f.write(json.dumps(_jsonable(record), indent=1)))
+    return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), indent=1)))
 
 
 def read_run(out: Path, filter_name: str, index: int) -> Optional[Dict[str, Any]]:
@@ -279,7 +283,7 @@ class Campaign:
                 old = json.loads(path.read_text(encoding="utf-8"))
             except (OSError, json.JSONDecodeError) as exc:
                 raise NavfmuError(f"{path}: unreadable campaign manifest: {exc}") from None
-            mine = _jsonable(self.identity)
+            mine = jsonable(self.identity)
             theirs = old.get("identity", {})
             differ = [k for k in mine if k != "ssd" and theirs.get(k) != mine[k]]
             if old.get("format") != FORMAT or differ:
@@ -289,7 +293,7 @@ class Campaign:
                                   "with its own options or choose another --out")
             runs = max(runs, int(old.get("runs", 0)))
         atomic_write(path, lambda f: f.write(json.dumps(
-            {"format": FORMAT, "identity": _jsonable(self.identity), "runs": runs}, indent=2)))
+            {"format": FORMAT, "identity": jsonable(self.identity), "runs": runs}, indent=2)))
 
     def job(self, filter_name: str, index: int) -> Dict[str, Any]:
         s = self.spec
@@ -343,7 +347,7 @@ def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[
     summary = summarize(records, paper_reference(campaign.model),
                         {**provenance(campaign, records), "mode": ex.mode})
     atomic_write(campaign.out / "summary.json",
-                 lambda f: f.write(json.dumps(_jsonable(summary), indent=1)))
+                 lambda f: f.write(json.dumps(jsonable(summary), indent=1)))
     summary["counts"] = counts
     return summary
 
@@ -368,12 +372,6 @@ def _remove_stale_temporaries(out: Path) -> None:
                 p.unlink()
             except FileNotFoundError:
                 pass
-
-
-def _jsonable(value):
-    from .scenarios import _jsonable as jsonable
-
-    return jsonable(value)
 
 
 __all__ = ["CampaignSpec", "Campaign", "run_campaign", "run_one", "run_path", "read_run", "scenario_hash",

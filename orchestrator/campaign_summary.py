@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Dict, List, Mapping, Optional, Sequence
 
+from . import metric_comparisons
 from . import metrics as nav_metrics
 from . import statistics as st
 
@@ -59,7 +60,7 @@ def summarize(records: Mapping[str, Sequence[Mapping[str, Any]]],
     for key, group, axis, label, unit in recorded_axes(records):
         values = {f: per_run_values(records[f], group, axis) for f in filters}
         entry = {"label": label, "unit": unit,
-                 "filters": {f: {**st.t_interval(v), "pooled_rms": nav_metrics.pooled_rms(v),
+                 "filters": {f: {**st.t_interval(v), "pooled_rms": metric_comparisons.pooled_rms(v),
                                  "paper": paper.get(f, {}).get(key)}
                              for f, v in values.items()}}
         if len(filters) > 1:

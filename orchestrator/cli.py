@@ -9,7 +9,6 @@ a failed component.  Ctrl-C ends every command with ``navfmu: interrupted`` and 
 """
 from __future__ import annotations
 
-import contextlib
 import json
 import sys
 import zipfile
@@ -18,52 +17,10 @@ from pathlib import Path
 import click
 
 from . import interrupts
+from .cli_options import DEFAULT_OUT, filter_names, parse_sets, parse_window
 from .errors import NavfmuError, SimulationError
 from .exchange import ALGORITHMS
-
-DEFAULT_OUT = Path("navfmu-results")
-
-
-@contextlib.contextmanager
-def _progress_bars():
-    """A factory of tqdm progress callbacks (one bar per label, shown on a terminal only);
-    every bar is closed (its line cleared) when the block ends, also on an error, so a
-    message starts on its own line.  Each callback is a safe point for a deferred Ctrl-C."""
-    from tqdm import tqdm
-
-    bars = []
-
-    def factory(label, unit="step"):
-        bar = {}
-
-        def progress(done, total):
-            interrupts.check()
-            if "bar" not in bar:
-                bar["bar"] = tqdm(total=total, desc=label, unit=unit, leave=False,
-                                  mininterval=0.5, file=sys.stderr, disable=None)
-                bars.append(bar["bar"])
-            bar["bar"].update(done - bar["bar"].n)
-            if done >= total:
-                bar["bar"].close()
-
-        return progress
-
-    try:
-        yield factory
-    finally:
-        for b in bars:
-            b.close()
-
-
-def _filter_names(text):
-    """``A,B,C`` -> names; at least one, none twice."""
-    names = [f.strip() for f in text.split(",") if f.strip()]
-    if not names:
-        raise NavfmuError("--filters: give at least one filter")
-    twice = sorted({n for n in names if names.count(n) > 1})
-    if twice:
-        raise NavfmuError(f"--filters: {', '.join(twice)} listed more than once ({text})")
-    return names
+from .progress import progress_bars
 
 
 class _Group(click.Group):
@@ -79,37 +36,6 @@ class _Group(click.Group):
         if rows:
             with formatter.section("Commands"):
                 formatter.write_dl(rows)
-
-
-def _parse_window(text):
-    if not text:
-        return None
-    try:
-        t0, t1 = (float(x) for x in text.split(":"))
-    except ValueError:
-        raise NavfmuError(f"--window: expected 't0:t1' in seconds, got {text!r}") from None
-    if not t1 > t0:
-        raise NavfmuError(f"--window: t1 must be greater than t0, got {text!r}")
-    return t0, t1
-
-
-def _parse_sets(items):
-    values = {}
-    for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or "." not in key:
-            raise NavfmuError(f"--set: expected Component.variable=value, got {item!r}")
-        for conv in (int, float):
-            try:
-                value = conv(value)
-                break
-            except ValueError:
-                continue
-        else:
-            if value.lower() in ("true", "false"):
-                value = value.lower() == "true"
-        values[key] = value
-    return values
 
 
 @click.group(cls=_Group)
@@ -202,71 +128,12 @@ def _common_run_options(f):
 
 def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
              replay=None, log_sensors=None):
-    from . import outputs, prechecks, scenarios
+    from .run_command import run_scenarios
 
-    model = scenarios.load_scenario(scenario)
-    window = _parse_window(window)
-    parameters = _parse_sets(sets)
-    prechecks.check_stop_time(stop, model.start_time)
-    out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
-    runs = []
-    stream_dir = None
-    if fmt == "parquet":
-        if log_sensors:
-            raise NavfmuError("--log-sensors needs the run's rows in memory: use --format csv "
-                              "or npz with it")
-        stream_dir = outputs.stream_folder(out)
-    with _progress_bars() as progress_bar:
-        for f in filters:
-            label = f or "scenario"
-            stream_to = None
-            if stream_dir is not None:
-                stream_to = stream_dir / ("results.parquet" if len(filters) == 1 else
-                                          f"results_{scenarios.filter_label(model, f)}.parquet")
-            runs.append(scenarios.simulate_scenario(
-                model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
-                window=window, progress=progress_bar(label),
-                algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
-                log=lambda m: click.echo(m, err=True), replay=replay, stream_to=stream_to))
-    if log_sensors:
-        from .replay import write_sensor_log
-
-        click.echo(f"sensor log written to {write_sensor_log(runs[0].results, log_sensors)}/")
-    if not runs[0].metrics:
-        click.echo(f"\n{model.name}: no truth in the run (a sensor log without truth.csv): no "
-                   "metrics")
-        written = scenarios.write_outputs(runs, out, fmt=fmt, plots_on=False, title=title)
-        click.echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
-        return
-    reference = scenarios.paper_reference(model)
-    click.echo(f"\n{model.name}: RMS errors over "
-               f"{runs[0].metrics and next(iter(runs[0].metrics.values()))['window_s']} s")
-    click.echo(scenarios.report_table(runs, reference))
-    for run in runs:
-        for f, m in run.metrics.items():
-            extra = []
-            if "nis" in m:
-                extra.append(f"mean NIS {m['nis']['mean']:.2f} (dof {m['nis']['dof']}, 95 % band "
-                             f"{m['nis']['band95'][0]:.2f}-{m['nis']['band95'][1]:.2f})")
-            if "nees" in m:
-                extra.append("NEES pos/vel/att " + "/".join(f"{m['nees'][g]:.2f}" for g in
-                                                            ("position", "velocity", "attitude")))
-            if "time_per_step_ms" in m:
-                extra.append(f"{m['time_per_step_ms'] * 1e3:.0f} us per filter step")
-            click.echo(f"  {run.label}: " + "; ".join(extra))
-    names = [f for f in filters if f]
-    if len(names) < 2:  # a single run: suggest timing the paper's filters against each other
-        names = list((reference or {}).get("time_per_cycle_ms") or {}) or names
-    text = scenarios.format_comparison(
-        scenarios.paper_comparison(runs, reference),
-        bench_command=(f"`navfmu bench {scenario} --filters {','.join(names)}`" if names else ""),
-        show_missing=len(filters) > 1)
-    if text:
-        click.echo(text)
-    written = scenarios.write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
-                                      reference=reference)
-    click.echo(f"\nwrote {len(written)} files to {out}/: "
-               + ", ".join(p.name for p in written))
+    run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
+                  echo=click.echo,
+                  algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
+                  replay=replay, log_sensors=log_sensors)
 
 
 @cli.command()
@@ -290,7 +157,7 @@ def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, n
 @_common_run_options
 def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, replay):
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
-    names = _filter_names(filters)
+    names = filter_names(filters)
     _execute(scenario, names, out, stop, backend, window, sets, fmt, no_plots,
              title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
 
@@ -355,57 +222,12 @@ def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, wo
     FMUs once per filter instead and print each filter's time per cycle and the ratios to the
     first filter (next to the paper's, from paper.json).  SCENARIO defaults to navfmu's own
     models/aircraft_500s."""
-    from . import build as fmu_build
-    from . import scenarios
+    from .bench import bench_command
 
-    scenario = scenario or fmu_build.ROOT / "models" / "aircraft_500s"
-    if executors:
-        _bench_executors(str(scenario), filters, runs, stop, workers, as_json)
-        return
-    model = scenarios.load_scenario(scenario)
-    if against_libcosim:
-        from .libcosim_run import bench_against_libcosim
-
-        scenarios.ensure_fmus(model, log=lambda m: click.echo(m, err=True))
-        out = bench_against_libcosim(scenario or model.path, stop, repeat)
-        click.echo(json.dumps(out, indent=2) if as_json else
-                   f"{model.name}, {stop:g} s, fastest of {out['repeat']} alternating runs: ours "
-                   f"(jacobi) {out['ours_s']:.2f} s, libcosim recording every output "
-                   f"{out['libcosim_recorded_s']:.2f} s (ratio {out['ratio_recorded']:.2f}), "
-                   f"libcosim alone {out['libcosim_unrecorded_s']:.2f} s (ratio "
-                   f"{out['ratio_unrecorded']:.2f})")
-        return
-    if filters is not None:
-        names = _filter_names(filters)
-        with _progress_bars() as progress_bar:
-            out = scenarios.bench_filters(model, names, stop_time=stop, repeat=repeat,
-                                          progress_factory=progress_bar,
-                                          reference=scenarios.paper_reference(model),
-                                          log=lambda m: click.echo(m, err=True))
-        if as_json:
-            click.echo(json.dumps(scenarios._jsonable(out), indent=2))
-            return
-        _print_filter_bench(out)
-        return
-    with _progress_bars() as progress_bar:
-        out = scenarios.bench(model, stop_time=stop, repeat=repeat,
-                              progress_factory=progress_bar,
-                              log=lambda m: click.echo(m, err=True))
-    if as_json:
-        click.echo(json.dumps(out, indent=2))
-        return
-    click.echo(f"{model.name}, {out['fmu']['steps']} steps of the base step, one process, "
-               f"fastest of {out['repeat']} alternating runs per path:")
-    click.echo(f"  wall time direct {out['direct']['wall_s']:.2f} s, co-simulation "
-               f"{out['fmu']['wall_s']:.2f} s, ratio {out['ratio']:.3f}")
-    click.echo(f"  identical results through both paths: {out['identical']}")
-    click.echo(f"  {'component':14s} {'direct step':>12s} {'FMU step':>10s} "
-               f"{'FMU set+step+get':>17s}   [us per call]")
-    for c in out["fmu"]["do_step_us"]:
-        click.echo(f"  {c:14s} {out['direct']['do_step_us'][c]:12.1f} "
-                   f"{out['fmu']['do_step_us'][c]:10.1f} {out['fmu']['exchange_us'][c]:17.1f}")
-    click.echo(f"  master overhead per base step: direct {out['direct']['master_overhead_us']:.1f}"
-               f" us, FMU {out['fmu']['master_overhead_us']:.1f} us")
+    click.echo(bench_command(scenario, stop=stop, repeat=repeat, filters=filters,
+                             against_libcosim=against_libcosim, executors=executors, runs=runs,
+                             workers=workers, as_json=as_json,
+                             log=lambda m: click.echo(m, err=True)))
 
 
 @cli.command()
@@ -441,12 +263,12 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
     spec = campaign.CampaignSpec(
         scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
-        stop_time=stop, window=_parse_window(window), samples=samples,
+        stop_time=stop, window=parse_window(window), samples=samples,
         seed_offsets=campaign.parse_seed_offsets(seed_offsets),
-        parameters=tuple(_parse_sets(sets).items()), series=series)
+        parameters=tuple(parse_sets(sets).items()), series=series)
     model_name = scenarios.load_scenario(scenario).name
     out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
-    with _progress_bars() as progress_bar:
+    with progress_bars() as progress_bar:
         summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
                                         local_cluster=local_cluster,
                                         progress=progress_bar("runs", unit="run"),
@@ -476,22 +298,13 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
     NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
     from . import report as report_module
 
-    with _progress_bars() as progress_bar:
+    with progress_bars() as progress_bar:
         path = report_module.build_report(
             out, runs=runs or report_module.DEFAULT_RUNS, workers=workers,
             scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
             progress_factory=lambda name: progress_bar(name, unit="run"),
             log=lambda m: click.echo(m, err=True), only_finished=only_finished)
     click.echo(f"wrote {path}")
-
-
-def _bench_executors(scenario, filters, runs, stop, workers, as_json):
-    from .campaign_bench import bench_executors, format_bench
-
-    names = [f.strip() for f in (filters or "Kf").split(",") if f.strip()]
-    out = bench_executors(scenario, names, runs=runs, stop_time=stop, workers=workers,
-                          log=lambda m: click.echo(m, err=True))
-    click.echo(json.dumps(out, indent=2) if as_json else format_bench(out))
 
 
 @cli.command()
@@ -534,11 +347,11 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
     except ValueError:
         raise NavfmuError(f"--train-seeds: expected comma-separated integers, got "
                           f"{train_seeds!r}") from None
-    with _progress_bars() as progress_bar:
+    with progress_bars() as progress_bar:
         summary = tuner.run_tune(scenario, component, names, generations=generations,
                                  population=population, workers=workers, seed=seed,
                                  ranges=tuner.parse_ranges(ranges), train_seeds=seeds,
-                                 backend=backend, stop_time=stop, window=_parse_window(window),
+                                 backend=backend, stop_time=stop, window=parse_window(window),
                                  scheduler=scheduler, progress=progress_bar("tune", unit="individual"),
                                  log=lambda m: click.echo(m, err=True))
     out = Path(out) if out else DEFAULT_OUT / summary["model"] / "tune"
@@ -550,26 +363,6 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
     click.echo(f"wrote {', '.join(str(p) for p in written)}")
     click.echo(f"bind it with: <ssd:ParameterBinding source=\"{written[0].name}\"/> (in place "
                f"of the component's bindings: it holds them too)")
-
-
-def _print_filter_bench(out):
-    rows = out["filters"]
-    first = rows[out["baseline"]]
-    click.echo(f"{out['model']}: {out['stop_time']:g} s through the FMUs per filter "
-               f"({first['base_steps']} base steps), one process, fastest of {out['repeat']} "
-               "alternating runs per filter:")
-    click.echo(f"  {'filter':14s} {'ms per cycle':>12s} {'ratio':>7s} {'paper [ms]':>11s} "
-               f"{'paper ratio':>12s} {'wall [s]':>9s}")
-
-    def num(value, fmt):
-        return format(value, fmt) if value is not None else f"{'-':>{len(format(0.0, fmt))}s}"
-
-    for name, r in rows.items():
-        click.echo(f"  {name:14s} {r['time_per_cycle_ms']:12.4f} {r['ratio']:7.2f} "
-                   f"{num(r['paper_time_per_cycle_ms'], '11.3f')} "
-                   f"{num(r['paper_ratio'], '12.2f')} {r['wall_s']:9.2f}")
-    click.echo(f"  one cycle = one do_step of the filter FMU ({first['cycle_s']:g} s); ratios to "
-               f"{out['baseline']}, the first filter")
 
 
 def _write_system(scenario, out, module_name):

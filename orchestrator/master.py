@@ -117,74 +117,19 @@ from __future__ import annotations
 
 import time as _time
 import warnings
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Tuple
 
 import numpy as np
+from navcore.timing import TIME_TOLERANCE
 
-from .backends import NUMERIC_TYPES, DirectInstance, FmuInstance, Instance, VarInfo
+from .backends import NUMERIC_TYPES, Instance
+from .component_description import describe_direct, describe_fmu
 from .errors import NavfmuError, WiringError
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from .recorder import Recording
 from .results import Results
-from .fmu_path import searched_places
 from .ssp import ComponentSpec, Connection, SystemModel
-
-#: relative tolerance for "the run length / a step hint is an integer multiple of h"
-MULTIPLE_TOLERANCE = 1e-9
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
-
-
-# ----------------------------------------------------------------------------------------
-# Per-component description (known before anything is instantiated)
-# ----------------------------------------------------------------------------------------
-@dataclass
-class _Described:
-    spec: ComponentSpec
-    variables: Dict[str, VarInfo]
-    source: str            # FMU path or Python class, for messages
-    model_name: str
-    make: Callable[[], Instance]
-
-
-def _model_name_of_fmu(path: Path) -> str:
-    from fmpy import read_model_description
-
-    try:
-        return read_model_description(str(path), validate=False).modelName
-    except Exception as exc:  # fmpy raises plain Exception for unreadable files
-        raise NavfmuError(f"cannot read the model description of {path}: {exc}") from None
-
-
-def _describe_fmu(spec: ComponentSpec) -> _Described:
-    from fmpy import read_model_description
-
-    path = spec.source
-    if not path.is_file():
-        where = f"source=\"{spec.source_text}\" " if spec.source_text else ""
-        raise NavfmuError(f"component '{spec.name}': FMU file not found: {path} ({where}searched "
-                          f"{searched_places()})")
-    try:
-        md = read_model_description(str(path), validate=False)
-    except Exception as exc:  # fmpy raises plain Exception for unreadable files
-        raise NavfmuError(f"component '{spec.name}': cannot read the model description of "
-                          f"{path}: {exc}") from None
-    variables = {}
-    for v in md.modelVariables:
-        unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
-        variables[v.name] = VarInfo(v.name, v.type, v.causality, unit, v.valueReference)
-    return _Described(spec, variables, str(path), md.modelName,
-                      lambda: FmuInstance(path, spec.name))
-
-
-def _describe_direct(spec: ComponentSpec, registry: Mapping[str, type]) -> _Described:
-    model_name = spec.source.stem
-    if model_name not in registry and spec.source.is_file():
-        model_name = _model_name_of_fmu(spec.source)
-    probe = DirectInstance.from_registry(model_name, spec.name, registry)
-    return _Described(spec, probe.variables, probe.source, model_name,
-                      lambda: DirectInstance.from_registry(model_name, spec.name, registry))
 
 
 # ----------------------------------------------------------------------------------------
@@ -223,7 +168,7 @@ class Simulation:
         if not self.base_step > 0:
             raise NavfmuError(f"the base step must be > 0, got {self.base_step}")
         self.components = [
-            _describe_fmu(c) if backend == "fmu" else _describe_direct(c, registry)
+            describe_fmu(c) if backend == "fmu" else describe_direct(c, registry)
             for c in model.components
         ]
         self.names = [c.spec.name for c in self.components]
@@ -245,7 +190,7 @@ class Simulation:
             return 1
         ratio = spec.step_hint / self.base_step
         n = int(round(ratio))
-        if n < 1 or abs(ratio - n) > MULTIPLE_TOLERANCE * ratio:
+        if n < 1 or abs(ratio - n) > TIME_TOLERANCE * ratio:
             raise NavfmuError(f"component '{spec.name}': its step {spec.step_hint} s is not an "
                               f"integer multiple of the base step {self.base_step} s")
         return n
@@ -345,7 +290,7 @@ class Simulation:
             raise NavfmuError(f"the stop time {stop} must be greater than the start time {start}")
         ratio = (stop - start) / self.base_step
         n = int(round(ratio))
-        if n < 1 or abs(ratio - n) > MULTIPLE_TOLERANCE * max(ratio, 1.0):
+        if n < 1 or abs(ratio - n) > TIME_TOLERANCE * max(ratio, 1.0):
             raise NavfmuError(f"the run from {start} s to {stop} s is not an integer number of "
                               f"base steps of {self.base_step} s")
         return n

@@ -28,9 +28,8 @@ Definitions (errors are estimate - truth):
   and the three Euler angles of the attitude error, sqrt(1/(n m) sum_k sum_j e_jk^2) [deg].
 * NIS: mean of ``nis`` over the update epochs, with the two-sided 95 % band of the mean of
   N chi-square(dof) samples: chi2.ppf(0.025, N dof)/N .. chi2.ppf(0.975, N dof)/N.
-* 3-D RMS of a group: root of the sum of the per-axis mean squares; improvement of a filter
-  over a baseline in percent: 100 (1 - RMS_filter / RMS_baseline); RMS ratio: RMS_baseline /
-  RMS_filter (paper 001's "6 times").
+* 3-D RMS, improvement, RMS ratio, the pooled RMS over runs and the RMS table:
+  :mod:`orchestrator.metric_comparisons`.
 * Outlier detection of a filter with an ``n_rejected`` output, at its update epochs (rows with
   ``updated``), against the ``gnss_outlier`` flag of the receiver (the component recording
   it) on the same rows: detection rate = injected epochs with n_rejected > 0 / injected
@@ -55,6 +54,7 @@ from navcore.earth import radii as _radii
 # thresholds for dof 3 when ctfa_t1/t2 are 0 or unset
 from navcore.innovation_stats import (CHI2_THRESHOLD_PAPER_004 as CHI2_GATE_DEFAULT,
                                       CTFA_THRESHOLDS_PAPER_000 as CTFA_THRESHOLDS_DOF3)
+from navcore.rotations import euler_to_dcm
 from navcore.rotations import wrap_angle as _wrap
 
 from .errors import NavfmuError
@@ -66,20 +66,12 @@ ATTITUDE = ("roll", "pitch", "yaw")
 
 
 def _dcm(roll, pitch, yaw):
-    """C_bn for arrays of ZYX Euler angles, shape (N, 3, 3)."""
-    cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
-                              np.cos(yaw), np.sin(yaw))
-    C = np.empty(roll.shape + (3, 3))
-    C[..., 0, 0] = cy * cp
-    C[..., 0, 1] = cy * sp * sr - sy * cr
-    C[..., 0, 2] = cy * sp * cr + sy * sr
-    C[..., 1, 0] = sy * cp
-    C[..., 1, 1] = sy * sp * sr + cy * cr
-    C[..., 1, 2] = sy * sp * cr - cy * sr
-    C[..., 2, 0] = -sp
-    C[..., 2, 1] = cp * sr
-    C[..., 2, 2] = cp * cr
-    return C
+    """C_bn for arrays of ZYX Euler angles, shape (N, 3, 3), by navcore's one definition
+    (:func:`navcore.rotations.euler_to_dcm`) sample by sample."""
+    out = np.empty(np.shape(roll) + (3, 3))
+    for i, angles in enumerate(zip(roll.tolist(), pitch.tolist(), yaw.tolist())):
+        out[i] = euler_to_dcm(*angles)
+    return out
 
 
 def find_component(results, prefix, required):
@@ -328,94 +320,6 @@ def attitude_fitness(errors, mask=None):
     mask = errors["valid"] if mask is None else mask
     squares = np.stack([errors["att_" + a][mask] ** 2 for a in ATTITUDE])
     return math.degrees(float(np.sqrt(np.mean(squares))))
-
-
-def reference_metrics(position_enu=None, velocity_enu=None, attitude_deg=None):
-    """A paper's row (lists in the tables' order: E/N/U, roll/pitch/yaw; None where the paper
-    gives no number) in the shape of :func:`filter_metrics`' RMS groups, for
-    :func:`rms_table`."""
-    def group(values, keys):
-        if values is None:
-            return None
-        return {k: (None if v is None else float(v)) for k, v in zip(keys, values)}
-
-    return {"position_rms_m": group(position_enu, ENU),
-            "velocity_rms_mps": group(velocity_enu, ENU),
-            "attitude_rms_deg": group(attitude_deg, ATTITUDE)}
-
-
-def _cell(group, key, width, decimals):
-    value = (group or {}).get(key)
-    if value is None or not math.isfinite(value):
-        return f"{'-':>{width}s}"
-    return f"{value:{width}.{decimals}f}"
-
-
-def rms_table(rows, reference=None):
-    """Text table in the shape of paper 001's Table 1 (position and velocity RMS east, north,
-    up) plus attitude RMS (paper 000's Table 4).
-
-    ``rows``: list of (label, metrics dict) in the given order, metrics from
-    :func:`filter_metrics` or :func:`reference_metrics` (a missing group or None value prints
-    '-'); ``reference``: list of (label, pos_enu, vel_enu[, att_deg]) from a paper, printed
-    under the rows.
-    """
-    rows = list(rows)
-    for ref in reference or ():
-        label, pos, vel = ref[:3]
-        rows.append((label, reference_metrics(pos, vel, ref[3] if len(ref) > 3 else None)))
-    w = max([len("RMS error")] + [len(label) for label, _ in rows])
-    head = (f"{'RMS error':{w}s} {'pos E/lon':>10s} {'pos N/lat':>10s} {'pos U/h':>10s} "
-            f"{'vel E':>8s} {'vel N':>8s} {'vel U':>8s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s}")
-    units = (f"{'':{w}s} {'[m]':>10s} {'[m]':>10s} {'[m]':>10s} {'[m/s]':>8s} {'[m/s]':>8s} "
-             f"{'[m/s]':>8s} {'[deg]':>7s} {'[deg]':>7s} {'[deg]':>7s}")
-    lines = [head, units]
-    for label, m in rows:
-        p, v, a = (m.get("position_rms_m"), m.get("velocity_rms_mps"),
-                   m.get("attitude_rms_deg"))
-        lines.append(" ".join([f"{label:{w}s}"] + [_cell(p, k, 10, 4) for k in ENU]
-                              + [_cell(v, k, 8, 4) for k in ENU]
-                              + [_cell(a, k, 7, 4) for k in ATTITUDE]))
-    return "\n".join(lines)
-
-
-# -- comparisons of two filters ------------------------------------------------------------
-#: the metrics key of each 3-D RMS group
-GROUP_KEYS = {"position": "position_rms_m", "velocity": "velocity_rms_mps",
-              "attitude": "attitude_rms_deg"}
-
-
-def rms_3d(metrics, group):
-    """3-D RMS of ``group`` (position/velocity/attitude): the root of the sum of the per-axis
-    mean squares."""
-    values = metrics[GROUP_KEYS[group]].values()
-    return float(math.sqrt(sum(v * v for v in values)))
-
-
-def pooled_rms(per_run_rms):
-    """RMS over several runs of equal length: the root of the mean of the per-run mean
-    squares (the README's and the slow tests' "RMS over the Monte Carlo runs")."""
-    x = np.asarray(per_run_rms, dtype=float)
-    return float(np.sqrt(np.mean(x * x)))
-
-
-def improvement_percent(baseline, value):
-    """Reduction of ``value`` against ``baseline`` in percent of the baseline (nan if the
-    baseline is 0)."""
-    baseline, value = float(baseline), float(value)
-    return 100.0 * (1.0 - value / baseline) if baseline != 0.0 else float("nan")
-
-
-def rms_ratio(baseline, value):
-    """baseline / value (nan if value is 0): "improved n times"."""
-    baseline, value = float(baseline), float(value)
-    return baseline / value if value != 0.0 else float("nan")
-
-
-def per_axis_enu(metrics, group):
-    """RMS of ``group`` in the papers' order E, N, U (position, velocity) or roll, pitch, yaw."""
-    keys = ATTITUDE if group == "attitude" else ENU
-    return [float(metrics[GROUP_KEYS[group]][k]) for k in keys]
 
 
 # -- outlier detection ---------------------------------------------------------------------

@@ -25,6 +25,7 @@ from typing import Any, Dict, List, Optional
 
 from . import build as fmu_build
 from . import campaign as camp
+from . import metric_comparisons
 from . import metrics as nav_metrics
 from . import plots
 from . import recorder
@@ -221,8 +222,8 @@ def _provenance(plan) -> str:
 
 def _per_run(plan, f, fn) -> Optional[Dict[str, float]]:
     values = [fn(r["metrics"]) for r in plan["records"][f] if r["metrics"]]
-    values = [v for v in values if v is not None and math.isfinite(v)]
-    return st.t_interval(values) if values else None
+    interval = st.t_interval(values) if values else None
+    return interval if interval and interval["n"] else None
 
 
 def _paper_table(plan) -> List[str]:
@@ -290,18 +291,18 @@ def _improvement(plan) -> List[str]:
              f"{imp.get('note', '')}):", "", "| quantity | ours | paper |", "|---|---|---|"]
     for group in ("position", "velocity", "attitude"):
         if group in imp:
-            v = [nav_metrics.improvement_percent(nav_metrics.rms_3d(b["metrics"], group),
-                                                 nav_metrics.rms_3d(f["metrics"], group))
+            v = [metric_comparisons.improvement_percent(metric_comparisons.rms_3d(b["metrics"], group),
+                                                 metric_comparisons.rms_3d(f["metrics"], group))
                  for b, f in pairs]
             lines.append(f"| {group} 3-D RMS reduction [%] | {_ci(st.t_interval(v), 1)} | "
                          f"{imp[group]} |")
-        for suffix, fn, what in (("_enu", nav_metrics.improvement_percent, "reduction [%]"),
-                                 ("_ratio_enu", nav_metrics.rms_ratio, "ratio base/filter")):
+        for suffix, fn, what in (("_enu", metric_comparisons.improvement_percent, "reduction [%]"),
+                                 ("_ratio_enu", metric_comparisons.rms_ratio, "ratio base/filter")):
             if group + suffix not in imp:
                 continue
             for i, axis in enumerate("ENU"):
-                v = [fn(nav_metrics.per_axis_enu(b["metrics"], group)[i],
-                        nav_metrics.per_axis_enu(f["metrics"], group)[i]) for b, f in pairs]
+                v = [fn(metric_comparisons.per_axis_enu(b["metrics"], group)[i],
+                        metric_comparisons.per_axis_enu(f["metrics"], group)[i]) for b, f in pairs]
                 lines.append(f"| {group} {axis} {what} | {_ci(st.t_interval(v), 2)} | "
                              f"{imp[group + suffix][i]} |")
     return lines + [""]
@@ -384,8 +385,8 @@ def _cross_matrix(sections) -> List[str]:
             if f not in plan["records"]:
                 cells.append("-")
                 continue
-            rms_3d = lambda m, g: (nav_metrics.rms_3d(m, g)  # noqa: E731
-                                   if nav_metrics.GROUP_KEYS[g] in m else None)
+            rms_3d = lambda m, g: (metric_comparisons.rms_3d(m, g)  # noqa: E731
+                                   if metric_comparisons.GROUP_KEYS[g] in m else None)
             cells.append(" / ".join(_ci(_per_run(plan, f, lambda m, g=g: rms_3d(m, g)),
                                         3 if g == "position" else 4)
                                     for g in ("position", "velocity", "attitude")))

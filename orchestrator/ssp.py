@@ -34,53 +34,33 @@ model packed as one ``.ssp`` archive.
 Anything outside the subset, or inconsistent, raises :class:`~orchestrator.errors.SspError`
 naming the file and the element/attribute.  Files are read as data only: with defusedxml,
 refusing any DTD (so no entity expansion and no external reference), and up to
-:data:`MAX_FILE_BYTES`.
+:data:`~orchestrator.ssp_xml.MAX_FILE_BYTES`.
 """
 from __future__ import annotations
 
 import dataclasses
-import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 
-import defusedxml.ElementTree as DefusedET
-from defusedxml import DefusedXmlException
+from navcore.timing import TIME_TOLERANCE
 
 from .errors import SspError
 from .fmu_path import resolve_source
-
-SSD_NS = "http://ssp-standard.org/SSP1/SystemStructureDescription"
-SSC_NS = "http://ssp-standard.org/SSP1/SystemStructureCommon"
-SSV_NS = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
-OSP_NS = "http://opensimulationplatform.com/SSP/OSPAnnotations"
-OSP_ANNOTATION_TYPE = "com.opensimulationplatform"
-
-#: prefix each namespace must be written with (libcosim matches "ssd:System" literally)
-REQUIRED_PREFIX = {SSD_NS: "ssd", SSC_NS: "ssc", SSV_NS: "ssv", OSP_NS: "osp"}
-PREFIX_OF = {uri: prefix for uri, prefix in REQUIRED_PREFIX.items()}
+from .ssp_xml import OSP_ANNOTATION_TYPE, OSP_NS, SSC_NS, SSD_NS, SSV_NS, TYPES
+from .ssp_xml import tag as _tag
+from .ssp_xml import pretty as _pretty
+from .ssp_xml import parse as _parse
+from .ssp_xml import attr as _attr
+from .ssp_xml import float_attr as _float_attr
+from .ssp_xml import only_children as _only_children
+from .ssp_xml import osp_annotation as _osp_annotation
+from .ssp_xml import typed_value as _typed_value
 
 #: the one component type of the subset (SSP 1.0's default)
 FMU_TYPE = "application/x-fmu-sharedlibrary"
-TYPES = ("Real", "Integer", "Boolean", "String")
 KINDS = ("input", "output", "parameter", "calculatedParameter")
-#: relative tolerance for "step hint is an integer multiple of the base step"
-MULTIPLE_TOLERANCE = 1e-9
-#: largest .ssd / .ssv file read (ours are a few kilobytes)
-MAX_FILE_BYTES = 16 * 1024 * 1024
-
-
-def _tag(ns: str, local: str) -> str:
-    return "{%s}%s" % (ns, local)
-
-
-def _pretty(tag: str) -> str:
-    """``{uri}Local`` -> ``prefix:Local`` for messages."""
-    if tag.startswith("{"):
-        uri, local = tag[1:].split("}", 1)
-        return f"{PREFIX_OF.get(uri, uri)}:{local}"
-    return tag
 
 
 @dataclass
@@ -179,116 +159,6 @@ def _swap_variant(comp: ComponentSpec, model_name: str) -> Dict[str, Tuple[str, 
     return values
 
 
-# ----------------------------------------------------------------------------------------
-# XML helpers
-# ----------------------------------------------------------------------------------------
-def _parse(path: Path) -> ET.Element:
-    """Parse ``path`` as data (no DTD, no entities, at most :data:`MAX_FILE_BYTES`); check
-    that the namespaces use the literal prefixes libcosim expects."""
-    if not path.is_file():
-        raise SspError(f"{path}: file not found")
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise SspError(f"{path}: {size} bytes, more than the {MAX_FILE_BYTES} an SSP file "
-                       "may have here")
-    declared: List[Tuple[str, str]] = []
-    try:
-        root = None
-        for event, item in DefusedET.iterparse(str(path), events=("start-ns", "start"),
-                                               forbid_dtd=True):
-            if event == "start-ns":
-                declared.append(item)
-            elif root is None:
-                root = item
-        # iterparse keeps building the tree; the root element is complete here
-    except ET.ParseError as exc:
-        # str(exc) already ends with "line L, column C"
-        raise SspError(f"{path}: malformed XML: {exc}") from None
-    except DefusedXmlException as exc:
-        raise SspError(f"{path}: {exc}: a DTD or entity is not allowed in an SSP file") from None
-    for prefix, uri in declared:
-        want = REQUIRED_PREFIX.get(uri)
-        if want is not None and prefix != want:
-            shown = f"prefix '{prefix}'" if prefix else "the default namespace"
-            raise SspError(
-                f"{path}: namespace {uri} is bound to {shown}; write it with the literal "
-                f"prefix '{want}:' (libcosim matches tag names literally)"
-            )
-    return root
-
-
-def _attr(path: Path, elem: ET.Element, name: str, where: str) -> str:
-    value = elem.get(name)
-    if value is None or value.strip() == "":
-        raise SspError(f"{path}: {where} lacks the required attribute '{name}'")
-    return value.strip()
-
-
-def _float_attr(path: Path, elem: ET.Element, name: str, where: str,
-                required: bool = True, default: Optional[float] = None) -> Optional[float]:
-    if elem.get(name) is None and not required:
-        return default
-    text = _attr(path, elem, name, where)
-    try:
-        value = float(text)
-    except ValueError:
-        raise SspError(f"{path}: {where} attribute '{name}'=\"{text}\" is not a number") from None
-    if not math.isfinite(value):
-        raise SspError(f"{path}: {where} attribute '{name}'=\"{text}\" is not finite")
-    return value
-
-
-def _describe(elem: ET.Element) -> str:
-    name = elem.get("name")
-    return f"<{_pretty(elem.tag)} name=\"{name}\">" if name else f"<{_pretty(elem.tag)}>"
-
-
-def _only_children(path: Path, elem: ET.Element, allowed: Tuple[str, ...], where: str) -> None:
-    for child in elem:
-        if child.tag not in allowed:
-            raise SspError(f"{path}: {where} contains <{_pretty(child.tag)}>, which is not supported "
-                           f"(allowed: {', '.join('<' + _pretty(a) + '>' for a in allowed)})")
-
-
-def _osp_annotation(elem: ET.Element) -> Optional[ET.Element]:
-    """The ``ssc:Annotation type="com.opensimulationplatform"`` under ``elem/ssd:Annotations``."""
-    annotations = elem.find(_tag(SSD_NS, "Annotations"))
-    if annotations is None:
-        return None
-    for a in annotations.findall(_tag(SSC_NS, "Annotation")):
-        if a.get("type") == OSP_ANNOTATION_TYPE:
-            return a
-    return None
-
-
-def _typed_value(path: Path, elem: ET.Element, where: str) -> Tuple[str, object]:
-    """Read ``<ssv:Real value=..>`` (etc.) below a parameter element."""
-    children = [c for c in elem if c.tag in {_tag(SSV_NS, t) for t in TYPES}]
-    if len(children) != 1:
-        raise SspError(f"{path}: {where} needs exactly one of <ssv:Real>, <ssv:Integer>, "
-                       f"<ssv:Boolean>, <ssv:String> (found {len(children)})")
-    child = children[0]
-    typ = child.tag.split("}", 1)[1]
-    text = child.get("value")
-    if text is None:
-        raise SspError(f"{path}: {where} <ssv:{typ}> lacks the required attribute 'value'")
-    try:
-        if typ == "Real":
-            value: object = float(text)
-        elif typ == "Integer":
-            value = int(text.strip())
-        elif typ == "Boolean":
-            t = text.strip().lower()
-            if t not in ("true", "false", "1", "0"):
-                raise ValueError(text)
-            value = t in ("true", "1")
-        else:
-            value = text
-    except ValueError:
-        raise SspError(f"{path}: {where} <ssv:{typ} value=\"{text}\"> is not a valid {typ}") from None
-    return typ, value
-
-
 def _read_parameter_set(path: Path, parameter_set: ET.Element,
                         where: str) -> Dict[str, Tuple[str, object]]:
     result: Dict[str, Tuple[str, object]] = {}
@@ -382,97 +252,94 @@ def _read_component(path: Path, elem: ET.Element) -> ComponentSpec:
     return comp
 
 
-def load_ssd(path) -> SystemModel:
-    """Load ``SystemStructure.ssd`` (``path`` is the file or the folder holding it)."""
-    path = Path(path).expanduser()
-    if path.is_dir():
-        path = path / "SystemStructure.ssd"
-    path = path.resolve()
-    root = _parse(path)
-    if root.tag != _tag(SSD_NS, "SystemStructureDescription"):
-        raise SspError(f"{path}: root element is <{_pretty(root.tag)}>, expected "
-                       f"<ssd:SystemStructureDescription>")
-    systems = root.findall(_tag(SSD_NS, "System"))
-    if len(systems) != 1:
-        raise SspError(f"{path}: <ssd:SystemStructureDescription> needs exactly one <ssd:System> "
-                       f"(found {len(systems)})")
-    system = systems[0]
-    system_name = _attr(path, system, "name", "<ssd:System>")
-    model_name = root.get("name") or system_name
-
-    # -- components ---------------------------------------------------------------------
+def _read_components(path: Path, system: ET.Element, system_name: str) -> List[ComponentSpec]:
     elements = system.find(_tag(SSD_NS, "Elements"))
     if elements is None:
         raise SspError(f"{path}: <ssd:System name=\"{system_name}\"> has no <ssd:Elements>")
     _only_children(path, elements, (_tag(SSD_NS, "Component"),),
                    "<ssd:Elements> (only a flat system of components is supported)")
     components: List[ComponentSpec] = []
-    by_name: Dict[str, ComponentSpec] = {}
+    names = set()
     for elem in elements.findall(_tag(SSD_NS, "Component")):
         comp = _read_component(path, elem)
-        if comp.name in by_name:
+        if comp.name in names:
             raise SspError(f"{path}: <ssd:Component name=\"{comp.name}\"> is declared twice "
                            f"(component names must be unique)")
         components.append(comp)
-        by_name[comp.name] = comp
+        names.add(comp.name)
     if not components:
         raise SspError(f"{path}: <ssd:Elements> contains no <ssd:Component>")
+    return components
 
-    # -- connections --------------------------------------------------------------------
+
+def _read_connection(path: Path, ce: ET.Element,
+                     by_name: Dict[str, ComponentSpec]) -> Tuple[Connection, str]:
+    """One ``ssd:Connection`` (checked against the components' connectors) and its text."""
+    where = "<ssd:Connection>"
+    attrs = {}
+    for a in ("startElement", "startConnector", "endElement", "endConnector"):
+        value = ce.get(a)
+        if a.endswith("Element") and (value is None or value.strip() == ""):
+            attrs[a] = ""
+        else:
+            attrs[a] = _attr(path, ce, a, where)
+    where = (f"<ssd:Connection startElement=\"{attrs['startElement']}\" "
+             f"startConnector=\"{attrs['startConnector']}\" "
+             f"endElement=\"{attrs['endElement']}\" "
+             f"endConnector=\"{attrs['endConnector']}\">")
+    if len(ce):
+        raise SspError(f"{path}: {where} has a <{_pretty(ce[0].tag)}> child: connection "
+                       f"transformations are not supported")
+    if not attrs["startElement"] or not attrs["endElement"]:
+        raise SspError(f"{path}: {where}: connections to the system itself are not "
+                       f"supported (component to component only)")
+    conn = Connection(attrs["startElement"], attrs["startConnector"],
+                      attrs["endElement"], attrs["endConnector"])
+    kinds = []
+    for role, cname, vname in (("start", conn.start_component, conn.start_connector),
+                               ("end", conn.end_component, conn.end_connector)):
+        comp = by_name.get(cname)
+        if comp is None:
+            raise SspError(f"{path}: {where}: {role}Element \"{cname}\" is not a component "
+                           f"of the system (components: {', '.join(by_name)})")
+        if vname not in comp.connectors:
+            raise SspError(f"{path}: {where}: {role}Connector \"{vname}\" is not declared "
+                           f"as an <ssd:Connector> of component \"{cname}\"")
+        kinds.append(comp.connectors[vname])
+    (skind, stype), (ekind, etype) = kinds
+    if skind != "output":
+        raise SspError(f"{path}: {where}: the start connector has kind \"{skind}\"; only "
+                       f"output -> input connections are supported")
+    if ekind != "input":
+        raise SspError(f"{path}: {where}: the end connector has kind \"{ekind}\"; only "
+                       f"output -> input connections are supported")
+    if stype != etype:
+        raise SspError(f"{path}: {where}: type mismatch, {stype} output connected to "
+                       f"{etype} input")
+    return conn, where
+
+
+def _read_connections(path: Path, system: ET.Element,
+                      components: List[ComponentSpec]) -> List[Connection]:
+    by_name = {c.name: c for c in components}
     connections: List[Connection] = []
     driven: Dict[Tuple[str, str], Connection] = {}
     conns_elem = system.find(_tag(SSD_NS, "Connections"))
-    if conns_elem is not None:
-        for ce in conns_elem.findall(_tag(SSD_NS, "Connection")):
-            where = "<ssd:Connection>"
-            attrs = {}
-            for a in ("startElement", "startConnector", "endElement", "endConnector"):
-                value = ce.get(a)
-                if a.endswith("Element") and (value is None or value.strip() == ""):
-                    attrs[a] = ""
-                else:
-                    attrs[a] = _attr(path, ce, a, where)
-            where = (f"<ssd:Connection startElement=\"{attrs['startElement']}\" "
-                     f"startConnector=\"{attrs['startConnector']}\" "
-                     f"endElement=\"{attrs['endElement']}\" "
-                     f"endConnector=\"{attrs['endConnector']}\">")
-            if len(ce):
-                raise SspError(f"{path}: {where} has a <{_pretty(ce[0].tag)}> child: connection "
-                               f"transformations are not supported")
-            if not attrs["startElement"] or not attrs["endElement"]:
-                raise SspError(f"{path}: {where}: connections to the system itself are not "
-                               f"supported (component to component only)")
-            conn = Connection(attrs["startElement"], attrs["startConnector"],
-                              attrs["endElement"], attrs["endConnector"])
-            kinds = []
-            for role, cname, vname in (("start", conn.start_component, conn.start_connector),
-                                       ("end", conn.end_component, conn.end_connector)):
-                comp = by_name.get(cname)
-                if comp is None:
-                    raise SspError(f"{path}: {where}: {role}Element \"{cname}\" is not a component "
-                                   f"of the system (components: {', '.join(by_name)})")
-                if vname not in comp.connectors:
-                    raise SspError(f"{path}: {where}: {role}Connector \"{vname}\" is not declared "
-                                   f"as an <ssd:Connector> of component \"{cname}\"")
-                kinds.append(comp.connectors[vname])
-            (skind, stype), (ekind, etype) = kinds
-            if skind != "output":
-                raise SspError(f"{path}: {where}: the start connector has kind \"{skind}\"; only "
-                               f"output -> input connections are supported")
-            if ekind != "input":
-                raise SspError(f"{path}: {where}: the end connector has kind \"{ekind}\"; only "
-                               f"output -> input connections are supported")
-            if stype != etype:
-                raise SspError(f"{path}: {where}: type mismatch, {stype} output connected to "
-                               f"{etype} input")
-            key = (conn.end_component, conn.end_connector)
-            if key in driven:
-                raise SspError(f"{path}: {where}: input {conn.end_component}.{conn.end_connector} "
-                               f"is already connected ({driven[key]}); an input takes one source")
-            driven[key] = conn
-            connections.append(conn)
+    if conns_elem is None:
+        return connections
+    for ce in conns_elem.findall(_tag(SSD_NS, "Connection")):
+        conn, where = _read_connection(path, ce, by_name)
+        key = (conn.end_component, conn.end_connector)
+        if key in driven:
+            raise SspError(f"{path}: {where}: input {conn.end_component}.{conn.end_connector} "
+                           f"is already connected ({driven[key]}); an input takes one source")
+        driven[key] = conn
+        connections.append(conn)
+    return connections
 
-    # -- default experiment -------------------------------------------------------------
+
+def _read_experiment(path: Path, root: ET.Element) -> Tuple[float, float, float]:
+    """Start time, stop time and base step of ``ssd:DefaultExperiment``."""
     experiment = root.find(_tag(SSD_NS, "DefaultExperiment"))
     if experiment is None:
         raise SspError(f"{path}: <ssd:DefaultExperiment> is missing (it carries the base step)")
@@ -500,6 +367,10 @@ def load_ssd(path) -> SystemModel:
         )
     if base_step <= 0:
         raise SspError(f"{path}: <osp:FixedStepAlgorithm> baseStepSize={base_step} must be > 0")
+    return start, stop, base_step
+
+
+def _check_step_hints(path: Path, components: List[ComponentSpec], base_step: float) -> None:
     for comp in components:
         if comp.step_hint is None:
             continue
@@ -507,9 +378,32 @@ def load_ssd(path) -> SystemModel:
         if comp.step_hint <= 0:
             raise SspError(f"{path}: {where}: the step must be > 0")
         ratio = comp.step_hint / base_step
-        if round(ratio) < 1 or abs(ratio - round(ratio)) > MULTIPLE_TOLERANCE * ratio:
+        if round(ratio) < 1 or abs(ratio - round(ratio)) > TIME_TOLERANCE * ratio:
             raise SspError(f"{path}: {where}: the step must be an integer multiple of the base "
                            f"step {base_step}")
+
+
+def load_ssd(path) -> SystemModel:
+    """Load ``SystemStructure.ssd`` (``path`` is the file or the folder holding it)."""
+    path = Path(path).expanduser()
+    if path.is_dir():
+        path = path / "SystemStructure.ssd"
+    path = path.resolve()
+    root = _parse(path)
+    if root.tag != _tag(SSD_NS, "SystemStructureDescription"):
+        raise SspError(f"{path}: root element is <{_pretty(root.tag)}>, expected "
+                       f"<ssd:SystemStructureDescription>")
+    systems = root.findall(_tag(SSD_NS, "System"))
+    if len(systems) != 1:
+        raise SspError(f"{path}: <ssd:SystemStructureDescription> needs exactly one <ssd:System> "
+                       f"(found {len(systems)})")
+    system = systems[0]
+    system_name = _attr(path, system, "name", "<ssd:System>")
+    model_name = root.get("name") or system_name
+    components = _read_components(path, system, system_name)
+    connections = _read_connections(path, system, components)
+    start, stop, base_step = _read_experiment(path, root)
+    _check_step_hints(path, components, base_step)
     return SystemModel(name=model_name, path=path, base_step=base_step, start_time=start,
                        stop_time=stop, components=components, connections=connections)
 

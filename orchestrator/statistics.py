@@ -7,6 +7,8 @@ Definitions (one each; the per-run numbers come from :mod:`orchestrator.metrics`
   confidence interval from Student's t with ``n - 1`` degrees of freedom,
   ``mean +- t_{(1+level)/2, n-1} s / sqrt(n)`` (``s``: sample standard deviation).  It treats
   the runs as independent draws (each run has its own seeds), not the samples inside a run.
+  A run whose value is not finite (a diverged filter's NaN RMS, a missing number) is left
+  out and counted in ``dropped``: ``n`` is the number of runs the interval is over.
 * :func:`paired_difference`: the t-interval of the per-run differences ``a_i - b_i`` of two
   filters run on the same seeds (paired: the truth, IMU and GNSS noise of run ``i`` are the
   same for both, so the noise they share cancels in the difference).
@@ -32,22 +34,23 @@ PAIRED_METHOD = "paired t interval of the per-run differences (same seeds)"
 
 
 def t_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float]:
-    """Mean of ``values`` with its t confidence interval: dict ``mean``, ``low``, ``high``,
-    ``half_width``, ``sd``, ``n`` (the interval is nan for fewer than two values)."""
-    x = np.asarray(values, dtype=float)
+    """Mean of the finite ``values`` with its t confidence interval: dict ``mean``, ``low``,
+    ``high``, ``half_width``, ``sd``, ``n`` (finite values used) and ``dropped`` (values left
+    out as not finite, None included); the interval is nan for fewer than two values, the
+    mean too for none."""
+    x = np.array([math.nan if v is None else v for v in values], dtype=float)
     if x.ndim != 1 or x.size == 0:
         raise NavfmuError("t_interval: needs a non-empty list of per-run values")
-    if not np.all(np.isfinite(x)):
-        raise NavfmuError("t_interval: a per-run value is not finite")
-    n = int(x.size)
-    mean = float(x.mean())
+    finite = x[np.isfinite(x)]
+    n, dropped = int(finite.size), int(x.size - finite.size)
+    mean = float(finite.mean()) if n else math.nan
     if n < 2:
         return {"mean": mean, "low": math.nan, "high": math.nan, "half_width": math.nan,
-                "sd": math.nan, "n": n}
-    sd = float(x.std(ddof=1))
+                "sd": math.nan, "n": n, "dropped": dropped}
+    sd = float(finite.std(ddof=1))
     half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * sd / math.sqrt(n)
     return {"mean": mean, "low": mean - half, "high": mean + half, "half_width": half,
-            "sd": sd, "n": n}
+            "sd": sd, "n": n, "dropped": dropped}
 
 
 def paired_difference(a: Sequence[float], b: Sequence[float],

@@ -310,7 +310,7 @@ def _campaign(scenario, filters, out):
 
 def _pooled(records):
     """filter -> pooled RMS position N/E/D and velocity N/E/D over the runs."""
-    from orchestrator.metrics import pooled_rms
+    from orchestrator.metric_comparisons import pooled_rms
 
     return {f: np.array([pooled_rms([r["metrics"][g][a] for r in rows])
                          for g in ("position_rms_m", "velocity_rms_mps") for a in "ned"])

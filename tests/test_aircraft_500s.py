@@ -6,7 +6,7 @@ import pytest
 
 from orchestrator import build as fmu_build
 from orchestrator import scenarios
-from orchestrator.metrics import rms_table
+from orchestrator.metric_comparisons import rms_table
 
 MODEL = fmu_build.ROOT / "models" / "aircraft_500s"
 

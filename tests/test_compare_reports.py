@@ -10,8 +10,9 @@ import types
 import pytest
 
 from orchestrator import build as fmu_build
+from orchestrator import metric_comparisons
 from orchestrator import metrics as nav_metrics
-from orchestrator import scenarios
+from orchestrator import bench, comparison, comparison_text, run_outputs, scenarios
 from orchestrator.cli import main
 
 MODELS = fmu_build.ROOT / "models"
@@ -59,31 +60,31 @@ def _metrics(pos_ned, vel_ned=(0.0, 0.0, 0.0), att=(0.0, 0.0, 0.0)):
 def test_improvement_and_ratios_on_constructed_metrics():
     base = _metrics((3.0, 4.0, 0.0), (0.0, 0.3, 0.4))
     filt = _metrics((0.6, 0.8, 0.0), (0.0, 0.03, 0.04))
-    assert nav_metrics.rms_3d(base, "position") == pytest.approx(5.0)
-    assert nav_metrics.rms_3d(filt, "velocity") == pytest.approx(0.05)
-    assert nav_metrics.improvement_percent(5.0, 1.0) == pytest.approx(80.0)
-    assert nav_metrics.rms_ratio(6.0, 1.5) == pytest.approx(4.0)
-    assert nav_metrics.per_axis_enu(base, "position") == [4.0, 3.0, 0.0]  # E, N, U
+    assert metric_comparisons.rms_3d(base, "position") == pytest.approx(5.0)
+    assert metric_comparisons.rms_3d(filt, "velocity") == pytest.approx(0.05)
+    assert metric_comparisons.improvement_percent(5.0, 1.0) == pytest.approx(80.0)
+    assert metric_comparisons.rms_ratio(6.0, 1.5) == pytest.approx(4.0)
+    assert metric_comparisons.per_axis_enu(base, "position") == [4.0, 3.0, 0.0]  # E, N, U
 
     runs = [scenarios.Run("Kf", None, None, {"filter": base}),
             scenarios.Run("Robust", None, None, {"filter": filt})]
     ref = {"improvement_percent": {"baseline": "Kf", "filter": "Robust", "position": 76.0,
                                    "velocity": 80.0, "position_ratio_enu": [6.07, 5.71, 2.39]}}
-    comp = scenarios.paper_comparison(runs, ref)
+    comp = comparison.paper_comparison(runs, ref)
     items = {i["key"]: i for i in comp["improvement"]["items"]}
     assert items["position"]["ours"] == pytest.approx(80.0)
     assert items["velocity"]["ours"] == pytest.approx(90.0)
     assert items["position"]["paper"] == 76.0
     ratio = items["position_ratio_enu"]["ours"]
     assert ratio[:2] == pytest.approx([5.0, 5.0]) and math.isnan(ratio[2])  # 0 / 0 -> nan
-    text = scenarios.format_comparison(comp)
+    text = comparison_text.format_comparison(comp)
     assert "ours 80.0 % lower, paper 76.0 %" in text
     assert "ours 90.0 % lower, paper 80.0 %" in text
     assert "6.07" in text and "5.00" in text
     # a block whose filters were not run says which are missing
-    comp = scenarios.paper_comparison(runs[:1], ref)
+    comp = comparison.paper_comparison(runs[:1], ref)
     assert comp["improvement"]["missing"] == ["Robust"]
-    assert "add Robust to --filters" in scenarios.format_comparison(comp)
+    assert "add Robust to --filters" in comparison_text.format_comparison(comp)
 
 
 def test_rejection_statistics_on_constructed_epochs():
@@ -101,7 +102,7 @@ def test_rejection_statistics_on_constructed_epochs():
 
 def test_rms_table_prints_dashes_for_missing_paper_numbers():
     m = _metrics((1.0, 2.0, 3.0), (0.1, 0.2, 0.3), (0.01, 0.02, 0.03))
-    table = nav_metrics.rms_table([("ours", m)], [("paper: a", None, None),
+    table = metric_comparisons.rms_table([("ours", m)], [("paper: a", None, None),
                                                   ("paper: b", [1, None, 3], [4, 5, 6],
                                                    [0.5, 0.6, 0.7])])
     assert _row(table, "paper: a").split()[2:] == ["-"] * 9
@@ -114,7 +115,7 @@ def test_rms_table_prints_dashes_for_missing_paper_numbers():
 # -- paper 004: aircraft_outliers ----------------------------------------------------------
 def test_outlier_report(outliers, tmp_path):
     model, runs, ref = outliers
-    table = scenarios.report_table(runs, ref)
+    table = comparison.report_table(runs, ref)
     for label in ("Kf", "NewtonRobustKf"):
         values = [float(x) for x in NUMBER.findall(_row(table, label))]
         assert len(values) == 9 and all(math.isfinite(v) for v in values)
@@ -133,7 +134,7 @@ def test_outlier_report(outliers, tmp_path):
     assert det["expected_false_alarm_rate_chi2_1"] == pytest.approx(0.01, abs=1e-4)
     assert "outlier_detection" not in runs[0].metrics["filter"]  # Kf has no n_rejected
 
-    comp = scenarios.paper_comparison(runs, ref)
+    comp = comparison.paper_comparison(runs, ref)
     items = {i["key"]: i for i in comp["improvement"]["items"]}
     kf, rob = runs[0].metrics["filter"], runs[1].metrics["filter"]
     for group, key in (("position", "position_rms_m"), ("velocity", "velocity_rms_mps")):
@@ -141,11 +142,11 @@ def test_outlier_report(outliers, tmp_path):
         f = math.sqrt(sum(v ** 2 for v in rob[key].values()))
         assert items[group]["ours"] == pytest.approx(100 * (1 - f / b))
         assert items[group]["ours"] > 30.0  # the outliers hurt the plain Kf
-    text = scenarios.format_comparison(comp)
+    text = comparison_text.format_comparison(comp)
     assert "paper 76.0 %" in text and "paper 80.0 %" in text
     assert "NewtonRobustKf: detected 3/3 injected epochs (100.0 %)" in text
 
-    written = {p.name: p for p in scenarios.write_outputs(runs, tmp_path, reference=ref)}
+    written = {p.name: p for p in run_outputs.write_outputs(runs, tmp_path, reference=ref)}
     for name in ("errors.png", "nis.png", "adaptive.png", "outliers.png", "trajectory.png"):
         assert written[name].stat().st_size > 10_000, name
     assert "chi2.png" not in written and "r_estimate.png" not in written
@@ -168,7 +169,7 @@ def test_chi2_threshold_from_the_run_parameters(outliers):
 # -- paper 000: uav_maneuver ---------------------------------------------------------------
 def test_uav_report(uav, tmp_path):
     model, runs, ref = uav
-    table = scenarios.report_table(runs, ref)
+    table = comparison.report_table(runs, ref)
     lines = table.splitlines()
     # our row, then the paper's row for the same filter, with the paper's attitude (Table 4)
     assert lines[2].startswith("Ukf ") and lines[3].startswith("paper: UKF ")
@@ -180,7 +181,7 @@ def test_uav_report(uav, tmp_path):
         values = [float(x) for x in NUMBER.findall(_row(table, label))]
         assert len(values) == 9 and all(math.isfinite(v) and v >= 0 for v in values)
 
-    comp = scenarios.paper_comparison(runs, ref)
+    comp = comparison.paper_comparison(runs, ref)
     tpc = comp["time_per_cycle"]
     assert tpc["baseline"] == "Ukf" and tpc["missing"] == ["ImmUkf"]
     assert tpc["filter_step_s"] == pytest.approx(0.02)
@@ -189,7 +190,7 @@ def test_uav_report(uav, tmp_path):
     assert rows["CtfaUkf"]["ours_ratio"] == pytest.approx(
         rows["CtfaUkf"]["ours_ms"] / rows["Ukf"]["ours_ms"])
     assert rows["Ukf"]["ours_ms"] > 0
-    text = scenarios.format_comparison(comp, "`navfmu bench X --filters Ukf,CtfaUkf`")
+    text = comparison_text.format_comparison(comp, "`navfmu bench X --filters Ukf,CtfaUkf`")
     assert "1.38" in text and "navfmu bench X --filters Ukf,CtfaUkf" in text
     # phase means from paper.json's windows: 20 s lie in the first strong phase only
     phase_rows = {(r["filter"], r["variable"]): r for r in comp["phases"]["rows"]}
@@ -202,7 +203,7 @@ def test_uav_report(uav, tmp_path):
     assert [(g["name"], g["value"]) for g in gates] == [("ctfa_t1", 6.25), ("ctfa_t2", 11.35)]
     assert nav_metrics.chi2_thresholds(runs[0].results, "filter") == []  # plain Ukf: no gate
 
-    written = {p.name: p for p in scenarios.write_outputs(runs, tmp_path, reference=ref)}
+    written = {p.name: p for p in run_outputs.write_outputs(runs, tmp_path, reference=ref)}
     for name in ("errors.png", "adaptive.png", "chi2.png", "trajectory.png"):
         assert written[name].stat().st_size > 10_000, name
     assert "outliers.png" not in written
@@ -211,7 +212,7 @@ def test_uav_report(uav, tmp_path):
 # -- paper 001: aircraft_500s --------------------------------------------------------------
 def test_aircraft_report(aircraft, tmp_path):
     model, runs, ref = aircraft
-    comp = scenarios.paper_comparison(runs, ref)
+    comp = comparison.paper_comparison(runs, ref)
     items = {i["key"]: i for i in comp["improvement"]["items"]}
     kf, iakf = runs[0].metrics["filter"], runs[1].metrics["filter"]
     expected = [kf["position_rms_m"][a] / iakf["position_rms_m"][a] for a in "end"]
@@ -219,11 +220,11 @@ def test_aircraft_report(aircraft, tmp_path):
     assert items["position_ratio_enu"]["paper"] == [6.07, 5.71, 2.39]
     assert items["velocity_enu"]["ours"] == pytest.approx(
         [100 * (1 - iakf["velocity_rms_mps"][a] / kf["velocity_rms_mps"][a]) for a in "end"])
-    text = scenarios.format_comparison(comp)
+    text = comparison_text.format_comparison(comp)
     assert "position RMS ratio Kf/Iakf" in text and "6.07" in text and "2.39" in text
     assert "time per filter cycle" not in text  # paper 001 gives no timing
 
-    written = {p.name: p for p in scenarios.write_outputs(runs, tmp_path, reference=ref)}
+    written = {p.name: p for p in run_outputs.write_outputs(runs, tmp_path, reference=ref)}
     assert written["r_estimate.png"].stat().st_size > 10_000
     assert written["adaptive.png"].stat().st_size > 10_000
 
@@ -251,7 +252,7 @@ def _fmus():
 def test_bench_filters(_fmus, capsys):
     model = scenarios.load_scenario(MODELS / "uav_maneuver")
     ref = scenarios.paper_reference(model)
-    out = scenarios.bench_filters(model, ["Ukf", "CtfaUkf"], stop_time=2.0, repeat=2,
+    out = bench.bench_filters(model, ["Ukf", "CtfaUkf"], stop_time=2.0, repeat=2,
                                   reference=ref, log=None)
     assert out["baseline"] == "Ukf" and out["repeat"] == 2 and out["stop_time"] == 2.0
     rows = out["filters"]

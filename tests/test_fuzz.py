@@ -24,7 +24,8 @@ from navcore import components
 from navcore.errors import NavcoreError
 from orchestrator import build as fmu_build
 from orchestrator import scenarios
-from orchestrator.backends import DirectInstance, FmuInstance
+from orchestrator.direct_instance import DirectInstance
+from orchestrator.fmu_instance import FmuInstance
 from orchestrator.errors import NavfmuError, SimulationError
 
 MODELS = fmu_build.ROOT / "models"

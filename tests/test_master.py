@@ -279,7 +279,7 @@ def test_swap_variant_file_applies_to_the_swapped_in_model_only(write_ssd, tmp_p
 
 
 def test_direct_instance_state_round_trip():
-    from orchestrator.backends import DirectInstance
+    from orchestrator.direct_instance import DirectInstance
 
     inst = DirectInstance.from_registry("Accumulator", "acc", REGISTRY)
     inst.prepare(["u", "count_in"], ["s"])
@@ -506,7 +506,7 @@ def test_fmu_swap_with_missing_variable(write_ssd, toy_fmus):
 
 
 def test_fmu_instance_errors(tmp_path):
-    from orchestrator.backends import FmuInstance
+    from orchestrator.fmu_instance import FmuInstance
 
     with pytest.raises(NavfmuError, match="FMU file not found: .*nothing.fmu"):
         FmuInstance(tmp_path / "nothing.fmu", "x")

@@ -48,7 +48,26 @@ def test_paired_difference_removes_the_shared_noise():
 def test_bad_inputs():
     with pytest.raises(NavfmuError, match="same runs"):
         st.paired_difference([1.0, 2.0], [1.0])
-    with pytest.raises(NavfmuError, match="not finite"):
-        st.t_interval([1.0, float("nan")])
+    with pytest.raises(NavfmuError, match="non-empty"):
+        st.t_interval([])
     single = st.t_interval([2.0])
     assert single["mean"] == 2.0 and math.isnan(single["half_width"])
+
+
+def test_non_finite_runs_left_out_and_counted_the_same_by_report_and_summary():
+    """A diverged run (NaN RMS) or a missing number is left out of the interval by
+    t_interval itself, so the campaign summary and the report give the same interval."""
+    from orchestrator import campaign_summary, report
+
+    values = [1.0, float("nan"), 2.0, 3.0, None, 4.0, float("inf"), 5.0]
+    s = st.t_interval(values)
+    assert s == {**st.t_interval([1.0, 2.0, 3.0, 4.0, 5.0]), "dropped": 3}
+    assert s["n"] == 5 and s["mean"] == 3.0
+    none = st.t_interval([float("nan")])
+    assert none["n"] == 0 and none["dropped"] == 1 and math.isnan(none["mean"])
+    rows = [v for v in values if v is not None]
+    records = {"Kf": [{"metrics": {"position_rms_m": {"e": v, "n": v, "d": v}}} for v in rows]}
+    east = campaign_summary.summarize(records)["axes"]["pos_e"]["filters"]["Kf"]
+    plan = {"records": records}
+    from_report = report._per_run(plan, "Kf", lambda m: m["position_rms_m"]["e"])
+    assert from_report == {k: east[k] for k in from_report} == {**s, "dropped": 2}

@@ -10,7 +10,7 @@ import pytest
 
 from navcore import motion_profiles
 from navcore.component import ParameterError
-from orchestrator import ssp
+from orchestrator import ssp, ssp_xml
 from orchestrator.errors import SspError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,7 +39,7 @@ def test_ssd_with_a_dtd_is_refused(write_ssd, text):
 
 def test_oversized_ssd_is_refused_before_parsing(write_ssd, monkeypatch):
     path = write_ssd("<not even xml" + " " * 200)
-    monkeypatch.setattr(ssp, "MAX_FILE_BYTES", 100)
+    monkeypatch.setattr(ssp_xml, "MAX_FILE_BYTES", 100)
     with pytest.raises(SspError, match="more than the 100"):
         ssp.load_ssd(path)
 
