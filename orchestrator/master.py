@@ -132,6 +132,22 @@ from .ssp import ComponentSpec, Connection, SystemModel
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 
+def _row_recorder(vectors, rec_index, recordings):
+    """``record(row)``: copy the recorded signals into row ``row`` of the recording buffers;
+    a type recorded whole, in vector order, is one row copy."""
+    whole = [t for t in NUMERIC_TYPES
+             if np.array_equal(rec_index[t], np.arange(len(vectors[t])))]
+    picked = [t for t in NUMERIC_TYPES if t not in whole and len(rec_index[t])]
+
+    def record(row):
+        for t in whole:
+            recordings[t][row] = vectors[t]
+        for t in picked:
+            vectors[t].take(rec_index[t], out=recordings[t][row], mode="clip")
+
+    return record
+
+
 # ----------------------------------------------------------------------------------------
 # Simulation
 # ----------------------------------------------------------------------------------------
@@ -339,28 +355,16 @@ class Simulation:
         start = self.model.start_time
         stop = float(stop_time) if stop_time is not None else self.model.stop_time
         n_steps = self._n_steps(start, stop)
-        record_every = self.record_every
-        n_rows = n_steps // record_every + 1
         vectors, position, slices, out_names, source_of = self._layout()
         rec_index = {t: np.array([position[(n, v)][1] for n in self.names
                                   for v in self.recorded[n] if position[(n, v)][0] == t],
                                  dtype=np.intp) for t in NUMERIC_TYPES}
-        recording = Recording(n_rows, {t: len(rec_index[t]) for t in NUMERIC_TYPES}, _DTYPES,
+        recording = Recording(n_steps // self.record_every + 1,
+                              {t: len(rec_index[t]) for t in NUMERIC_TYPES}, _DTYPES,
                               lambda first, n, bufs: self._chunk(first, n, bufs, rec_index,
                                                                  position),
                               sink=sink)
-        recordings = recording.buffers
-
-        # recording everything in vector order: one row copy per type
-        whole = [t for t in NUMERIC_TYPES if np.array_equal(rec_index[t], np.arange(len(vectors[t])))]
-        picked = [t for t in NUMERIC_TYPES if t not in whole and len(rec_index[t])]
-
-        def record(row):
-            for t in whole:
-                recordings[t][row] = vectors[t]
-            for t in picked:
-                vectors[t].take(rec_index[t], out=recordings[t][row], mode="clip")
-
+        record = _row_recorder(vectors, rec_index, recording.buffers)
         timing = Timing(len(self.components))
         instances: List[Instance] = []
         try:
@@ -375,21 +379,7 @@ class Simulation:
                 inst.set_parameters(self.parameter_values[d.spec.name])
             exchange.initialize(start, stop)
             record(recording.slot(0))
-            step = exchange.step
-            progress_every = max(1, n_steps // 100)
-            next_progress = progress_every if progress is not None else n_steps + 1
-            loop_start = _time.perf_counter_ns()
-            for k in range(n_steps):
-                step(k)
-                kp1 = k + 1
-                if kp1 % record_every == 0:
-                    record(recording.slot(kp1 // record_every))
-                if kp1 == next_progress:
-                    progress(kp1, n_steps)
-                    next_progress = kp1 + progress_every
-            loop_ns = _time.perf_counter_ns() - loop_start
-            if progress is not None and n_steps % progress_every:
-                progress(n_steps, n_steps)
+            loop_ns = self._loop(exchange.step, record, recording, n_steps, progress)
             recording.finish()
         except BaseException:
             if sink is not None:
@@ -400,10 +390,30 @@ class Simulation:
                 inst.terminate()
 
         results = self._results(start, stop, n_steps, recording.size if sink is None else 0,
-                                recordings, rec_index, position, timing, loop_ns)
+                                recording.buffers, rec_index, position, timing, loop_ns)
         if sink is not None:
             sink.close(results)
         return results
+
+    def _loop(self, step, record, recording, n_steps: int, progress) -> int:
+        """The macro steps 0 .. n_steps-1, each row recorded when due; returns the loop's
+        wall time [ns].  ``progress`` is called about every 1 % and at the end."""
+        record_every = self.record_every
+        progress_every = max(1, n_steps // 100)
+        next_progress = progress_every if progress is not None else n_steps + 1
+        loop_start = _time.perf_counter_ns()
+        for k in range(n_steps):
+            step(k)
+            kp1 = k + 1
+            if kp1 % record_every == 0:
+                record(recording.slot(kp1 // record_every))
+            if kp1 == next_progress:
+                progress(kp1, n_steps)
+                next_progress = kp1 + progress_every
+        loop_ns = _time.perf_counter_ns() - loop_start
+        if progress is not None and n_steps % progress_every:
+            progress(n_steps, n_steps)
+        return loop_ns
 
     # -- results ------------------------------------------------------------------------
     def _chunk(self, first_row, n_rows, recordings, rec_index, position) -> Results:

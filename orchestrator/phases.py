@@ -13,12 +13,12 @@ label pooled, clipped to the run), and the ratio of the first label's mean to th
 """
 from __future__ import annotations
 
-import math
 from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
 from .errors import NavfmuError
+from .windows import window_bounds
 
 
 def phase_windows(reference: Optional[Dict[str, Any]]) -> List[Dict[str, Any]]:
@@ -32,15 +32,12 @@ def phase_windows(reference: Optional[Dict[str, Any]]) -> List[Dict[str, Any]]:
                           "{label, t0, t1}")
     out = []
     for i, w in enumerate(windows):
-        try:
-            label, t0, t1 = str(w["label"]), float(w["t0"]), float(w["t1"])
-        except (KeyError, TypeError, ValueError):
-            raise NavfmuError(f"paper.json: phases.windows[{i}] must have 'label', 't0' and "
-                              f"'t1' (s), got {w!r}") from None
-        if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
-            raise NavfmuError(f"paper.json: phases.windows[{i}]: need finite t0 < t1, got "
-                              f"{t0}, {t1}")
-        out.append({"label": label, "t0": t0, "t1": t1})
+        where = f"phases.windows[{i}]"
+        if not isinstance(w, dict) or "label" not in w:
+            raise NavfmuError(f"paper.json: {where} must have 'label', 't0' and 't1' (s), "
+                              f"got {w!r}")
+        t0, t1 = window_bounds(w, where)
+        out.append({"label": str(w["label"]), "t0": t0, "t1": t1})
     return out
 
 

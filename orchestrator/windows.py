@@ -16,6 +16,7 @@ the smaller RMS is shown).
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Dict, List, Sequence
 
 from . import metrics as nav_metrics
@@ -26,12 +27,25 @@ _GROUPS = (("attitude_rms_deg", "attitude", "deg"), ("position_rms_m", "position
            ("velocity_rms_mps", "velocity", "m/s"))
 
 
+def window_bounds(w, where: str):
+    """``(t0, t1)`` [s] of a paper.json window ``w`` (a dict with numbers ``t0`` < ``t1``,
+    both finite), or a NavfmuError naming it ``where``: the one check of every paper.json
+    window (the named windows here, the phase windows of :mod:`orchestrator.phases`)."""
+    try:
+        t0, t1 = float(w["t0"]), float(w["t1"])
+    except (KeyError, TypeError, ValueError):
+        raise NavfmuError(f"paper.json: {where} must have numbers 't0' and 't1' (s), got "
+                          f"{w!r}") from None
+    if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
+        raise NavfmuError(f"paper.json: {where}: need finite t0 < t1, got {t0}, {t1}")
+    return t0, t1
+
+
 def paper_windows(reference) -> Dict[str, Dict[str, Any]]:
     """The named windows of a paper.json (``{}`` without any), each checked."""
     windows = (reference or {}).get("windows") or {}
     for name, w in windows.items():
-        if not (isinstance(w, dict) and "t0" in w and "t1" in w and w["t1"] > w["t0"]):
-            raise NavfmuError(f"paper.json: window '{name}' needs numbers t0 < t1")
+        window_bounds(w, f"window '{name}'")
     return windows
 
 
