@@ -1,14 +1,17 @@
 """Our numbers next to the paper's: the RMS table with the paper's rows and the comparison
 blocks of paper.json (improvement over a baseline, time per filter cycle, phases, outlier
-detection, the paper's windows), as a JSON-ready dict.  Text: :mod:`orchestrator.comparison_text`."""
+detection, the paper's windows), as a JSON-ready dict.  Its text:
+:mod:`orchestrator.comparison_text`."""
 from __future__ import annotations
 
 from typing import Any, Dict, Sequence
 
-from . import metric_comparisons
+from . import metrics as nav_metrics
 from . import phases as scenario_phases
 from . import windows as paper_windows
-from .scenarios import FILTER_COMPONENT, Run, filters_in
+from .metric_comparisons import (improvement_percent, per_axis_enu, reference_metrics, rms_3d,
+                                 rms_ratio, rms_table)
+from .scenarios import FILTER_COMPONENT, Run
 
 
 def _row_label(run: Run, component: str) -> str:
@@ -25,7 +28,7 @@ def report_table(runs: Sequence[Run], reference=None) -> str:
         if all(v is None for v in values):
             continue  # the paper gives no number for this row (e.g. only in a figure)
         ref_rows.append((r.get("filter"), f"paper: {r['label']}",
-                         metric_comparisons.reference_metrics(*values)))
+                         reference_metrics(*values)))
     used = set()
     rows = []
     for run in runs:
@@ -38,7 +41,7 @@ def report_table(runs: Sequence[Run], reference=None) -> str:
                     rows.append((label, ref))
                     used.add(i)
     rows += [(label, ref) for i, (_, label, ref) in enumerate(ref_rows) if i not in used]
-    return metric_comparisons.rms_table(rows)
+    return rms_table(rows)
 
 
 def _by_filter(runs: Sequence[Run]) -> Dict[str, Dict[str, Any]]:
@@ -53,17 +56,17 @@ def _improvement_items(imp, b, f):
     items = []
     for group in ("position", "velocity", "attitude"):
         if group in imp:
-            b3, f3 = metric_comparisons.rms_3d(b, group), metric_comparisons.rms_3d(f, group)
+            b3, f3 = rms_3d(b, group), rms_3d(f, group)
             items.append({"key": group, "kind": "percent_3d", "baseline_rms": b3,
-                          "filter_rms": f3, "ours": metric_comparisons.improvement_percent(b3, f3),
+                          "filter_rms": f3, "ours": improvement_percent(b3, f3),
                           "paper": imp[group]})
         for suffix, kind in (("_enu", "percent_axes"), ("_ratio_enu", "ratio_axes")):
             key = group + suffix
             if key not in imp:
                 continue
-            bs, fs = metric_comparisons.per_axis_enu(b, group), metric_comparisons.per_axis_enu(f, group)
-            fn = (metric_comparisons.improvement_percent if kind == "percent_axes"
-                  else metric_comparisons.rms_ratio)
+            bs, fs = per_axis_enu(b, group), per_axis_enu(f, group)
+            fn = (improvement_percent if kind == "percent_axes"
+                  else rms_ratio)
             items.append({"key": key, "kind": kind, "baseline_rms": bs, "filter_rms": fs,
                           "ours": [fn(x, y) for x, y in zip(bs, fs)], "paper": imp[key]})
     return items
@@ -123,7 +126,7 @@ def paper_comparison(runs: Sequence[Run], reference=None) -> Dict[str, Any]:
     times = reference.get("time_per_cycle_ms")
     if isinstance(times, dict) and times:
         out["time_per_cycle"] = _time_per_cycle_block(times, ours, runs)
-    phase_stats = scenario_phases.phase_statistics(runs, reference, filters_in)
+    phase_stats = scenario_phases.phase_statistics(runs, reference, nav_metrics.filters_of)
     if phase_stats and phase_stats["rows"]:
         out["phases"] = phase_stats
     detection = {name: m["outlier_detection"] for name, m in ours.items()

@@ -196,7 +196,4 @@ class DirectInstance(Instance):
             hook()
 
 
-__all__ = ["VarInfo", "Instance", "FmuInstance", "DirectInstance"]
-
-
 __all__ = ["DirectInstance"]

@@ -43,8 +43,8 @@ def rms_table(rows, reference=None):
     up) plus attitude RMS (paper 000's Table 4).
 
     ``rows``: list of (label, metrics dict) in the given order, metrics from
-    :func:`orchestrator.metrics.filter_metrics` or :func:`reference_metrics` (a missing group or None value prints
-    '-'); ``reference``: list of (label, pos_enu, vel_enu[, att_deg]) from a paper, printed
+    :func:`orchestrator.metrics.filter_metrics` or :func:`reference_metrics` (a missing group
+    or None value prints '-'); ``reference``: list of (label, pos_enu, vel_enu[, att_deg]) from a paper, printed
     under the rows.
     """
     rows = list(rows)

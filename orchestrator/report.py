@@ -25,13 +25,13 @@ from typing import Any, Dict, List, Optional
 
 from . import build as fmu_build
 from . import campaign as camp
-from . import metric_comparisons
 from . import metrics as nav_metrics
 from . import plots
 from . import recorder
 from . import statistics as st
 from .campaign_summary import AXES
 from .errors import NavfmuError, WiringError
+from .metric_comparisons import GROUP_KEYS, improvement_percent, per_axis_enu, rms_3d, rms_ratio
 from .results import atomic_write
 
 MODELS = fmu_build.ROOT / "models"
@@ -291,18 +291,17 @@ def _improvement(plan) -> List[str]:
              f"{imp.get('note', '')}):", "", "| quantity | ours | paper |", "|---|---|---|"]
     for group in ("position", "velocity", "attitude"):
         if group in imp:
-            v = [metric_comparisons.improvement_percent(metric_comparisons.rms_3d(b["metrics"], group),
-                                                 metric_comparisons.rms_3d(f["metrics"], group))
+            v = [improvement_percent(rms_3d(b["metrics"], group), rms_3d(f["metrics"], group))
                  for b, f in pairs]
             lines.append(f"| {group} 3-D RMS reduction [%] | {_ci(st.t_interval(v), 1)} | "
                          f"{imp[group]} |")
-        for suffix, fn, what in (("_enu", metric_comparisons.improvement_percent, "reduction [%]"),
-                                 ("_ratio_enu", metric_comparisons.rms_ratio, "ratio base/filter")):
+        for suffix, fn, what in (("_enu", improvement_percent, "reduction [%]"),
+                                 ("_ratio_enu", rms_ratio, "ratio base/filter")):
             if group + suffix not in imp:
                 continue
             for i, axis in enumerate("ENU"):
-                v = [fn(metric_comparisons.per_axis_enu(b["metrics"], group)[i],
-                        metric_comparisons.per_axis_enu(f["metrics"], group)[i]) for b, f in pairs]
+                v = [fn(per_axis_enu(b["metrics"], group)[i],
+                        per_axis_enu(f["metrics"], group)[i]) for b, f in pairs]
                 lines.append(f"| {group} {axis} {what} | {_ci(st.t_interval(v), 2)} | "
                              f"{imp[group + suffix][i]} |")
     return lines + [""]
@@ -385,9 +384,9 @@ def _cross_matrix(sections) -> List[str]:
             if f not in plan["records"]:
                 cells.append("-")
                 continue
-            rms_3d = lambda m, g: (metric_comparisons.rms_3d(m, g)  # noqa: E731
-                                   if metric_comparisons.GROUP_KEYS[g] in m else None)
-            cells.append(" / ".join(_ci(_per_run(plan, f, lambda m, g=g: rms_3d(m, g)),
+            group_rms = lambda m, g: (rms_3d(m, g)  # noqa: E731
+                                      if GROUP_KEYS[g] in m else None)
+            cells.append(" / ".join(_ci(_per_run(plan, f, lambda m, g=g: group_rms(m, g)),
                                         3 if g == "position" else 4)
                                     for g in ("position", "velocity", "attitude")))
         lines.append(f"| {f} | " + " | ".join(cells) + " |")

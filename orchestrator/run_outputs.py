@@ -15,7 +15,7 @@ from . import recorder
 from .comparison import paper_comparison
 from .jsonsafe import jsonable
 from .results import atomic_write
-from .scenarios import FILTER_COMPONENT, Run, filters_in, has_truth
+from .scenarios import FILTER_COMPONENT, Run, has_truth
 
 #: adaptive diagnostics plotted when a filter has them
 ADAPTIVE_OUTPUTS = ("q_scale", "r_scale", "fading_factor", "outlier", "compression", "chi2",
@@ -82,7 +82,7 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
     for run in runs:
         results = (run.results if run.series_file is None
                    else recorder.plot_view(streamed[id(run)]))
-        for f in filters_in(results):
+        for f in nav_metrics.filters_of(results):
             label = run.label if f == FILTER_COMPONENT else f"{run.label}:{f}"
             entries.append((label, results, f, nav_metrics.navigation_errors(results, f)))
     navigation = [en for en in entries if "pos_n" in en[3]]

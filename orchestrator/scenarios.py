@@ -91,9 +91,6 @@ def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
         raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
 
 
-filters_in = nav_metrics.filters_of
-
-
 def has_truth(results: Results) -> bool:
     return any(results.has(c, "truth_time") for c in results.components)
 
@@ -153,7 +150,7 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     run = Run(label, model, results)
     if not has_truth(results):
         return run
-    for f in filters_in(results):
+    for f in nav_metrics.filters_of(results):
         run.metrics[f] = nav_metrics.filter_metrics(results, f, window=window)
     return run
 

@@ -143,4 +143,5 @@ def typed_value(path: Path, elem: ET.Element, where: str) -> Tuple[str, object]:
 
 
 __all__ = ["SSD_NS", "SSC_NS", "SSV_NS", "OSP_NS", "OSP_ANNOTATION_TYPE", "MAX_FILE_BYTES",
-           "TYPES"] + ["tag", "pretty", "parse", "attr", "float_attr", "only_children", "osp_annotation", "typed_value"]
+           "TYPES", "tag", "pretty", "parse", "attr", "float_attr", "only_children",
+           "osp_annotation", "typed_value"]

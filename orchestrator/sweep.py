@@ -4,10 +4,10 @@ A small campaign for sensitivity studies: every level ``k`` multiplies the scena
 the named parameters (``"component.parameter"``) by ``k``; each (level, filter, seed) is one
 task of :mod:`orchestrator.executor` running the scenario on the direct backend (identical to
 the FMU path), and its result is the 3-D RMS of the position, velocity and attitude errors
-(``metric_comparisons.rms_3d``) plus the per-phase means of :mod:`orchestrator.phases` when the scenario
-declares phases.  :func:`sweep_table` turns the results into a Markdown table (mean over the
-seeds, each filter's RMS relative to the first filter's, the baseline) and :func:`plot_sweep`
-into a PNG.  Nothing here knows what the parameters mean.
+(``metric_comparisons.rms_3d``) plus the per-phase means of :mod:`orchestrator.phases` when
+the scenario declares phases.  :func:`sweep_table` turns the results into a Markdown table
+(mean over the seeds, each filter's RMS relative to the first filter's, the baseline) and
+:func:`plot_sweep` into a PNG.  Nothing here knows what the parameters mean.
 """
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from . import metric_comparisons
+from . import metrics as nav_metrics
 from .executor import Executor, Task
 from .phases import phase_statistics
 
@@ -58,7 +59,7 @@ def run_point(scenario: str, filter: str, level: float, scaled: Dict[str, float]
                                           build=False, log=lambda m: None)
     metrics = run.metrics[scenarios.FILTER_COMPONENT]
     out = {"rms_3d": {g: metric_comparisons.rms_3d(metrics, g) for g in GROUPS}, "phases": {}}
-    stats = phase_statistics([run], scenarios.paper_reference(model), scenarios.filters_in)
+    stats = phase_statistics([run], scenarios.paper_reference(model), nav_metrics.filters_of)
     for row in (stats or {}).get("rows", ()):
         out["phases"][row["variable"]] = row["means"]
     return out

@@ -5,7 +5,7 @@ import os
 from pathlib import Path
 
 from orchestrator.campaign import Campaign, CampaignSpec, run_campaign
-from scenario_runner import MODELS
+from direct_replay import MODELS
 
 
 def run_paper_campaign(scenario, filters, runs, out, seed_offsets, stop_time=None):

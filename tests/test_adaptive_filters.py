@@ -1,7 +1,8 @@
 """Adaptive / robust filters of papers 001 and 004 (navcore.adaptive_filters + components).
 
 Default tests run short stretches of the scenarios through the navcore components directly
-(tests/scenario_runner.py, no FMI): no NaN, diagnostics that behave as the equations say,
+(tests/direct_replay.py: the direct backend, no FMI): no NaN, diagnostics that behave as the
+equations say,
 bit-identical continuation after a state copy, parameter errors.  The acceptance Monte Carlo
 campaigns of the issue are marked ``slow`` (run with ``pytest -m slow``).
 """
@@ -19,7 +20,7 @@ from navcore.innovation_stats import CHI2_THRESHOLD_PAPER_004
 from navcore.ins_gnss_kf import KfConfig, KfEngine
 from navcore.strapdown import Strapdown
 
-from scenario_runner import MODELS, rms_table, run_filter, simulate_sensors
+from direct_replay import MODELS, rms_table, run_filter, simulate_sensors
 
 FILTERS = [components.Kf, components.SageHusaFading, components.Iakf,
            components.NewtonRobustKf, components.Igg3RobustKf, components.InsOnly]
@@ -138,7 +139,7 @@ def test_fading_factor_rescues_sage_husa_from_a_model_error(clean_then_noisy):
     fails at the first fix even with gamma = 10, eq. 12 inflates P once and the next fixes
     pull the position in.  Without fading (gamma = 1e9), eq. 9 takes the 200 m innovations
     for measurement noise, R_hat grows and the error is still ~100 m after 12 s."""
-    lat0 = clean_then_noisy.scenario.parameters["filter"]["init_lat"]
+    lat0 = clean_then_noisy.parameters["filter"]["init_lat"]
     shifted = {"init_lat": lat0 + 200.0 / 6.36e6}
     faded = run_filter(clean_then_noisy, components.SageHusaFading, shifted, stop_row=4000)
     unfaded = run_filter(clean_then_noisy, components.SageHusaFading,
@@ -301,7 +302,7 @@ def _campaign(scenario, filters, out):
     """Per filter: the campaign records of seeds 1..20 (trajectory.seed = gnss.seed = run
     index + 1), RMS at the GNSS fix epochs over the whole run, the truth/IMU/GNSS of a seed
     shared by the filters (same seeds as the earlier hand-written loop, same per-run numbers:
-    tests/test_campaign.py checks one run against tests/scenario_runner.py)."""
+    tests/test_campaign.py checks one run against tests/direct_replay.py)."""
     from campaign_helpers import run_paper_campaign
 
     return run_paper_campaign(scenario, filters, N_SEEDS, out,

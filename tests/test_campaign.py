@@ -17,7 +17,7 @@ import pytest
 from navcore import components
 from orchestrator.campaign import CampaignSpec, read_run, run_campaign, run_one
 from orchestrator.errors import NavfmuError
-from scenario_runner import MODELS, rms_table, run_filter, simulate_sensors
+from direct_replay import MODELS, rms_table, run_filter, simulate_sensors
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = str(MODELS / "aircraft_500s")
@@ -39,8 +39,9 @@ def _numbers(out, spec):
 
 
 def test_one_run_equals_the_replay_loop():
-    """Run 2 (seeds 3/3) at the GNSS fixes through the master equals tests/scenario_runner's
-    own stepping loop and its own error formulas (the earlier slow tests' numbers)."""
+    """Run 2 (seeds 3/3) of a campaign (the whole system in the master, metrics of
+    orchestrator.metrics at the GNSS fixes) equals the filter replayed on the sensors alone
+    (tests/direct_replay.py) with that helper's own error formulas (the slow tests' numbers)."""
     sensors = simulate_sensors(MODELS / "aircraft_outliers", stop_time=60.0,
                                overrides={"trajectory": {"seed": 3}, "gnss": {"seed": 3}})
     for cls in (components.Kf, components.NewtonRobustKf):

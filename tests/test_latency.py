@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-import scenario_runner
+import direct_replay
 from navcore import components, earth, signals
 from orchestrator import build as fmu_build
 from orchestrator import scenarios
@@ -227,7 +227,7 @@ def _three_components(jacobi, stop):
     the outputs all had at t, and the receiver's outputs appear when its 1 s step ends).
     Returns the RMS of the N/E/D position error (against the truth at nav_time) and the
     number of updates."""
-    p = scenario_runner.load_scenario(MODEL).parameters
+    p = direct_replay.scenario_parameters(scenarios.load_scenario(MODEL))
     traj = components.TrajectoryImu(**p["trajectory"])
     rx = components.GnssReceiver(**p["gnss"])
     kf = components.Kf(**p["filter"])

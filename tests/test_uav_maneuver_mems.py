@@ -17,7 +17,7 @@ import pytest
 
 from navcore import components
 from orchestrator import ssp
-from scenario_runner import MODELS, rms, run_filter, simulate_sensors
+from direct_replay import MODELS, rms, run_filter, simulate_sensors
 from test_ukf_filters import EXTRA, FILTERS, NAMES, SHORT_STOP, rms_row
 
 SCENARIO = MODELS / "uav_maneuver_mems"

@@ -1,7 +1,7 @@
 """Paper 000's unscented filters (Ukf, CtfaUkf, ImmUkf) on the ``uav_maneuver`` scenario.
 
-Runs the navcore components directly (tests/scenario_runner.py: trajectory every base step,
-receiver decimated after it, filter every base step).  The default tests share one 1200 s
+Runs the navcore components on the direct backend (tests/direct_replay.py: trajectory every
+base step, receiver decimated after it, filter every base step).  The default tests share one 1200 s
 stretch of the scenario (a strong-manoeuvre block 0-600 s and the first calm block 600-1200 s);
 the full 60 min Monte Carlo of the paper's Tables 2-4 is marked slow.
 """
@@ -16,7 +16,7 @@ import pytest
 from navcore import components
 from navcore.component import ParameterError
 from navcore.ctfa import PAPER_T1, PAPER_T2, ctfa_q_scale
-from scenario_runner import MODELS, rms, run_filter, simulate_sensors
+from direct_replay import MODELS, rms, run_filter, simulate_sensors
 
 SCENARIO = MODELS / "uav_maneuver"
 FILTERS = ("Ukf", "CtfaUkf", "ImmUkf")
