@@ -6,6 +6,7 @@ Python inputs (its slave script and every file of the ``fmushell`` and ``navcore
 library it carries (the patched pythonfmu library of :mod:`orchestrator.native_library` with the
 hash of its sources, or the wheel's when that cannot be built here).  Each FMU is written to a
 temporary name and renamed, so an interrupted build never leaves a broken ``.fmu`` behind.
+:func:`ensure_fmus` builds those a system model uses before it runs.
 """
 from __future__ import annotations
 
@@ -167,3 +168,16 @@ def _build_in_subprocess(scripts, dist: Path, log):
         detail = (proc.stderr.strip().splitlines() or ["no message"])[-1]
         raise NavfmuError(f"building {', '.join(s.stem for s in scripts)} failed: {detail}")
     return [fmu_path(s.stem, dist) for s in scripts]
+
+
+def ensure_fmus(model, log=print) -> None:
+    """Build the FMUs the system ``model`` uses that come from ``fmus/dist`` and are missing
+    or stale (the FMUs it takes from elsewhere are left alone)."""
+    names = []
+    for component in model.components:
+        src = Path(component.source).resolve()
+        if src.parent == DIST.resolve() and (FMU_SOURCES / f"{src.stem}.py").is_file():
+            names.append(src.stem)
+    stale = [n for n in names if is_stale(FMU_SOURCES / f"{n}.py")]
+    if stale:
+        build(stale, log=log)

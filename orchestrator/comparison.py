@@ -109,7 +109,7 @@ def paper_comparison(runs: Sequence[Run], reference=None) -> Dict[str, Any]:
     * ``improvement_percent`` (baseline and filter names): per-axis entries (``position_enu``,
       ``velocity_enu`` [%], ``position_ratio_enu``, ``velocity_ratio_enu`` [baseline RMS /
       filter RMS], east/north/up) and 3-D entries (``position``, ``velocity`` [%], of the 3-D
-      RMS, see :func:`metrics.rms_3d`);
+      RMS, see :func:`orchestrator.metric_comparisons.rms_3d`);
     * ``time_per_cycle_ms`` (filter -> ms; the first listed is the baseline of the ratios):
       our filter's mean do_step time per call next to it;
 

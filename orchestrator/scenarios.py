@@ -12,9 +12,10 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, Optional
 
 from . import build as fmu_build
+from .build import ensure_fmus
 from . import metrics as nav_metrics
 from . import prechecks
 from . import recorder
@@ -34,24 +35,6 @@ def registry():
     from navcore.components import REGISTRY
 
     return REGISTRY
-
-
-def _fmu_sources(model: SystemModel) -> List[Path]:
-    return [c.source for c in model.components]
-
-
-def ensure_fmus(model: SystemModel, log=print) -> None:
-    """Build the FMUs the model uses that come from ``fmus/dist`` and are missing or stale."""
-    names = []
-    for src in _fmu_sources(model):
-        src = Path(src).resolve()
-        if src.parent == fmu_build.DIST.resolve():
-            if (fmu_build.FMU_SOURCES / f"{src.stem}.py").is_file():
-                names.append(src.stem)
-    scripts = [fmu_build.FMU_SOURCES / f"{n}.py" for n in names]
-    stale = [s.stem for s in scripts if fmu_build.is_stale(s)]
-    if stale:
-        fmu_build.build(stale, log=log)
 
 
 def resolve_filter(name_or_path: str) -> Path:
