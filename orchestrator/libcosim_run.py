@@ -78,11 +78,11 @@ class _Reader:
 
 def _outputs(model) -> Dict[str, list]:
     """component -> its Real/Integer/Boolean outputs (VarInfo) in model-description order."""
-    from .master import _describe_fmu
+    from .component_description import describe_fmu
 
     result = {}
     for spec in model.components:
-        d = _describe_fmu(spec)
+        d = describe_fmu(spec)
         result[spec.name] = [v for v in d.variables.values()
                              if v.causality == "output" and v.type in NUMERIC_TYPES]
     return result
