@@ -214,10 +214,14 @@ class ImmBank:
 
     def predict(self, predict_fn: Callable[[Any, int], Any]) -> None:
         """Mix (once per measurement interval), then ``predict_fn(filter, j)`` for every model."""
+        self.predict_all(lambda filters: [predict_fn(flt, j) for j, flt in enumerate(filters)])
+
+    def predict_all(self, predict_fn: Callable[[List[Any]], Any]) -> None:
+        """Mix (once per measurement interval), then ``predict_fn(filters)`` predicts every
+        model in one call (e.g. one process-model evaluation over all models' sigma points)."""
         if self.needs_mixing:
             self.mix()
-        for j, flt in enumerate(self.filters):
-            predict_fn(flt, j)
+        predict_fn(self.filters)
         self.x, self.P = imm_combine(self.mu, [f.x for f in self.filters], [f.P for f in self.filters])
 
     def update(self, update_fn: Callable[[Any, int], Any]) -> np.ndarray:

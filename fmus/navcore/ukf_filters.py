@@ -97,36 +97,50 @@ from .unscented import UnscentedKalmanFilter
 _TIME_EPS = 1e-9
 
 
-def _batch_skew_apply(a, b):
-    """Row-wise cross products a x b for (N, 3) arrays (np.cross is slow on small arrays)."""
-    ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
-    bx, by, bz = b[:, 0], b[:, 1], b[:, 2]
-    return np.stack((ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx), axis=1)
+# The process model works on component arrays of shape (3, N) (one row per axis, one column per
+# sigma point), so a cross product is two gathers and three array operations whatever N.
+_NEXT = np.array([1, 2, 0])
+_PREV = np.array([2, 0, 1])
 
 
-def _rotate_by_rotvec(phi, v):
-    """exp([phi x]) v for each row (Rodrigues), phi and v of shape (N, 3)."""
-    theta2 = np.einsum("ij,ij->i", phi, phi)
+def _cross(a_next, a_prev, b):
+    """Cross products a x b, b of shape (..., 3, N), for a given by its gathered components
+    a_next = a[_NEXT] and a_prev = a[_PREV] (shape (3, N) or (3, 1))."""
+    return a_next * b[..., _PREV, :] - a_prev * b[..., _NEXT, :]
+
+
+def _rodrigues_coefficients(theta2):
+    """sin(t)/t and (1 - cos t)/t^2 of |phi|^2 = theta2, with their series near 0."""
     theta = np.sqrt(theta2)
     small = theta2 < 1e-12
+    if not small.any():                  # the usual case: the same values without the series
+        return np.sin(theta) / theta, (1.0 - np.cos(theta)) / (theta * theta)
     safe = np.where(small, 1.0, theta)
-    # sin(t)/t and (1 - cos t)/t^2 with their series near 0
     a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
     b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    pxv = _batch_skew_apply(phi, v)
-    return v + a[:, None] * pxv + b[:, None] * _batch_skew_apply(phi, pxv)
+    return a, b
 
 
-def _inverse_jacobian_apply(phi, w):
+def _rotate_by_rotvec(phi_next, phi_prev, V, a, b):
+    """exp([phi x]) V (Rodrigues) for V of shape (..., 3, N); a, b of _rodrigues_coefficients."""
+    pxv = _cross(phi_next, phi_prev, V)
+    return V + a * pxv + b * _cross(phi_next, phi_prev, pxv)
+
+
+def _inverse_jacobian_apply(phi_next, phi_prev, w, theta2):
     """J^-1(phi) w = w - 1/2 phi x w + c(|phi|) phi x (phi x w) (rotation-vector kinematics)."""
-    theta2 = np.einsum("ij,ij->i", phi, phi)
     small = theta2 < 1e-8
-    theta = np.sqrt(np.where(small, 1.0, theta2))
-    half = 0.5 * theta
-    c = np.where(small, 1.0 / 12.0 + theta2 / 720.0,
-                 (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta))
-    pxw = _batch_skew_apply(phi, w)
-    return w - 0.5 * pxw + c[:, None] * _batch_skew_apply(phi, pxw)
+    if small.any():
+        theta = np.sqrt(np.where(small, 1.0, theta2))
+        half = 0.5 * theta
+        c = np.where(small, 1.0 / 12.0 + theta2 / 720.0,
+                     (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta))
+    else:                                # the same values without the series
+        theta = np.sqrt(theta2)
+        half = 0.5 * theta
+        c = (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta)
+    pxw = _cross(phi_next, phi_prev, w)
+    return w - 0.5 * pxw + c * _cross(phi_next, phi_prev, pxw)
 
 
 def _nav_rates(lat, h, vn, ve, rn, re):
@@ -152,39 +166,49 @@ class NominalInterval:
 
 def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
     """Time derivative of every sigma point (rows of X, shape (N, 15)); module docstring."""
-    dr, dv, phi = X[:, 0:3], X[:, 3:6], X[:, 6:9]
-    dbg, dba = X[:, 9:12], X[:, 12:15]
+    Xt = X.T                                   # (15, N): one row per state
+    dr, dv, phi = Xt[0:3], Xt[3:6], Xt[6:9]
     rn, re = _radii(nom.lat)
     v = nom.v
     # computed (primed) rates, scalars
     w_in_c, w_cor_c = _nav_rates(nom.lat, nom.h, v[0], v[1], rn, re)
-    w_in_c = np.array(w_in_c)
-    w_cor_c = np.array(w_cor_c)
     # true state of each point: computed minus error
-    lat_t = nom.lat - dr[:, 0] / (rn + nom.h)
-    h_t = nom.h + dr[:, 2]
-    v_t = v - dv
-    w_in_t, w_cor_t = _nav_rates(lat_t, h_t, v_t[:, 0], v_t[:, 1], rn, re)
-    w_in_t = np.stack(w_in_t, axis=1)
-    w_cor_t = np.stack(w_cor_t, axis=1)
+    lat_t = nom.lat - dr[0] / (rn + nom.h)
+    h_t = nom.h + dr[2]
+    v_t = v[:, None] - dv
+    w_in_t, w_cor_t = _nav_rates(lat_t, h_t, v_t[0], v_t[1], rn, re)
+
+    phi_rows = X[:, 6:9]
+    theta2 = np.einsum("ij,ij->i", phi_rows, phi_rows)
+    a, b = _rodrigues_coefficients(theta2)
+    phi_next, phi_prev = phi[_NEXT], phi[_PREV]
+    # exp([phi x]) of the three vectors it rotates, at once: w_in' - C' dbg, f^{n'}, C' dba
+    C_t = nom.C.T
+    V = np.empty((3, 3, X.shape[0]))
+    np.subtract(np.array(w_in_c)[:, None], (X[:, 9:12] @ C_t).T, out=V[0])
+    V[1] = nom.f[:, None]
+    V[2] = (X[:, 12:15] @ C_t).T
+    RV = _rotate_by_rotvec(phi_next, phi_prev, V, a, b)
 
     # attitude: d(phi)/dt = J^-1(phi) [exp([phi x]) (w_in' - C' dbg) - w_in]
-    w_s = _rotate_by_rotvec(phi, w_in_c - dbg @ nom.C.T) - w_in_t
-    dphi = _inverse_jacobian_apply(phi, w_s)
+    w_s = RV[0] - np.array(w_in_t)
+    dphi = _inverse_jacobian_apply(phi_next, phi_prev, w_s, theta2)
 
     # velocity
-    f = np.broadcast_to(nom.f, phi.shape)
-    ddv = f - _rotate_by_rotvec(phi, f) + _rotate_by_rotvec(phi, dba @ nom.C.T)
-    cor_c = np.cross(w_cor_c, v)
-    ddv -= cor_c - _batch_skew_apply(w_cor_t, v_t)
-    ddv[:, 2] += 2.0 * _gravity(nom.lat, nom.h) / math.sqrt(rn * re) * dr[:, 2]
+    ddv = nom.f[:, None] - RV[1] + RV[2]
+    w_cor_t = np.array(w_cor_t)
+    (wn, we, wd), (vn, ve, vd) = w_cor_c, v
+    cor_c = np.array([we * vd - wd * ve, wd * vn - wn * vd, wn * ve - we * vn])   # w_cor' x v'
+    ddv -= cor_c[:, None] - _cross(w_cor_t[_NEXT], w_cor_t[_PREV], v_t)
+    ddv[2] += 2.0 * _gravity(nom.lat, nom.h) / math.sqrt(rn * re) * dr[2]
 
     Xdot = np.empty_like(X)
-    Xdot[:, 0:3] = dv
-    Xdot[:, 3:6] = ddv
-    Xdot[:, 6:9] = dphi
-    Xdot[:, 9:12] = 0.0 if tau_g <= 0 else -dbg / tau_g
-    Xdot[:, 12:15] = 0.0 if tau_a <= 0 else -dba / tau_a
+    Xdot_t = Xdot.T
+    Xdot_t[0:3] = dv
+    Xdot_t[3:6] = ddv
+    Xdot_t[6:9] = dphi
+    Xdot_t[9:12] = 0.0 if tau_g <= 0 else -Xt[9:12] / tau_g
+    Xdot_t[12:15] = 0.0 if tau_a <= 0 else -Xt[12:15] / tau_a
     return Xdot
 
 
@@ -400,13 +424,19 @@ class ImmUkfEngine(UkfEngine):
         return self.bank.mu
 
     def predict_filters(self, nom, Q, tau_g, tau_a):
+        """Every model's sigma points through one call of the process model (it works row by
+        row, so each model's points propagate exactly as on their own), then each model's
+        moments with its own Q."""
         scales = self.q_scales
 
-        def predict_model(flt, j):
-            flt.predict(propagate_points, Q, nom, tau_g, tau_a, q_scale=scales[j],
-                        vectorized=True)
+        def predict_models(filters):
+            X = np.concatenate([flt.sigma_points() for flt in filters])
+            Y = propagate_points(X, nom, tau_g, tau_a)
+            k = 2 * N_STATES + 1
+            for j, flt in enumerate(filters):
+                flt.predict_points(Y[j * k:(j + 1) * k], Q, q_scale=scales[j])
 
-        self.bank.predict(predict_model)
+        self.bank.predict_all(predict_models)
 
     def covariance_diagonal(self):
         return np.diagonal(self.bank.P) + self.q_scale * self.q_density * self._T

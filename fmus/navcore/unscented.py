@@ -286,8 +286,17 @@ class UnscentedKalmanFilter:
         schemes; CTFA instead passes its scheduled ``Q`` directly, paper 000 eq. 25).
         """
         X = self.sigma_points()
-        Y = _apply_model(f, X, args, vectorized)
-        if Y.shape != X.shape:
+        self.predict_points(_apply_model(f, X, args, vectorized), Q, q_scale=q_scale)
+
+    def predict_points(self, Y: np.ndarray, Q: np.ndarray, q_scale: float = 1.0) -> None:
+        """Time update, eqs. 15-16, from the points of :meth:`sigma_points` already mapped
+        through the process model (``Y``, shape ``(2n + 1, n)``; one row per point).
+
+        For a caller that propagates several filters' points in one call of the model (an IMM
+        bank); :meth:`predict` is ``sigma_points``, the model, then this.
+        """
+        Y = np.asarray(Y, dtype=float)
+        if Y.shape != (2 * self.n + 1, self.n):
             raise InputError(f"UnscentedKalmanFilter.predict: f must return shape ({self.n},) per point, "
                              f"got {Y.shape[1:]}")
         if np.shape(Q) != (self.n, self.n):
