@@ -1,0 +1,96 @@
+"""The UKF's process model over all sigma points (navcore.ukf_filters.error_dynamics) against a
+point-by-point reference written independently: scipy rotations for exp([phi x]), numpy
+cross products, textbook earth and transport rates, and the rotation vector's rate taken by
+central differences of exp(eps w_s) exp([phi x]) (so the kinematics' convention is checked,
+not only its algebra)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from navcore import earth
+from navcore.ukf_filters import NominalInterval, error_dynamics, propagate_points
+
+TAU_G, TAU_A = 3600.0, 1800.0
+
+
+def nav_rates(lat, h, v, rn, re):
+    """(w_ie + w_en, 2 w_ie + w_en) in NED (Groves 5.41, 5.44) with the radii given."""
+    w_ie = earth.earth_rate_ned(lat)
+    w_en = np.array([v[1] / (re + h), -v[0] / (rn + h), -v[1] * np.tan(lat) / (re + h)])
+    return w_ie + w_en, 2.0 * w_ie + w_en
+
+
+def rotation_vector_rate(phi, w_s, step=1e-5):
+    """d(phi)/dt of R = exp([phi x]) turning with spatial rate w_s (dR/dt = [w_s x] R), by
+    central differences over a turn of ``step`` rad."""
+    norm = np.linalg.norm(w_s)
+    if norm == 0.0:
+        return np.zeros(3)
+    eps = step / norm
+    R = Rotation.from_rotvec(phi)
+    ahead = (Rotation.from_rotvec(eps * w_s) * R).as_rotvec()
+    behind = (Rotation.from_rotvec(-eps * w_s) * R).as_rotvec()
+    return (ahead - behind) / (2.0 * eps)
+
+
+def reference_derivative(x, nom):
+    """Module docstring of navcore.ukf_filters, one point; radii at the computed latitude."""
+    dr, dv, phi, dbg, dba = x[0:3], x[3:6], x[6:9], x[9:12], x[12:15]
+    rn, re = earth.radii(nom.lat)
+    w_in_c, w_cor_c = nav_rates(nom.lat, nom.h, nom.v, rn, re)
+    v_t = nom.v - dv
+    w_in_t, w_cor_t = nav_rates(nom.lat - dr[0] / (rn + nom.h), nom.h + dr[2], v_t, rn, re)
+    R = Rotation.from_rotvec(phi).as_matrix()
+    w_s = R @ (w_in_c - nom.C @ dbg) - w_in_t
+    ddv = (nom.f - R @ nom.f) + R @ (nom.C @ dba) - (np.cross(w_cor_c, nom.v) - np.cross(w_cor_t, v_t))
+    ddv[2] += 2.0 * earth.gravity(nom.lat, nom.h) / np.sqrt(rn * re) * dr[2]
+    return np.concatenate([dv, ddv, rotation_vector_rate(phi, w_s), -dbg / TAU_G, -dba / TAU_A])
+
+
+@pytest.fixture(scope="module")
+def points():
+    rng = np.random.default_rng(7)
+    scale = np.array([5.0] * 3 + [0.2] * 3 + [3e-3] * 3 + [2e-5] * 3 + [2e-3] * 3)
+    X = rng.standard_normal((31, 15)) * scale
+    X[0] = 0.0                                    # the centre point after feedback
+    X[1, 6:9] = [0.2, -0.3, 0.1]                  # a large attitude error (0.37 rad)
+    X[2, 6:9] = [3e-9, 0.0, -1e-9]                # inside the series branches
+    C = Rotation.from_euler("ZYX", [2.1, 0.05, -0.2]).as_matrix()
+    nom = NominalInterval(0.1, 0.61, 850.0, np.array([42.0, -17.0, 1.5]), C,
+                          np.array([0.8, -1.1, -9.6]))
+    return X, nom
+
+
+def test_process_model_matches_pointwise_reference(points):
+    X, nom = points
+    Xdot = error_dynamics(X, nom, TAU_G, TAU_A)
+    ref = np.array([reference_derivative(x, nom) for x in X])
+    # position, velocity and bias rows: the same formulas in another form, rounding level
+    for rows in (slice(0, 6), slice(9, 15)):
+        np.testing.assert_allclose(Xdot[:, rows], ref[:, rows], rtol=1e-9, atol=1e-15)
+    # attitude rows: central differences, truncation ~step^2 = 1e-10, rounding ~1e-16/step
+    for got, want in zip(Xdot[1:, 6:9], ref[1:, 6:9]):
+        assert np.linalg.norm(got - want) <= 1e-8 * np.linalg.norm(want), (got, want)
+
+
+def test_propagated_points_are_one_step_with_second_order_position(points):
+    X, nom = points
+    Xdot = np.array([reference_derivative(x, nom) for x in X])
+    T = nom.T
+    expected = X + T * Xdot
+    expected[:, 0:3] += 0.5 * T * T * Xdot[:, 3:6]
+    np.testing.assert_allclose(propagate_points(X, nom, TAU_G, TAU_A), expected,
+                               rtol=1e-9, atol=1e-12)
+
+
+def test_points_of_several_filters_in_one_call_propagate_as_alone(points):
+    """What the IMM bank relies on when it propagates all models' points in one call: each
+    row's result depends on that row only, bit for bit."""
+    X, nom = points
+    rng = np.random.default_rng(8)
+    other = X[::-1] * rng.uniform(0.5, 2.0, size=X.shape)
+    together = propagate_points(np.concatenate([X, other]), nom, TAU_G, TAU_A)
+    assert np.array_equal(together[:31], propagate_points(X, nom, TAU_G, TAU_A))
+    assert np.array_equal(together[31:], propagate_points(other, nom, TAU_G, TAU_A))
