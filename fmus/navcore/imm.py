@@ -168,7 +168,9 @@ class ImmBank:
 
     * ``predict(predict_fn)``: mixes if this is the first prediction since the last update,
       then calls ``predict_fn(filter, j)`` for every model ``j`` (e.g.
-      ``lambda flt, j: flt.predict(f, Qs[j], dt)``);
+      ``lambda flt, j: flt.predict(f, Qs[j], dt)``); ``predict_all(predict_fn)`` the same
+      with one call ``predict_fn(filters)`` for all models (models that share the process
+      model can propagate all their points at once);
     * ``update(update_fn)``: calls ``update_fn(filter, j)`` for every model; it returns the
       model's log-likelihood of the measurement, either as a float or as a dict with key
       ``'log_likelihood'`` (what ``UnscentedKalmanFilter.update`` returns); then updates the
