@@ -289,7 +289,7 @@ class UnscentedKalmanFilter:
         self.predict_points(_apply_model(f, X, args, vectorized), Q, q_scale=q_scale)
 
     def predict_points(self, Y: np.ndarray, Q: np.ndarray, q_scale: float = 1.0) -> None:
-        """Time update, eqs. 15-16, from the points of :meth:`sigma_points` already mapped
+        """Time update, paper 000 eqs. 15-16, from the points of :meth:`sigma_points` mapped
         through the process model (``Y``, shape ``(2n + 1, n)``; one row per point).
 
         For a caller that propagates several filters' points in one call of the model (an IMM
