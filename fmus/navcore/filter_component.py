@@ -22,7 +22,7 @@ from .constants import DPH, DPSH, UG
 from .imu_errors import ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_LIMITS, GYRO_BIAS_LIMITS
 from .ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from .latency import SolutionHistory
-from .rotations import dcm_to_euler
+from .rotations import _euler_from_rows
 from .strapdown import Strapdown
 from .timing import same_time, time_tolerance
 
@@ -82,6 +82,8 @@ _GNSS_VALUE_NAMES = ("gnss_time", "gnss_lat", "gnss_lon", "gnss_h", "gnss_vn", "
                      "gnss_vd")
 
 _STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
+_BG_NAMES = tuple(f"nav_bg_{a}" for a in signals.AXES_BODY)
+_BA_NAMES = tuple(f"nav_ba_{a}" for a in signals.AXES_BODY)
 
 
 class InsGnssFilter(Component):
@@ -292,15 +294,12 @@ class InsGnssFilter(Component):
         out = self.out
         out["nav_time"] = self.nav_time
         out["nav_lat"], out["nav_lon"], out["nav_h"] = nav.lat, nav.lon, nav.h
-        out["nav_vn"], out["nav_ve"], out["nav_vd"] = (float(x) for x in nav.v_ned)
-        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = (float(x) for x in
-                                                             dcm_to_euler(nav.C_bn))
-        for i, a in enumerate(signals.AXES_BODY):
-            out[f"nav_bg_{a}"] = float(engine.gyro_bias[i])
-            out[f"nav_ba_{a}"] = float(engine.accel_bias[i])
-        std = np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0))
-        for i, name in enumerate(_STD_NAMES):
-            out[name] = float(std[i])
+        out["nav_vn"], out["nav_ve"], out["nav_vd"] = nav.v_ned.tolist()
+        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = _euler_from_rows(nav.C_bn.tolist())
+        update = out.update
+        update(zip(_BG_NAMES, engine.gyro_bias.tolist()))
+        update(zip(_BA_NAMES, engine.accel_bias.tolist()))
+        update(zip(_STD_NAMES, np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0)).tolist()))
         if not math.isfinite(sum(out.values())):  # one pass over every output
             bad = next(k for k, v in out.items() if not math.isfinite(v))
             raise DivergenceError(f"{self.model_name}: output '{bad}' became non-finite at "

@@ -25,12 +25,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import earth
-from .error_model import ATT, BA, BG, N_STATES, POS, VEL, process_noise_density, system_matrix
+from .error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
+                          transition_matrix)
 from .innovation_stats import nis
 from .strapdown import Strapdown
 
 #: measurement modes and their dimension
 MEASUREMENTS = {"position": 3, "position_velocity": 6}
+_DIAGONAL = slice(None, None, N_STATES + 1)
 
 
 @dataclass
@@ -91,16 +93,16 @@ class KfEngine:
         """Mechanize one IMU interval with bias-compensated increments and propagate P."""
         dtheta_c = dtheta - self.gyro_bias * dt
         dvel_c = dvel - self.accel_bias * dt
-        C_prev = self.nav.C_bn
-        self.nav.update(dtheta_c, dvel_c, dt)
+        nav = self.nav
+        C_prev = nav.C_bn
+        nav.update(dtheta_c, dvel_c, dt)
         f_ned = C_prev @ (dvel_c / dt)
         cfg = self.config
-        F = system_matrix(self.nav.lat, self.nav.h, self.nav.v_ned, self.nav.C_bn, f_ned,
-                          cfg.gyro_bias_tau, cfg.accel_bias_tau)
-        phi = np.eye(N_STATES) + F * dt
+        phi = transition_matrix(nav.lat, nav.h, nav.v_ned, nav.C_bn, f_ned, dt,
+                                cfg.gyro_bias_tau, cfg.accel_bias_tau)
         self.phi_acc = phi @ self.phi_acc
         q_acc = phi @ self.q_acc @ phi.T
-        q_acc[np.diag_indices(N_STATES)] += self.q_density * dt
+        q_acc.ravel()[_DIAGONAL] += self.q_density * dt   # a view: q_acc is C-contiguous
         self.q_acc = q_acc
 
     def predicted_parts(self):

@@ -139,14 +139,18 @@ class TrajectoryImu(Component):
         else:
             out.update(self._no_mag)
         out["imu_time"] = t_end
-        out["imu_dt"] = self.dt
-        for i, a in enumerate(signals.AXES_BODY):
-            dth, dv = float(dtheta[i]), float(dvel[i])   # plain floats: the outputs are state
-            out[f"imu_dtheta_{a}"] = dth
-            out[f"imu_dvel_{a}"] = dv
-            out[f"imu_gyro_{a}"] = dth / self.dt
-            out[f"imu_accel_{a}"] = dv / self.dt
+        out["imu_dt"] = dt = self.dt
+        dth, dv = dtheta.tolist(), dvel.tolist()   # plain floats: the outputs are state
+        update = out.update
+        update(zip(_DTHETA_NAMES, dth))
+        update(zip(_DVEL_NAMES, dv))
+        update(zip(_GYRO_NAMES, [x / dt for x in dth]))
+        update(zip(_ACCEL_NAMES, [x / dt for x in dv]))
         return out
+
+
+_DTHETA_NAMES, _DVEL_NAMES, _GYRO_NAMES, _ACCEL_NAMES = (
+    tuple(f"imu_{q}_{a}" for a in signals.AXES_BODY) for q in ("dtheta", "dvel", "gyro", "accel"))
 
 
 # ---------------------------------------------------------------------------------------
