@@ -48,17 +48,31 @@ def bench(model: SystemModel, stop_time: Optional[float] = None, repeat: int = 2
             if backend not in best or wall < best[backend][0]:
                 best[backend] = (wall, res)
     for backend, (wall, res) in best.items():
-        out[backend] = {"wall_s": wall, "steps": len(res.time) - 1,
-                        "do_step_us": {c: 1e6 * v for c, v in res.step_time_s.items()},
-                        "exchange_us": {c: 1e6 * v for c, v in res.exchange_step_time_s.items()},
-                        "master_overhead_us": 1e6 * res.metadata.get("master_overhead_s_per_step",
-                                                                     float("nan"))}
+        out[backend] = _path_costs(wall, res)
     out["repeat"] = repeat
     out["ratio"] = out["fmu"]["wall_s"] / out["direct"]["wall_s"]
     a, b = best["fmu"][1], best["direct"][1]
     out["identical"] = all(
         a.columns[c] == b.columns[c] and (a.data[c] == b.data[c]).all() for c in a.components)
     return out
+
+
+def _path_costs(wall: float, res) -> Dict[str, Any]:
+    """Costs of one benchmark run: wall time, simulated seconds per wall second, and per
+    component the mean time per call and per base step (calls x mean / base steps) of its
+    do_step and of its whole exchange (set inputs, do_step, get outputs)."""
+    steps = len(res.time) - 1
+    calls = res.metadata.get("step_calls", {})
+    per_step = {c: 1e6 * v * calls.get(c, 0) / max(steps, 1)
+                for c, v in res.exchange_step_time_s.items()}
+    return {"wall_s": wall, "steps": steps,
+            "simulated_s_per_wall_s": (float(res.time[-1]) - float(res.time[0])) / wall,
+            "do_step_us": {c: 1e6 * v for c, v in res.step_time_s.items()},
+            "exchange_us": {c: 1e6 * v for c, v in res.exchange_step_time_s.items()},
+            "exchange_us_per_step": per_step,
+            "master_overhead_us": 1e6 * res.metadata.get("master_overhead_s_per_step",
+                                                         float("nan")),
+            "wall_us_per_step": 1e6 * wall / max(steps, 1)}
 
 
 def _fastest_filter_runs(models, filters, stop_time, repeat, progress_factory):
@@ -122,15 +136,21 @@ def format_bench(model_name: str, out: Dict[str, Any]) -> str:
              f"fastest of {out['repeat']} alternating runs per path:",
              f"  wall time direct {out['direct']['wall_s']:.2f} s, co-simulation "
              f"{out['fmu']['wall_s']:.2f} s, ratio {out['ratio']:.3f}",
+             f"  simulated seconds per wall second: direct "
+             f"{out['direct']['simulated_s_per_wall_s']:.1f}, co-simulation "
+             f"{out['fmu']['simulated_s_per_wall_s']:.1f}",
              f"  identical results through both paths: {out['identical']}",
              f"  {'component':14s} {'direct step':>12s} {'FMU step':>10s} "
-             f"{'FMU set+step+get':>17s}   [us per call]"]
-    for c in out["fmu"]["do_step_us"]:
-        lines.append(f"  {c:14s} {out['direct']['do_step_us'][c]:12.1f} "
-                     f"{out['fmu']['do_step_us'][c]:10.1f} {out['fmu']['exchange_us'][c]:17.1f}")
-    lines.append(f"  master overhead per base step: direct "
-                 f"{out['direct']['master_overhead_us']:.1f} us, FMU "
-                 f"{out['fmu']['master_overhead_us']:.1f} us")
+             f"{'FMU set+step+get':>17s}   [us per call]   {'direct':>8s} {'FMU':>8s}"
+             "   [us per base step]"]
+    d, f = out["direct"], out["fmu"]
+    for c in f["do_step_us"]:
+        lines.append(f"  {c:14s} {d['do_step_us'][c]:12.1f} {f['do_step_us'][c]:10.1f} "
+                     f"{f['exchange_us'][c]:17.1f}                   "
+                     f"{d['exchange_us_per_step'][c]:8.1f} {f['exchange_us_per_step'][c]:8.1f}")
+    lines.append(f"  master overhead per base step: direct {d['master_overhead_us']:.1f} us, "
+                 f"FMU {f['master_overhead_us']:.1f} us; wall time per base step: direct "
+                 f"{d['wall_us_per_step']:.1f} us, FMU {f['wall_us_per_step']:.1f} us")
     return "\n".join(lines)
 
 

@@ -174,7 +174,7 @@ def _getter(type_name):
         names = slave._vr_names.get(type_name, {})
         values = slave._values
         try:
-            return [values[names[vr]] for vr in vrs]
+            return list(map(values.__getitem__, map(names.__getitem__, vrs)))
         except (KeyError, TypeError):
             bad = [vr for vr in vrs if names.get(vr) is None]
             refuse(slave, f"fmi2Get{type_name}: " + _unknown(slave, type_name, bad))
@@ -187,7 +187,7 @@ def _setter(type_name):
     def set_(slave, vrs, new_values):
         settable = slave._settable.get(type_name, {})
         try:
-            names = [settable[vr] for vr in vrs]
+            names = list(map(settable.__getitem__, vrs))
         except (KeyError, TypeError):
             refuse(slave, f"fmi2Set{type_name}: " + _why_not_settable(slave, type_name, vrs))
             return

@@ -228,6 +228,15 @@ class Component(ABC):
     def check_inputs(self, inputs: Dict[str, Any], names) -> None:
         """Raise an :class:`InputError` naming the first of the Real inputs ``names`` that is
         not finite or outside the range its port declares."""
+        # fast path: the declared bounds by comparison, finiteness by one sum (NaN and inf
+        # propagate into it); anything doubtful goes through the full check below
+        for n, low, high, low_open, high_open in type(self)._bounded_inputs(names):
+            v = inputs[n]
+            if not ((v > low if low_open else v >= low) and (v < high if high_open else v <= high)):
+                break
+        else:
+            if math.isfinite(sum([inputs[n] for n in names])):
+                return
         ports = type(self)._input_ports()
         for n in names:
             v = inputs[n]
@@ -236,6 +245,21 @@ class Component(ABC):
             if not limits.contains(v):
                 raise InputError(f"{self.model_name}: input '{n}' = {v} is outside the accepted "
                                  f"range {limits.text(port.unit if port else '')}")
+
+    @classmethod
+    def _bounded_inputs(cls, names) -> Tuple[Tuple[str, float, float, bool, bool], ...]:
+        """``(name, low, high, low_open, high_open)`` of the inputs among ``names`` whose port
+        declares a range narrower than finite."""
+        cache = cls.__dict__.get("_bounded_input_cache")
+        if cache is None:
+            cache = cls._bounded_input_cache = {}
+        bounded = cache.get(names)
+        if bounded is None:
+            ports = cls._input_ports()
+            limits = [(n, ports[n].limits) for n in names if n in ports]
+            bounded = cache[names] = tuple((n, x.low, x.high, x.low_open, x.high_open)
+                                           for n, x in limits if x != FINITE)
+        return bounded
 
     @classmethod
     def _input_ports(cls) -> Dict[str, Port]:

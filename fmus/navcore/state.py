@@ -44,6 +44,8 @@ from .errors import StateError
 
 #: dtypes a state array may have (stored little-endian)
 ARRAY_DTYPES = (np.dtype("<f8"), np.dtype("<i8"), np.dtype("|b1"))
+#: the allowed dtypes in this machine's byte order (copied as they are)
+_NATIVE_DTYPES = tuple(d for d in ARRAY_DTYPES if d.isnative)
 
 
 @functools.lru_cache(maxsize=None)   # declarations are class attributes: one walk per class
@@ -62,10 +64,15 @@ def is_declared(obj: Any) -> bool:
     return hasattr(type(obj), "state_fields") and not isinstance(obj, type)
 
 
+@functools.lru_cache(maxsize=None)
+def _known_fields(cls) -> frozenset:
+    state, derived = declared_fields(cls)
+    return frozenset(state) | frozenset(derived)
+
+
 def undeclared_attributes(obj: Any) -> Tuple[str, ...]:
     """Instance attributes of ``obj`` that are neither state nor derived fields."""
-    state, derived = declared_fields(type(obj))
-    known = set(state) | set(derived)
+    known = _known_fields(type(obj))
     return tuple(sorted(a for a in vars(obj) if a not in known))
 
 
@@ -86,8 +93,19 @@ def capture(obj: Any, where: str = "") -> Dict[str, Any]:
     return tree
 
 
+#: types a tree holds as they are (immutable): the common case, checked first
+_PLAIN_TYPES = frozenset((type(None), bool, str, int, float))
+
+
 def capture_value(value: Any, where: str) -> Any:
     """A copy of ``value`` made of the kinds a state tree holds (module docstring)."""
+    kind = type(value)
+    if kind in _PLAIN_TYPES:
+        return value
+    if kind is np.ndarray and value.dtype in _NATIVE_DTYPES:
+        return np.array(value, copy=True)
+    if kind is tuple and all(type(v) is float for v in value):   # e.g. a 3-vector of floats
+        return value
     if value is None or isinstance(value, (bool, str)):
         return value
     if isinstance(value, (int, float)):

@@ -1,0 +1,143 @@
+"""A/B wall-time measurement of this checkout against another checkout of navfmu.
+
+Runs, alternating in one invocation (the machine may be shared: a ratio taken from pairs run
+back to back is what holds; absolute times do not), for every pair:
+
+* ``navfmu run SCENARIO --no-plots`` through the FMUs (``python -m orchestrator.cli run``
+  of each checkout, in its own folder, on its own FMUs in ``fmus/dist``) for each of the
+  paper scenarios ``aircraft_500s``, ``aircraft_outliers`` and ``uav_maneuver``;
+* a campaign of ``--runs`` seeds (default 10) of ``--campaign-scenario`` through the direct
+  backend, in one process per checkout: for seed ``s = 1..runs`` the scenario with
+  ``trajectory.seed = gnss.seed = s``, through ``orchestrator.scenarios.simulate_scenario``
+  (the same work in any checkout, also in those that predate ``navfmu montecarlo``).
+
+Each task runs once in each checkout per pair, the order of the two checkouts swapping from
+pair to pair; the printed ratio is the median over the pairs of (this / other) wall time.
+The FMUs of both checkouts are built once before the first pair (untimed).
+
+    python benchmarks/ab_speed.py --other /path/to/other/checkout
+    python benchmarks/ab_speed.py --other ../ref --pairs 5 --stop 100 --campaign-stop 100
+
+``--stop`` shortens every run (default: each scenario's own stop time); ``--tasks`` selects
+tasks (``run:aircraft_500s,campaign``).  ``--json FILE`` also writes every time measured.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parents[1]
+SCENARIOS = ("aircraft_500s", "aircraft_outliers", "uav_maneuver")
+
+
+def _env(checkout: Path) -> dict:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(checkout / "fmus"), str(checkout)])
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+def _call(checkout: Path, args, what: str) -> float:
+    """Wall time [s] of ``python ARGS`` run in ``checkout`` on its own sources."""
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, *args], cwd=checkout, env=_env(checkout),
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    wall = time.perf_counter() - t0
+    if done.returncode:
+        raise SystemExit(f"ab_speed: {what} failed in {checkout}:\n{done.stderr[-2000:]}")
+    return wall
+
+
+def _task_args(task: str, out: Path, stop, campaign_stop, runs: int, scenario: str):
+    if task == "campaign":
+        args = [str(Path(__file__).resolve()), "--seed-loop", scenario, "--runs", str(runs)]
+        return args + (["--campaign-stop", str(campaign_stop)] if campaign_stop else [])
+    name = task.split(":", 1)[1]
+    args = ["-m", "orchestrator.cli", "run", f"models/{name}", "--no-plots", "--out", str(out)]
+    return args + (["--stop", str(stop)] if stop else [])
+
+
+def seed_loop(scenario: str, runs: int, stop) -> None:
+    """The campaign task, run inside a checkout: ``runs`` seeds through the direct backend."""
+    from orchestrator.scenarios import load_scenario, simulate_scenario
+
+    model = load_scenario(Path("models") / scenario)
+    for seed in range(1, runs + 1):
+        simulate_scenario(model, backend="direct", stop_time=stop, build=False,
+                          parameters={"trajectory.seed": seed, "gnss.seed": seed},
+                          log=lambda *a, **k: None)
+
+
+def measure(other: Path, tasks, pairs: int, stop, campaign_stop, runs: int, scenario: str):
+    """{task: [(this_s, other_s), ...]} over ``pairs`` alternating pairs."""
+    checkouts = {"this": HERE, "other": other}
+    for label, checkout in checkouts.items():
+        _call(checkout, ["-m", "orchestrator.cli", "build"], "the FMU build")
+    times = {t: [] for t in tasks}
+    with tempfile.TemporaryDirectory(prefix="navfmu-ab-") as tmp:
+        for i in range(pairs):
+            order = ("this", "other") if i % 2 == 0 else ("other", "this")
+            for task in tasks:
+                wall = {}
+                for label in order:
+                    out = Path(tmp) / label / task.replace(":", "-")
+                    args = _task_args(task, out, stop, campaign_stop, runs, scenario)
+                    wall[label] = _call(checkouts[label], args, task)
+                times[task].append((wall["this"], wall["other"]))
+                print(f"pair {i + 1}/{pairs} {task:26s} this {wall['this']:8.2f} s  other "
+                      f"{wall['other']:8.2f} s  ratio {wall['this'] / wall['other']:.3f}",
+                      flush=True)
+    return times
+
+
+def summary(times) -> str:
+    lines = [f"{'task':26s} {'median this [s]':>16s} {'median other [s]':>17s} "
+             f"{'median ratio':>13s}  (this / other, per pair)"]
+    for task, pairs in times.items():
+        ratios = [a / b for a, b in pairs]
+        lines.append(f"{task:26s} {statistics.median(a for a, _ in pairs):16.2f} "
+                     f"{statistics.median(b for _, b in pairs):17.2f} "
+                     f"{statistics.median(ratios):13.3f}  "
+                     f"({', '.join(f'{r:.3f}' for r in ratios)})")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--other", type=Path, help="the other checkout (its root folder)")
+    parser.add_argument("--pairs", type=int, default=5, help="alternating pairs (default 5)")
+    parser.add_argument("--stop", type=float, help="stop time of the scenario runs [s] "
+                        "(default: each scenario's own)")
+    parser.add_argument("--campaign-stop", type=float,
+                        help="stop time of each campaign run [s] (default: the scenario's)")
+    parser.add_argument("--runs", type=int, default=10, help="seeds of the campaign task")
+    parser.add_argument("--campaign-scenario", default="aircraft_500s")
+    parser.add_argument("--tasks", default=",".join([f"run:{s}" for s in SCENARIOS]
+                                                    + ["campaign"]))
+    parser.add_argument("--json", type=Path, help="also write the times to this file")
+    parser.add_argument("--seed-loop", metavar="SCENARIO", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.seed_loop:
+        seed_loop(args.seed_loop, args.runs, args.campaign_stop)
+        return
+    if args.other is None or not (args.other / "orchestrator").is_dir():
+        parser.error("--other: give the root folder of another navfmu checkout")
+    tasks = [t.strip() for t in args.tasks.split(",") if t.strip()]
+    times = measure(args.other.resolve(), tasks, args.pairs, args.stop, args.campaign_stop,
+                    args.runs, args.campaign_scenario)
+    print(summary(times))
+    if args.json:
+        args.json.write_text(json.dumps({"other": str(args.other), "pairs": args.pairs,
+                                         "stop": args.stop, "campaign_stop": args.campaign_stop,
+                                         "runs": args.runs, "times": times}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
