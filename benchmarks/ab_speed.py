@@ -20,6 +20,12 @@ The FMUs of both checkouts are built once before the first pair (untimed).
 
 ``--stop`` shortens every run (default: each scenario's own stop time); ``--tasks`` selects
 tasks (``run:aircraft_500s,campaign``).  ``--json FILE`` also writes every time measured.
+
+``--flat SCENARIO`` measures instead, in this checkout only, whether the per-step cost is
+flat in the flight length: the co-simulation loop's wall time per base step of a ``--short``
+(default 600 s) and a ``--long`` (default 3600 s) run, alternating ``--pairs`` times::
+
+    python benchmarks/ab_speed.py --flat uav_maneuver --pairs 3
 """
 from __future__ import annotations
 
@@ -75,6 +81,32 @@ def seed_loop(scenario: str, runs: int, stop) -> None:
                           log=lambda *a, **k: None)
 
 
+def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> str:
+    """Per-step cost of a ``short`` and a ``long`` run of ``scenario`` in this checkout,
+    alternating ``pairs`` times in this process: wall time of the co-simulation loop
+    (:meth:`Simulation.run`, no output files) per base step, medians and their ratio."""
+    sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
+    from orchestrator.master import Simulation
+    from orchestrator.scenarios import ensure_fmus, load_scenario, registry
+
+    model = load_scenario(HERE / "models" / scenario)
+    if backend == "fmu":
+        ensure_fmus(model, log=lambda *a: None)
+    cost = {short: [], long: []}
+    for i in range(pairs):
+        for stop in ((short, long) if i % 2 == 0 else (long, short)):
+            sim = Simulation(model, backend=backend,
+                             registry=registry() if backend == "direct" else None)
+            t0 = time.perf_counter()
+            res = sim.run(stop_time=stop)
+            cost[stop].append((time.perf_counter() - t0) / (len(res.time) - 1))
+            print(f"pair {i + 1}/{pairs} {scenario} {stop:g} s ({backend}): "
+                  f"{1e6 * cost[stop][-1]:.1f} us per base step", flush=True)
+    a, b = statistics.median(cost[short]), statistics.median(cost[long])
+    return (f"{scenario} ({backend}): {1e6 * a:.1f} us per base step over {short:g} s, "
+            f"{1e6 * b:.1f} us over {long:g} s; long / short = {b / a:.3f} (medians of {pairs})")
+
+
 def measure(other: Path, tasks, pairs: int, stop, campaign_stop, runs: int, scenario: str):
     """{task: [(this_s, other_s), ...]} over ``pairs`` alternating pairs."""
     checkouts = {"this": HERE, "other": other}
@@ -122,10 +154,20 @@ def main(argv=None) -> None:
     parser.add_argument("--tasks", default=",".join([f"run:{s}" for s in SCENARIOS]
                                                     + ["campaign"]))
     parser.add_argument("--json", type=Path, help="also write the times to this file")
+    parser.add_argument("--flat", metavar="SCENARIO", help="instead: per-step cost of a "
+                        "--short and a --long run of SCENARIO in this checkout (alternating "
+                        "--pairs times, one process)")
+    parser.add_argument("--short", type=float, default=600.0)
+    parser.add_argument("--long", type=float, default=3600.0)
+    parser.add_argument("--backend", choices=("fmu", "direct"), default="fmu",
+                        help="backend of --flat")
     parser.add_argument("--seed-loop", metavar="SCENARIO", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.seed_loop:
         seed_loop(args.seed_loop, args.runs, args.campaign_stop)
+        return
+    if args.flat:
+        print(flat(args.flat, args.short, args.long, args.pairs, args.backend))
         return
     if args.other is None or not (args.other / "orchestrator").is_dir():
         parser.error("--other: give the root folder of another navfmu checkout")

@@ -129,25 +129,22 @@ def _euler_from_rows(m):
 
 
 def _matmul_rows(a, b):
-    b0, b1, b2 = b
-    out = []
-    for r0, r1, r2 in a:
-        out.append([
-            r0 * b0[0] + r1 * b1[0] + r2 * b2[0],
-            r0 * b0[1] + r1 * b1[1] + r2 * b2[1],
-            r0 * b0[2] + r1 * b1[2] + r2 * b2[2],
-        ])
-    return out
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = b
+    return [[r0 * b00 + r1 * b10 + r2 * b20, r0 * b01 + r1 * b11 + r2 * b21,
+             r0 * b02 + r1 * b12 + r2 * b22] for r0, r1, r2 in a]
 
 
 def _matTmul_rows(a, b):
     """a^T b for row lists."""
     (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
-    b0, b1, b2 = b
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = b
     return [
-        [a00 * b0[j] + a10 * b1[j] + a20 * b2[j] for j in range(3)],
-        [a01 * b0[j] + a11 * b1[j] + a21 * b2[j] for j in range(3)],
-        [a02 * b0[j] + a12 * b1[j] + a22 * b2[j] for j in range(3)],
+        [a00 * b00 + a10 * b10 + a20 * b20, a00 * b01 + a10 * b11 + a20 * b21,
+         a00 * b02 + a10 * b12 + a20 * b22],
+        [a01 * b00 + a11 * b10 + a21 * b20, a01 * b01 + a11 * b11 + a21 * b21,
+         a01 * b02 + a11 * b12 + a21 * b22],
+        [a02 * b00 + a12 * b10 + a22 * b20, a02 * b01 + a12 * b11 + a22 * b21,
+         a02 * b02 + a12 * b12 + a22 * b22],
     ]
 
 

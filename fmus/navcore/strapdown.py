@@ -109,6 +109,14 @@ def _solve_skew(wx, wy, wz, r):
     )
 
 
+def _add_rows(a, b):
+    """a + b for 3x3 row lists."""
+    (a0, a1, a2), (b0, b1, b2) = a, b
+    return [[a0[0] + b0[0], a0[1] + b0[1], a0[2] + b0[2]],
+            [a1[0] + b1[0], a1[1] + b1[1], a1[2] + b1[2]],
+            [a2[0] + b2[0], a2[1] + b2[1], a2[2] + b2[2]]]
+
+
 def integrate_position(lat, lon, h, v_prev, v_next, dt):
     """Position after ``dt`` by the trapezoid of two NED velocities [m/s].
 
@@ -244,13 +252,10 @@ class Strapdown:
         # summing the small terms first keeps the rounding relative to the change, so a
         # constant attitude stays constant to the last bit (no secular DCM drift).
         CB = _matmul_rows(C, _rodrigues_delta_rows(phx, phy, phz))
-        NC = _matmul_rows(_rodrigues_delta_rows(-zx, -zy, -zz),
-                          [[c + d for c, d in zip(rc, rd)] for rc, rd in zip(C, CB)])
-        C_next = [[c + (d + e) for c, d, e in zip(rc, rd, re_)]
-                  for rc, rd, re_ in zip(C, CB, NC)]
+        NC = _matmul_rows(_rodrigues_delta_rows(-zx, -zy, -zz), _add_rows(C, CB))
         self._v_prev = tuple(v)
         self.v_ned = np.array(v_next)
-        self.C_bn = np.array(C_next)
+        self.C_bn = np.array(_add_rows(C, _add_rows(CB, NC)))
         self._dtheta_prev = (gx, gy, gz)
         self._dvel_prev = (fx, fy, fz)
 
