@@ -289,7 +289,13 @@ class Strapdown:
                 f"Strapdown.inverse_update: target position differs by {mismatch:.3g} m from "
                 f"integrate_position of the velocities (tolerance {POSITION_TOLERANCE} m); "
                 "position must be integrated with navcore.strapdown.integrate_position")
+        return self._inverse_to(lat, lon, h, v1, C1, dt)
 
+    def _inverse_to(self, lat, lon, h, v1, C1, dt):
+        """:meth:`inverse_update` on checked floats: ``v1`` a 3-sequence, ``C1`` row lists
+        (the trajectory generator, which integrates the position itself, calls it directly)."""
+        v = np.asarray(self.v_ned, dtype=float).tolist()
+        C = np.asarray(self.C_bn, dtype=float).tolist()
         zeta, g_cor = self._nav_terms(v, dt)
         zx, zy, zz = zeta
         px, py, pz = self._dtheta_prev

@@ -122,7 +122,8 @@ class TrajectoryGenerator:
         v_next = self._velocity(V, psi, gamma)
         lat, lon, h = integrate_position(self.lat, self.lon, self.h, self._v, v_next, self.dt)
         euler = self._attitude(V, psi, psi_dot, gamma, roll_off, pitch_off)
-        dtheta, dvel = self._ins.inverse_update(lat, lon, h, v_next, _euler_rows(*euler), self.dt)
+        # the position is integrate_position's of the velocities: no need to check it again
+        dtheta, dvel = self._ins._inverse_to(lat, lon, h, v_next, _euler_rows(*euler), self.dt)
         v0 = self._v
         ax, ay, az = v_next[0] - v0[0], v_next[1] - v0[1], v_next[2] - v0[2]
         self.last_accel_norm = math.sqrt(ax * ax + ay * ay + az * az) / self.dt
