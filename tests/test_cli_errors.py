@@ -267,7 +267,16 @@ def test_bench_without_scenario_uses_the_package_models(tmp_path, monkeypatch):
                            "--repeat", "1", "--json"], capture_output=True, text=True,
                           timeout=300, env=_env())
     assert proc.returncode == 0, proc.stderr
-    assert json.loads(proc.stdout)["fmu"]["steps"] == 50
+    out = json.loads(proc.stdout)
+    assert out["fmu"]["steps"] == 50
+    for path in ("direct", "fmu"):
+        costs = out[path]
+        assert costs["simulated_s_per_wall_s"] == pytest.approx(0.5 / costs["wall_s"])
+        # per base step: the receiver (0.1 s hint on the 0.01 s base step) steps every 10th
+        assert costs["exchange_us_per_step"]["gnss"] == pytest.approx(
+            costs["exchange_us"]["gnss"] / 10)
+        assert costs["exchange_us_per_step"]["filter"] == pytest.approx(
+            costs["exchange_us"]["filter"])
 
 
 def test_usage_error_is_one_navfmu_line(capsys):
