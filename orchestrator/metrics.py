@@ -47,8 +47,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
+from navcore.chisquare import chi2
 from navcore.earth import radii as _radii
 # the papers' gates: paper 004's when a run does not set chi2_threshold, paper 000's eq. 25
 # thresholds for dof 3 when ctfa_t1/t2 are 0 or unset
@@ -276,8 +277,8 @@ class MetricAccumulator:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n
             out["nis"] = {"mean": self.nis_sum / n, "dof": dof, "updates": n,
-                          "band95": [float(stats.chi2.ppf(0.025, n * dof) / n),
-                                     float(stats.chi2.ppf(0.975, n * dof) / n)]}
+                          "band95": [float(chi2.ppf(0.025, n * dof) / n),
+                                     float(chi2.ppf(0.975, n * dof) / n)]}
         if header is not None and self.filter_name in getattr(header, "step_time_s", {}):
             out["time_per_step_ms"] = 1e3 * float(header.step_time_s[self.filter_name])
         if self.epochs["dof"]:
@@ -409,7 +410,7 @@ def _add_gate(detection, results, filter_name):
     gates = [g for g in chi2_thresholds(results, filter_name) if g["name"] == "chi2_threshold"]
     if gates:
         detection["chi2_threshold"] = gates[0]
-        detection["expected_false_alarm_rate_chi2_1"] = float(stats.chi2.sf(gates[0]["value"], 1))
+        detection["expected_false_alarm_rate_chi2_1"] = float(special.chdtrc(1, gates[0]["value"]))  # chi2(1).sf
 
 
 def _parameter(results, component, name):
@@ -448,6 +449,6 @@ def chi2_thresholds(results, filter_name):
                               "value": CTFA_THRESHOLDS_DOF3[i], "source": "default for dof 3"})
             else:
                 gates.append({"name": name, "statistic": "chi2",
-                              "value": float(stats.chi2.ppf(p, dof)),
+                              "value": float(chi2.ppf(p, dof)),
                               "source": f"default: chi2({dof}) {100 * p:.0f} %"})
     return gates
