@@ -83,8 +83,9 @@ def seed_loop(scenario: str, runs: int, stop) -> None:
 
 def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> str:
     """Per-step cost of a ``short`` and a ``long`` run of ``scenario`` in this checkout,
-    alternating ``pairs`` times in this process: wall time of the co-simulation loop
-    (:meth:`Simulation.run`, no output files) per base step, medians and their ratio."""
+    alternating ``pairs`` times in this process: wall and CPU time of the co-simulation loop
+    (:meth:`Simulation.run`, no output files) per base step, medians and their ratios (the
+    CPU time of this process is the steadier one on a loaded machine)."""
     sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
     from orchestrator.master import Simulation
     from orchestrator.scenarios import ensure_fmus, load_scenario, registry
@@ -93,18 +94,26 @@ def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> 
     if backend == "fmu":
         ensure_fmus(model, log=lambda *a: None)
     cost = {short: [], long: []}
+    cpu = {short: [], long: []}
     for i in range(pairs):
         for stop in ((short, long) if i % 2 == 0 else (long, short)):
             sim = Simulation(model, backend=backend,
                              registry=registry() if backend == "direct" else None)
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             res = sim.run(stop_time=stop)
-            cost[stop].append((time.perf_counter() - t0) / (len(res.time) - 1))
+            steps = len(res.time) - 1
+            cost[stop].append((time.perf_counter() - t0) / steps)
+            cpu[stop].append((time.process_time() - c0) / steps)
             print(f"pair {i + 1}/{pairs} {scenario} {stop:g} s ({backend}): "
-                  f"{1e6 * cost[stop][-1]:.1f} us per base step", flush=True)
-    a, b = statistics.median(cost[short]), statistics.median(cost[long])
-    return (f"{scenario} ({backend}): {1e6 * a:.1f} us per base step over {short:g} s, "
-            f"{1e6 * b:.1f} us over {long:g} s; long / short = {b / a:.3f} (medians of {pairs})")
+                  f"{1e6 * cost[stop][-1]:.1f} us wall, {1e6 * cpu[stop][-1]:.1f} us CPU per "
+                  "base step", flush=True)
+    lines = []
+    for what, values in (("wall", cost), ("CPU", cpu)):
+        a, b = statistics.median(values[short]), statistics.median(values[long])
+        lines.append(f"{scenario} ({backend}), {what}: {1e6 * a:.1f} us per base step over "
+                     f"{short:g} s, {1e6 * b:.1f} us over {long:g} s; long / short = "
+                     f"{b / a:.3f} (medians of {pairs})")
+    return "\n".join(lines)
 
 
 def measure(other: Path, tasks, pairs: int, stop, campaign_stop, runs: int, scenario: str):
