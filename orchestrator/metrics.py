@@ -49,12 +49,12 @@ import math
 import numpy as np
 from scipy import special
 
-from navcore.chisquare import chi2
 from navcore.earth import radii as _radii
 # the papers' gates: paper 004's when a run does not set chi2_threshold, paper 000's eq. 25
 # thresholds for dof 3 when ctfa_t1/t2 are 0 or unset
 from navcore.innovation_stats import (CHI2_THRESHOLD_PAPER_004 as CHI2_GATE_DEFAULT,
-                                      CTFA_THRESHOLDS_PAPER_000 as CTFA_THRESHOLDS_DOF3)
+                                      CTFA_THRESHOLDS_PAPER_000 as CTFA_THRESHOLDS_DOF3,
+                                      chi2_lower_quantile)
 from navcore.rotations import euler_to_dcm
 from navcore.rotations import wrap_angle as _wrap
 
@@ -277,8 +277,8 @@ class MetricAccumulator:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n
             out["nis"] = {"mean": self.nis_sum / n, "dof": dof, "updates": n,
-                          "band95": [float(chi2.ppf(0.025, n * dof) / n),
-                                     float(chi2.ppf(0.975, n * dof) / n)]}
+                          "band95": [float(chi2_lower_quantile(0.025, n * dof) / n),
+                                     float(chi2_lower_quantile(0.975, n * dof) / n)]}
         if header is not None and self.filter_name in getattr(header, "step_time_s", {}):
             out["time_per_step_ms"] = 1e3 * float(header.step_time_s[self.filter_name])
         if self.epochs["dof"]:
@@ -449,6 +449,6 @@ def chi2_thresholds(results, filter_name):
                               "value": CTFA_THRESHOLDS_DOF3[i], "source": "default for dof 3"})
             else:
                 gates.append({"name": name, "statistic": "chi2",
-                              "value": float(chi2.ppf(p, dof)),
+                              "value": float(chi2_lower_quantile(p, dof)),
                               "source": f"default: chi2({dof}) {100 * p:.0f} %"})
     return gates

@@ -17,7 +17,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from navcore.chisquare import chi2  # noqa: E402
+from navcore.innovation_stats import chi2_lower_quantile  # noqa: E402
 
 from . import metrics as nav_metrics  # noqa: E402
 from .phases import shade_phases  # noqa: E402
@@ -227,7 +227,7 @@ def plot_nis(entries, path, title=""):
                     color=f"C{f_i}", label=label)
         dofs.update(int(d) for d in np.unique(results.column(name, "nis_dof")[upd]))
     for dof in sorted(dofs):
-        lo, hi = chi2.ppf([0.025, 0.975], dof)
+        lo, hi = chi2_lower_quantile(np.array([0.025, 0.975]), dof)
         ax.axhline(hi, color="k", lw=0.8, ls="--")
         ax.axhline(lo, color="k", lw=0.8, ls=":")
         ax.text(ax.get_xlim()[0], hi, f" chi2({dof}) 97.5 %", va="bottom", fontsize=8)

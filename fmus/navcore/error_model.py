@@ -64,8 +64,8 @@ def _state_entries(lat, h, v_ned, C_bn, f_ned):
     w = 1.0 - earth.E2 * s2
     rn = earth.A * (1.0 - earth.E2) / w ** 1.5
     re = earth.A / math.sqrt(w)
-    g0 = earth.GAMMA_E * (1.0 + earth._K_SOMIGLIANA * s2) / math.sqrt(1.0 - earth.E2 * s2)
-    g = g0 * (1.0 - 2.0 / earth.A * (1.0 + earth.F + earth._M - 2.0 * earth.F * s2) * h
+    g0 = earth.GAMMA_E * (1.0 + earth.SOMIGLIANA_K * s2) / math.sqrt(1.0 - earth.E2 * s2)
+    g = g0 * (1.0 - 2.0 / earth.A * (1.0 + earth.F + earth.GRAVITY_M - 2.0 * earth.F * s2) * h
               + 3.0 * h ** 2 / earth.A ** 2)
     rn_h, re_h = rn + h, re + h
     tl = sl / cl
