@@ -232,7 +232,8 @@ class Component(ABC):
         # propagate into it); anything doubtful goes through the full check below
         for n, low, high, low_open, high_open in type(self)._bounded_inputs(names):
             v = inputs[n]
-            if not ((v > low if low_open else v >= low) and (v < high if high_open else v <= high)):
+            if not ((v > low if low_open else v >= low)
+                    and (v < high if high_open else v <= high)):
                 break
         else:
             if math.isfinite(sum([inputs[n] for n in names])):
@@ -253,6 +254,8 @@ class Component(ABC):
         cache = cls.__dict__.get("_bounded_input_cache")
         if cache is None:
             cache = cls._bounded_input_cache = {}
+        if type(names) is not tuple:   # the cache's keys: tuples of names
+            names = tuple(names)
         bounded = cache.get(names)
         if bounded is None:
             ports = cls._input_ports()
