@@ -410,7 +410,9 @@ def _add_gate(detection, results, filter_name):
     gates = [g for g in chi2_thresholds(results, filter_name) if g["name"] == "chi2_threshold"]
     if gates:
         detection["chi2_threshold"] = gates[0]
-        detection["expected_false_alarm_rate_chi2_1"] = float(special.chdtrc(1, gates[0]["value"]))  # chi2(1).sf
+        # chi2(1).sf, as scipy.stats computes it
+        detection["expected_false_alarm_rate_chi2_1"] = float(special.chdtrc(1,
+                                                                            gates[0]["value"]))
 
 
 def _parameter(results, component, name):
