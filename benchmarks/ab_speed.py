@@ -88,7 +88,8 @@ def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> 
     CPU time of this process is the steadier one on a loaded machine)."""
     sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
     from orchestrator.master import Simulation
-    from orchestrator.scenarios import ensure_fmus, load_scenario, registry
+    from orchestrator.build import ensure_fmus
+    from orchestrator.scenarios import load_scenario, registry
 
     model = load_scenario(HERE / "models" / scenario)
     if backend == "fmu":
