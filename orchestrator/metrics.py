@@ -55,7 +55,7 @@ from navcore.earth import radii as _radii
 from navcore.innovation_stats import (CHI2_THRESHOLD_PAPER_004 as CHI2_GATE_DEFAULT,
                                       CTFA_THRESHOLDS_PAPER_000 as CTFA_THRESHOLDS_DOF3,
                                       chi2_lower_quantile)
-from navcore.rotations import euler_to_dcm
+from navcore.rotations import euler_to_dcm_array as _dcm
 from navcore.rotations import wrap_angle as _wrap
 
 from .errors import NavfmuError
@@ -64,15 +64,6 @@ AXES = ("n", "e", "d")
 #: paper order of the tables: east, north, up (up error RMS = down error RMS)
 ENU = ("e", "n", "d")
 ATTITUDE = ("roll", "pitch", "yaw")
-
-
-def _dcm(roll, pitch, yaw):
-    """C_bn for arrays of ZYX Euler angles, shape (N, 3, 3), by navcore's one definition
-    (:func:`navcore.rotations.euler_to_dcm`) sample by sample."""
-    out = np.empty(np.shape(roll) + (3, 3))
-    for i, angles in enumerate(zip(roll.tolist(), pitch.tolist(), yaw.tolist())):
-        out[i] = euler_to_dcm(*angles)
-    return out
 
 
 def find_component(results, prefix, required):

@@ -168,7 +168,6 @@ class AhrsFilter(Component):
 class UkfAhrs(AhrsFilter):
     """Paper 003's conventional UKF: MRP attitude + gyro bias, fixed R."""
 
-    model_name = "UkfAhrs"
     description = ("Attitude UKF (paper 003): modified Rodrigues parameters and gyro bias as "
                    "the state, gravity and earth-field vectors from the accelerometer and the "
                    "magnetometer as measurements, fixed R.")
@@ -177,7 +176,6 @@ class UkfAhrs(AhrsFilter):
 class FuzzyUkfAhrs(AhrsFilter):
     """Paper 003's fuzzy adaptive UKF: R_k = F_k R_(k-1), F from a Mamdani inference."""
 
-    model_name = "FuzzyUkfAhrs"
     description = ("Fuzzy adaptive attitude UKF (paper 003): the UkfAhrs whose accelerometer "
                    "and magnetometer R blocks are scaled at every update by a Mamdani fuzzy "
                    "inference on the innovation covariance mismatch (paper 003 eqs. 15-19, 25); "

@@ -172,7 +172,8 @@ def string(name, description="", start=""):
 class Component(ABC):
     """Base class of the step-wise models wrapped by the FMUs (see module docstring)."""
 
-    #: model name of the FMU wrapping this component
+    #: model name of the FMU wrapping this component: by default the class's own name (set
+    #: for each subclass by ``__init_subclass__``)
     model_name: ClassVar[str] = ""
     description: ClassVar[str] = ""
     parameters: ClassVar[Tuple[Port, ...]] = ()
@@ -180,6 +181,12 @@ class Component(ABC):
     outputs: ClassVar[Tuple[Port, ...]] = ()
     #: default experiment (start, stop, step) written to the model description
     default_experiment: ClassVar[Tuple[float, float, float]] = (0.0, 10.0, 0.01)
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "model_name" not in cls.__dict__:
+            cls.model_name = cls.__name__
+
     def __init__(self, **params):
         self.params: Dict[str, Any] = {p.name: p.default() for p in self.parameters}
         self.notices: List[str] = []

@@ -38,6 +38,16 @@ _ANGLE = signals.EULER_ANGLE
 _R_POS = Limits(0.0, POS_SIGMA_LIMITS.high, low_open=True)
 _R_VEL = Limits(0.0, VEL_SIGMA_LIMITS.high, low_open=True)
 _TAU = Limits(0.0, 1e9)
+
+
+def _gauss_markov_parameters(sensor, suffix, unit, limits):
+    """The assumed first-order Gauss-Markov bias of one sensor triad: sigma and time constant."""
+    return (real(f"q_{sensor}_bias_instability_{suffix}", unit,
+                 f"Gauss-Markov {sensor} bias sigma assumed", 0.0, limits),
+            real(f"q_{sensor}_bias_tau_s", "s",
+                 f"Gauss-Markov {sensor} bias correlation time (0 = constant)", 0.0, _TAU))
+
+
 _FILTER_PARAMETERS = (
     *signals.state_ports("init", "initial"),
     real("init_roll", "rad", "initial roll", 0.0, _ANGLE),
@@ -56,14 +66,8 @@ _FILTER_PARAMETERS = (
          GYRO_ARW_LIMITS),
     real("q_accel_vrw_ugpsHz", "ug/sqrt(Hz)", "accel velocity random walk assumed by the filter",
          5.0, ACCEL_VRW_LIMITS),
-    real("q_gyro_bias_instability_dph", "deg/h", "Gauss-Markov gyro bias sigma assumed", 0.0,
-         GYRO_BIAS_LIMITS),
-    real("q_gyro_bias_tau_s", "s", "Gauss-Markov gyro bias correlation time (0 = constant)", 0.0,
-         _TAU),
-    real("q_accel_bias_instability_ug", "ug", "Gauss-Markov accel bias sigma assumed", 0.0,
-         ACCEL_BIAS_LIMITS),
-    real("q_accel_bias_tau_s", "s", "Gauss-Markov accel bias correlation time (0 = constant)",
-         0.0, _TAU),
+    *_gauss_markov_parameters("gyro", "dph", "deg/h", GYRO_BIAS_LIMITS),
+    *_gauss_markov_parameters("accel", "ug", "ug", ACCEL_BIAS_LIMITS),
     real("r_pos_n", "m", "GNSS position 1-sigma assumed, north", 5.0, _R_POS),
     real("r_pos_e", "m", "GNSS position 1-sigma assumed, east", 5.0, _R_POS),
     real("r_pos_d", "m", "GNSS position 1-sigma assumed, down", 5.0, _R_POS),
@@ -103,6 +107,8 @@ class InsGnssFilter(Component):
     engine_class = KfEngine
     extra_parameters = ()
     extra_outputs = ()
+    #: engine attributes written, under the same names, to outputs after every update
+    engine_diagnostics = ()
     #: the filter applies fixes, so it keeps the history that late ones need
     applies_fixes = True
     inputs = signals.FILTER_INPUTS
@@ -285,8 +291,11 @@ class InsGnssFilter(Component):
         self.write_diagnostics(result)
 
     def write_diagnostics(self, result):
-        """Subclasses write their extra outputs here: after every update (``result``) and
-        once at initialization (``result`` None)."""
+        """The extra outputs, after every update (``result``) and once at initialization
+        (``result`` None): each name in ``engine_diagnostics`` copied from the engine's
+        attribute of that name; subclasses add what needs computing."""
+        for name in self.engine_diagnostics:
+            self.out[name] = getattr(self.engine, name)
 
     def _write_solution(self):
         engine = self.engine

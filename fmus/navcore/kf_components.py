@@ -19,7 +19,6 @@ from .innovation_stats import CHI2_THRESHOLD_PAPER_004
 class Kf(InsGnssFilter):
     """Baseline 15-state loosely coupled error-state Kalman filter (closed loop)."""
 
-    model_name = "Kf"
     description = ("INS/GNSS loosely coupled 15-state error-state Kalman filter with closed-loop "
                    "feedback (baseline, fixed Q and R).")
 
@@ -36,7 +35,6 @@ _R_EST_NAMES = tuple(p.name for p in _R_EST_OUTPUTS)
 class SageHusaFading(InsGnssFilter):
     """Simplified Sage-Husa R estimation + fading memory (paper 001 eqs. 9-12)."""
 
-    model_name = "SageHusaFading"
     description = ("INS/GNSS 15-state error-state KF with the simplified Sage-Husa measurement-"
                    "noise estimator (paper 001 eq. 9) and the fading-memory filter (paper 001 "
                    "eqs. 10-12).")
@@ -62,6 +60,7 @@ class SageHusaFading(InsGnssFilter):
                     r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None)
 
     def write_diagnostics(self, result):
+        super().write_diagnostics(result)
         sigma = self.engine.r_sigma_estimate()
         for i, value in enumerate(sigma):
             self.out[_R_EST_NAMES[i]] = float(value)
@@ -70,7 +69,6 @@ class SageHusaFading(InsGnssFilter):
 class Iakf(SageHusaFading):
     """Improved adaptive KF: Sage-Husa + fading + outlier compression (paper 001 eqs. 9-14)."""
 
-    model_name = "Iakf"
     description = ("Improved adaptive Kalman filter of paper 001: simplified Sage-Husa R "
                    "estimation, fading memory and chi-square outlier compression of the "
                    "innovation (paper 001 eqs. 9-14), on the 15-state INS/GNSS error-state KF.")
@@ -84,21 +82,17 @@ class Iakf(SageHusaFading):
         real("compression", "", "outlier compression factor Y of the latest update (paper 001 "
              "eq. 14; 1 = no outlier)", 1.0),
     )
+    engine_diagnostics = ("compression",)
 
     def engine_options(self):
         options = super().engine_options()
         options["outlier_alpha"] = self.params["outlier_alpha"]
         return options
 
-    def write_diagnostics(self, result):
-        super().write_diagnostics(result)
-        self.out["compression"] = self.engine.compression
-
 
 class NewtonRobustKf(InsGnssFilter):
     """Paper 004: per-observation chi-square test + Newton extrapolation of failed ones."""
 
-    model_name = "NewtonRobustKf"
     description = ("Robust INS/GNSS KF of paper 004: per-observation chi-square test "
                    "(threshold 6.635) and replacement of failed observations by the Newton "
                    "forward extrapolation of the previous observations.")
@@ -117,6 +111,7 @@ class NewtonRobustKf(InsGnssFilter):
              "update"),
         integer("n_rejected", "observation components replaced at the latest update"),
     )
+    engine_diagnostics = ("chi2_max", "n_rejected")
 
     def engine_options(self):
         p = self.params
@@ -125,15 +120,10 @@ class NewtonRobustKf(InsGnssFilter):
         return dict(chi2_threshold=p["chi2_threshold"], newton_order=p["newton_order"],
                     replacement_variance=p["replacement_variance"])
 
-    def write_diagnostics(self, result):
-        self.out["chi2_max"] = self.engine.chi2_max
-        self.out["n_rejected"] = self.engine.n_rejected
-
 
 class Igg3RobustKf(InsGnssFilter):
     """IGG-III equivalent-weight robust KF (the equivalent-weight method of paper 004 1.2)."""
 
-    model_name = "Igg3RobustKf"
     description = ("Robust INS/GNSS KF with IGG-III equivalent weights on the standardized "
                    "innovations (R_ii / w_i; w = 1 below k0, 0 above k1).")
     engine_class = Igg3RobustKfEngine
@@ -148,6 +138,7 @@ class Igg3RobustKf(InsGnssFilter):
              "down-weighted)", 1.0),
         integer("n_rejected", "observation components rejected (weight 0) at the latest update"),
     )
+    engine_diagnostics = ("n_rejected",)
 
     def engine_options(self):
         p = self.params
@@ -155,8 +146,8 @@ class Igg3RobustKf(InsGnssFilter):
         return dict(igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
 
     def write_diagnostics(self, result):
+        super().write_diagnostics(result)
         self.out["min_weight"] = float(self.engine.weights.min())
-        self.out["n_rejected"] = self.engine.n_rejected
 
 
 class InsOnly(InsGnssFilter):
@@ -167,7 +158,6 @@ class InsOnly(InsGnssFilter):
     show the covariance propagated from P0 with the process noise alone.
     """
 
-    model_name = "InsOnly"
     description = ("Free strapdown inertial navigation (no GNSS update), same inputs and "
                    "outputs as the INS/GNSS filters; the covariance only propagates.")
     engine_class = InsOnlyEngine

@@ -39,7 +39,6 @@ _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
 class ImuGnssReplay(Component):
     """Plays a sensor log through the IMU, GNSS and truth outputs (module docstring)."""
 
-    model_name = "ImuGnssReplay"
     description = ("Replays a recorded sensor log (IMU increments, GNSS fixes, optional truth; "
                    "the navfmu sensor-log format) through the outputs of TrajectoryImu and "
                    "GnssReceiver, so any INS/GNSS filter runs on recorded or foreign data.")

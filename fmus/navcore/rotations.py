@@ -106,11 +106,12 @@ def _rotvec_from_rows(m):
     return k * x, k * y, k * z
 
 
-def _euler_rows(roll, pitch, yaw):
-    """Rows of C_bn = Rz(yaw) Ry(pitch) Rx(roll)."""
-    sr, cr = math.sin(roll), math.cos(roll)
-    sp, cp = math.sin(pitch), math.cos(pitch)
-    sy, cy = math.sin(yaw), math.cos(yaw)
+def _euler_rows(roll, pitch, yaw, sin=math.sin, cos=math.cos):
+    """Rows of C_bn = Rz(yaw) Ry(pitch) Rx(roll); with ``sin``/``cos`` = numpy's, the same
+    formula over arrays of angles (the rows are then arrays)."""
+    sr, cr = sin(roll), cos(roll)
+    sp, cp = sin(pitch), cos(pitch)
+    sy, cy = sin(yaw), cos(yaw)
     return [
         [cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
         [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],
@@ -160,6 +161,13 @@ def wrap_angle(a):
 def euler_to_dcm(roll, pitch, yaw):
     """C_bn (body -> NED) from ZYX Euler angles [rad]: ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     return np.array(_euler_rows(float(roll), float(pitch), float(yaw)))
+
+
+def euler_to_dcm_array(roll, pitch, yaw):
+    """:func:`euler_to_dcm` over arrays of angles of shape (N,): shape (N, 3, 3)."""
+    rows = _euler_rows(np.asarray(roll, dtype=float), np.asarray(pitch, dtype=float),
+                       np.asarray(yaw, dtype=float), np.sin, np.cos)
+    return np.moveaxis(np.array(rows), -1, 0)
 
 
 def dcm_to_euler(C):

@@ -50,7 +50,6 @@ class TrajectoryImu(Component):
     period give the same numbers bit for bit); a step reaching no epoch holds the outputs.
     """
 
-    model_name = "TrajectoryImu"
     description = ("Truth trajectory from a motion profile on WGS-84 and the strapdown IMU "
                    "increments along it, with bias, noise, Gauss-Markov, scale-factor, "
                    "misalignment and manoeuvre-dependent noise errors; a three-axis "
@@ -164,7 +163,6 @@ class GnssReceiver(Component):
     fix was taken): the latency of a real receiver's solution.
     """
 
-    model_name = "GnssReceiver"
     description = ("GNSS receiver: position and velocity fixes from the truth at its own rate "
                    "with per-axis noise, noise steps, outlier patches, periodic m-times "
                    "outliers and outages; 'gnss_epoch' counts fixes.")

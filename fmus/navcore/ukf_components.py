@@ -20,7 +20,6 @@ _IMM_MAX_MODELS = 3
 class Ukf(InsGnssFilter):
     """Paper 000's UKF: 15-state error-state UKF, nonlinear large-misalignment error model."""
 
-    model_name = "Ukf"
     description = ("INS/GNSS 15-state error-state unscented Kalman filter (paper 000 eqs. 11-23) "
                    "with a nonlinear rotation-vector large-misalignment error model, fixed Q and "
                    "R, closed-loop feedback.")
@@ -48,7 +47,6 @@ class Ukf(InsGnssFilter):
 class CtfaUkf(Ukf):
     """CTFA-UKF: the UKF + chi-square fuzzy adaptive process noise (paper 000 eqs. 24-25)."""
 
-    model_name = "CtfaUkf"
     description = ("Fuzzy adaptive UKF with chi-square test (CTFA-UKF, paper 000): the UKF whose "
                    "process noise Q moves between Qmin and Qmax as a piecewise-linear function "
                    "of the innovation chi-square statistic (paper 000 eqs. 24-25).")
@@ -71,6 +69,7 @@ class CtfaUkf(Ukf):
     extra_outputs = (
         real("chi2", "", "chi-square statistic of the latest update (paper 000 eq. 24)"),
     )
+    engine_diagnostics = ("chi2",)
 
     def engine_options(self):
         p = self.params
@@ -85,14 +84,10 @@ class CtfaUkf(Ukf):
                                  "must satisfy t1 < t2")
         return engine
 
-    def write_diagnostics(self, result):
-        self.out["chi2"] = self.engine.chi2
-
 
 class ImmUkf(Ukf):
     """IMM-UKF (paper 000's comparison): 2 or 3 UKFs with different Q scales."""
 
-    model_name = "ImmUkf"
     description = ("Interacting multiple model UKF (paper 000's IMM-UKF, its ref. [14]): 2 or 3 "
                    "UKFs with different process-noise scales, Markov model switching, mixing "
                    "once per GNSS interval, closed-loop feedback of the combined estimate.")
@@ -112,6 +107,7 @@ class ImmUkf(Ukf):
     extra_outputs = tuple(
         real(f"model_prob_{j}", "", f"IMM probability of model {j} after the latest update "
              "(0 for an unused model)") for j in range(1, _IMM_MAX_MODELS + 1))
+    engine_diagnostics = ("q_scale",)
 
     def engine_options(self):
         p = self.params
@@ -120,7 +116,7 @@ class ImmUkf(Ukf):
                     p_stay=p["imm_p_stay"])
 
     def write_diagnostics(self, result):
-        self.out["q_scale"] = self.engine.q_scale
+        super().write_diagnostics(result)
         mu = self.engine.model_probabilities
         for j in range(_IMM_MAX_MODELS):
             self.out[f"model_prob_{j + 1}"] = float(mu[j]) if j < len(mu) else 0.0
