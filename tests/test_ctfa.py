@@ -168,3 +168,39 @@ def test_pass_decay_returns_geometrically_to_qmin_and_one_is_the_paper():
     for bad in (-0.1, 1.5, float("nan")):
         with pytest.raises(ParameterError, match="pass_decay"):
             CtfaQSchedule(Qmin, Qmax, pass_decay=bad)
+
+
+def null_mean_weight(T1, T2, dof, pass_decay):
+    """Long-run mean weight of the schedule fed by a correct model (statistic chi2(dof) each
+    epoch), by integration over the chi-square density: an exceedance q >= T1 (probability p)
+    sets w = g(q) = min((q - T1) / (T2 - T1), 1), each pass multiplies it by d, so the weight
+    is g of the last exceedance times d^age with P(age = a) = p (1 - p)^a:
+    E[w] = E[g | q >= T1] p / (1 - (1 - p) d)."""
+    from scipy import integrate, stats
+    dist = stats.chi2(dof)
+    p = dist.sf(T1)
+    linear, _ = integrate.quad(lambda q: (q - T1) / (T2 - T1) * dist.pdf(q), T1, T2)
+    mean_g = (linear + dist.sf(T2)) / p
+    return mean_g * p / (1.0 - (1.0 - p) * pass_decay)
+
+
+@pytest.mark.parametrize("pass_decay", [1.0, 0.5])
+def test_schedule_under_a_correct_model_matches_the_chi_square_integral(pass_decay):
+    """The Q a correct model leaves behind (docs/uav_maneuver.md, why eq. 25 cannot give a
+    3x phase ratio): the schedule fed chi2(3) statistics against the integral above.  With
+    eq. 25 as printed (d = 1) the mean weight is E[g | q >= 6.25] = 0.394, so the calm-flight
+    Q averages 1 + 0.394 (k - 1) Qmin and no manoeuvre (Q <= Qmax = k Qmin) can raise the mean
+    more than k / (1 + 0.394 (k - 1)) < 1 / 0.394 = 2.54 times; with d = 0.5 the floor is 0.072."""
+    rng = np.random.default_rng(5)
+    sched = CtfaQSchedule(np.eye(1), 300.0 * np.eye(1), pass_decay=pass_decay)
+    weights = np.empty(40000)
+    for i, q in enumerate(rng.chisquare(3, size=weights.size)):
+        sched.update(q)
+        weights[i] = sched.weight
+    expected = null_mean_weight(PAPER_T1, PAPER_T2, 3, pass_decay)
+    assert weights[100:].mean() == pytest.approx(expected, rel=0.04)
+    if pass_decay == 1.0:
+        assert expected == pytest.approx(0.394, abs=0.001)
+        assert 300.0 / (1.0 + 299.0 * expected) < 2.6        # the ceiling of the phase ratio
+    else:
+        assert expected == pytest.approx(0.0717, abs=0.001)

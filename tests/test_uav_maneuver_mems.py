@@ -161,20 +161,22 @@ def test_uav_maneuver_mems_monte_carlo_issue_targets():
     assert (table["CtfaUkf"] <= 1.10 * table["ImmUkf"]).all(), table["CtfaUkf"] / table["ImmUkf"]
 
 
-#: the scenario with only the errors the filter models (Table 1), and the filter told the truth
+#: the scenario with only the errors the filter models (Table 1), and the filter told the truth:
+#: ARW and VRW as simulated, the turn-on biases random constants (no Gauss-Markov driver AND
+#: no correlation time: a zero sigma with filter.ssv's 100 s tau would tell the filter that
+#: the bias error decays to zero with certainty, tests/test_bias_covariance.py)
 ORACLE_TRAJECTORY = {"gyro_scale_factor_ppm": 0.0, "gyro_misalignment_urad": 0.0,
                      "g_sensitivity_dphpg": 0.0, "accel_scale_factor_ppm": 0.0,
                      "accel_misalignment_urad": 0.0, "noise_intensity_gain": 0.0}
-ORACLE_FILTER = {"q_gyro_bias_instability_dph": 0.0, "q_accel_bias_instability_ug": 0.0}
+ORACLE_FILTER = {"q_gyro_bias_instability_dph": 0.0, "q_gyro_bias_tau_s": 0.0,
+                 "q_accel_bias_instability_ug": 0.0, "q_accel_bias_tau_s": 0.0}
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="open: on 0-1200 s, seed 1, the oracle UKF has NIS 3.05 "
-                   "but NEES position 4.3, velocity 6.5, attitude 16 (heading NEES growing "
-                   "with time); docs/uav_maneuver.md")
 def test_oracle_ukf_nees_within_20_percent():
     """Consistency where the model is right: IMU errors = Table 1 only, the filter's Q = the
-    true noise (random-constant biases): NEES per group within 20 % of its dimension 3."""
+    true noise (random-constant biases): NEES per group within 20 % of its dimension 3, mean
+    of seeds 1-3 on 0-1200 s (measured 3.47 / 3.29 / 2.90, docs/uav_maneuver.md)."""
     from orchestrator import scenarios
 
     model = scenarios.load_scenario(SCENARIO)
