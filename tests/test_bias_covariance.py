@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 
 from navcore.error_model import BA, BG, N_STATES
-from navcore.ins_gnss_kf import ErrorStateKf, KfConfig
+from navcore.components import Ukf
+from navcore.ins_gnss_kf import KfConfig, KfEngine
 from navcore.strapdown import Strapdown
 from navcore.ukf_filters import UkfEngine
 
@@ -39,7 +40,9 @@ def _config(sigma_scale, tau):
 
 def _bias_variance_after(engine_class, config):
     nav = Strapdown(0.6, 1.9, 500.0, np.array([20.0, 10.0, 0.0]), np.eye(3))
-    engine = engine_class(config, nav)
+    # the UKF with its component's default options (prediction interval, unscented parameters)
+    options = Ukf().engine_options() if engine_class is UkfEngine else {}
+    engine = engine_class(config, nav, **options)
     dtheta = np.array([1e-4, -2e-4, 3e-4]) * DT
     dvel = np.array([0.5, -0.2, -9.8]) * DT
     for _ in range(round(DURATION / DT)):
@@ -48,7 +51,7 @@ def _bias_variance_after(engine_class, config):
     return np.diagonal(P)[BG], np.diagonal(P)[BA]
 
 
-@pytest.mark.parametrize("engine_class", [ErrorStateKf, UkfEngine])
+@pytest.mark.parametrize("engine_class", [KfEngine, UkfEngine])
 @pytest.mark.parametrize("sigma_scale, tau", [(0.0, 100.0), (0.5, 100.0), (0.0, 0.0)])
 def test_bias_variance_follows_gauss_markov_formula(engine_class, sigma_scale, tau):
     decay = math.exp(-2.0 * DURATION / tau) if tau > 0 else 1.0
