@@ -71,7 +71,8 @@ class Iakf(SageHusaFading):
 
     description = ("Improved adaptive Kalman filter of paper 001: simplified Sage-Husa R "
                    "estimation, fading memory and chi-square outlier compression of the "
-                   "innovation (paper 001 eqs. 9-14), on the 15-state INS/GNSS error-state KF.")
+                   "innovation (paper 001 eqs. 9-14), on the 15-state INS/GNSS "
+                   "error-state KF.")
     engine_class = IakfEngine
     extra_parameters = SageHusaFading.extra_parameters + (
         real("outlier_alpha", "", "significance alpha of the chi2(m) outlier gate (paper 001 "
