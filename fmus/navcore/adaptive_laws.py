@@ -318,7 +318,7 @@ def compression_factor(innovation, G, K, alpha: float = 0.05,
     m = v.shape[0]
     G = square("G", G, m)
     K = matrix("K", K, cols=m)
-    v, L = checked_cholesky(v, G, "G")               # G = L L', tau = |L^-1 v|^2
+    v, L = checked_cholesky(v, G, "G", numpy_factor=True)  # G = L L', tau = |L^-1 v|^2
     tau = nis_from_cholesky(L, v, general_solve=True)
     if D is None:
         gate = chi2_gate(alpha, m)

@@ -79,9 +79,12 @@ def gaussian_log_likelihood(nis_value: float, log_det: float, m: int) -> float:
     return -0.5 * (nis_value + log_det + m * _LOG_2PI)
 
 
-def checked_cholesky(innovation, S, where: str) -> Tuple[np.ndarray, np.ndarray]:
+def checked_cholesky(innovation, S, where: str,
+                     numpy_factor: bool = False) -> Tuple[np.ndarray, np.ndarray]:
     """``(v, L)``: the innovation as a float vector and the lower Cholesky factor of the
-    symmetrized ``S`` (LAPACK ``dpotrf``).  Raises :class:`InputError` naming ``where`` if the
+    symmetrized ``S`` (LAPACK ``dpotrf``; with ``numpy_factor`` numpy's ``cholesky``, the
+    factorization paper 001's compression factor keeps: the two libraries' factors agree to
+    round-off, not always to the bit).  Raises :class:`InputError` naming ``where`` if the
     shapes disagree, a value is not finite or ``S`` is not positive definite."""
     v = np.atleast_1d(np.asarray(innovation, dtype=float))
     S = np.atleast_2d(np.asarray(S, dtype=float))
@@ -89,6 +92,12 @@ def checked_cholesky(innovation, S, where: str) -> Tuple[np.ndarray, np.ndarray]
         raise InputError(f"{where}: 'S' must be {v.shape[0]}x{v.shape[0]}, got {S.shape}")
     if not (np.isfinite(v).all() and np.isfinite(S).all()):
         raise InputError(f"{where}: 'innovation' and 'S' must be finite")
+    if numpy_factor:
+        try:
+            return v, np.linalg.cholesky(0.5 * (S + S.T))
+        except np.linalg.LinAlgError:
+            raise InputError(f"{where}: innovation covariance 'S' is not positive "
+                             "definite") from None
     L, info = lapack.dpotrf(0.5 * (S + S.T), lower=1, clean=1)
     if info != 0:
         raise InputError(f"{where}: innovation covariance 'S' is not positive definite")
