@@ -114,7 +114,7 @@ def paper_comparison(runs: Sequence[Run], reference=None) -> Dict[str, Any]:
       our filter's mean do_step time per call next to it;
 
     and, from the filters' outputs alone, the outlier detection of every filter that reports
-    it (``metrics.outlier_detection``).  A block whose filters were not run says which are
+    it (the ``outlier_detection`` entry of its metrics).  A block whose filters were not run says which are
     missing.  JSON-ready dict; :func:`orchestrator.comparison_text.format_comparison`
     prints it."""
     reference = reference or {}

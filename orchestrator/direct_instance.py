@@ -4,28 +4,14 @@ from __future__ import annotations
 
 import itertools
 import operator
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, Mapping, Optional, Sequence
 
 import numpy as np
 
+from navcore.errors import NavcoreError, numerical_failure
+
 from .backends import Instance, VarInfo, coerce
 from .errors import NavfmuError, SimulationError
-
-def _component_error_types() -> Tuple[type, ...]:
-    """The exceptions a component raises for user errors (navcore's NavcoreError)."""
-    try:
-        from navcore.errors import NavcoreError
-    except ImportError:  # the master also runs components that do not come from navcore
-        return ()
-    return (NavcoreError,)
-
-
-def _numerical_failure(exc: Exception) -> str:
-    try:
-        from navcore.errors import numerical_failure
-    except ImportError:
-        return f"the computation failed numerically ({exc!r})"
-    return numerical_failure(exc)
 
 
 def _output_writer(buf: np.ndarray, names: Sequence[str]):
@@ -70,7 +56,8 @@ class DirectInstance(Instance):
                 self.variables[p.name] = VarInfo(p.name, p.type, causality, p.unit, next(ref))
         self._inputs: Dict[str, Any] = {p.name: p.default() for p in getattr(cls, "inputs", ())}
         self._outputs: Dict[str, Any] = {p.name: p.default() for p in getattr(cls, "outputs", ())}
-        self._errors = _component_error_types()
+        self._errors = (NavcoreError,)
+        self._advance = getattr(component, "advance", None) or component.step
         self.time: Optional[float] = None
 
     @classmethod
@@ -91,7 +78,7 @@ class DirectInstance(Instance):
         when = f" at t = {time:.9g} s" if time is not None and at else ""
         text = str(exc)
         if not isinstance(exc, self._errors):  # an arithmetic error: the state diverged
-            text = _numerical_failure(exc)
+            text = numerical_failure(exc)
         prefix = f"{self.model_name}: "
         if text.startswith(prefix):
             text = text[len(prefix):]
@@ -172,8 +159,7 @@ class DirectInstance(Instance):
 
     def do_step(self, t: float, h: float) -> None:
         try:
-            advance = getattr(self.component, "advance", None) or self.component.step
-            outputs = advance(t, h, self._inputs)
+            outputs = self._advance(t, h, self._inputs)
         except self._errors + (ArithmeticError, ValueError) as exc:
             raise self._error(f"step from t = {t:.9g} s to t = {t + h:.9g} s", exc, t,
                               at=False) from None

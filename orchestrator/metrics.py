@@ -380,20 +380,6 @@ def rejection_statistics(injected, n_rejected, n_observations):
             "detected_observations": int(rejected_injected)}
 
 
-def outlier_detection(results, filter_name, window=None, receiver_name=None):
-    """:func:`rejection_statistics` of a filter with an ``n_rejected`` output against the
-    receiver's injected outliers (see the module docstring), plus the gate it used and the
-    per-observation false-alarm probability that gate gives for a chi2(1) statistic; None if
-    the filter has no ``n_rejected`` output or no component records ``gnss_outlier``."""
-    epochs = update_epochs(results, filter_name, window, receiver_name)
-    if epochs is None or "n_rejected" not in epochs or "injected" not in epochs:
-        return None
-    out = rejection_statistics(epochs["injected"], epochs["n_rejected"], epochs["dof"])
-    out["receiver"] = receiver_name or find_receiver(results)
-    _add_gate(out, results, filter_name)
-    return out
-
-
 def _add_gate(detection, results, filter_name):
     """The chi2_threshold gate and its chi2(1) false-alarm probability, when there is one."""
     if results is None:

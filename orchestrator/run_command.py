@@ -83,14 +83,15 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     names = [f for f in filters if f]
     if len(names) < 2:  # a single run: suggest timing the paper's filters against each other
         names = list((reference or {}).get("time_per_cycle_ms") or {}) or names
+    comparison = paper_comparison(runs, reference)
     text = format_comparison(
-        paper_comparison(runs, reference),
+        comparison,
         bench_command=(f"`navfmu bench {scenario} --filters {','.join(names)}`" if names else ""),
         show_missing=len(filters) > 1)
     if text:
         echo(text)
     written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
-                            reference=reference)
+                            reference=reference, comparison=comparison)
     echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
 
 

@@ -26,14 +26,18 @@ FUZZY_INPUT_OUTPUTS = ("fuzzy_e_accel", "fuzzy_de_accel", "fuzzy_e_mag", "fuzzy_
 
 
 def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, title="",
-                  reference=None) -> List[Path]:
+                  reference=None, comparison=None) -> List[Path]:
     """Results (one file per run), metrics.json, report.json (the paper comparison with
-    ``reference``, when it has anything) and plots, replacing the folder ``out`` as a whole
+    ``reference``, when it has anything; ``comparison``: that comparison when the caller has
+    already computed it) and plots, replacing the folder ``out`` as a whole
     (:func:`orchestrator.outputs.staged`: all of them appear together or none does).
     Returns the paths the files have in ``out``."""
     out = Path(out)
+    if comparison is None:
+        comparison = paper_comparison(runs, reference)
     with outputs.staged(out) as stage:
-        names = [p.name for p in _write_files(runs, stage, fmt, plots_on, title, reference)]
+        names = [p.name for p in _write_files(runs, stage, fmt, plots_on, title, reference,
+                                              comparison)]
     return [out / n for n in names]
 
 
@@ -46,7 +50,7 @@ class _Written(list):
         interrupts.check()
 
 
-def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]:
+def _write_files(runs, out: Path, fmt, plots_on, title, reference, comparison) -> List[Path]:
     """Write every output file into the folder ``out``.  A run streamed to a Parquet file
     (:attr:`Run.series_file`) has its file moved in."""
     written = _Written()
@@ -66,7 +70,6 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference) -> List[Path]
                            "metadata": jsonable(run.results.metadata)} for run in runs}
     written.add(atomic_write(out / "metrics.json",
                              lambda f: f.write(json.dumps(summary, indent=2, sort_keys=True))))
-    comparison = paper_comparison(runs, reference)
     if comparison:
         written.add(atomic_write(out / "report.json", lambda f: f.write(
             json.dumps(jsonable(comparison), indent=2, sort_keys=True))))

@@ -21,7 +21,6 @@ OSP_ANNOTATION_TYPE = "com.opensimulationplatform"
 
 #: prefix each namespace must be written with (libcosim matches "ssd:System" literally)
 REQUIRED_PREFIX = {SSD_NS: "ssd", SSC_NS: "ssc", SSV_NS: "ssv", OSP_NS: "osp"}
-PREFIX_OF = {uri: prefix for uri, prefix in REQUIRED_PREFIX.items()}
 
 TYPES = ("Real", "Integer", "Boolean", "String")
 #: largest .ssd / .ssv file read (ours are a few kilobytes)
@@ -36,7 +35,7 @@ def pretty(tag: str) -> str:
     """``{uri}Local`` -> ``prefix:Local`` for messages."""
     if tag.startswith("{"):
         uri, local = tag[1:].split("}", 1)
-        return f"{PREFIX_OF.get(uri, uri)}:{local}"
+        return f"{REQUIRED_PREFIX.get(uri, uri)}:{local}"
     return tag
 
 

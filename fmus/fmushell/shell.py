@@ -42,7 +42,6 @@ def setup(slave, component_class):
     slave._failed = None
     slave._refused_state = None
     slave._refused = None      # a refused get/set, reported by the next do_step
-    slave._initialized = False
     slave._vr_names = {}       # type -> {value reference: name}
     slave._settable = {}       # type -> {value reference: name} that may be set now
     slave._causality = {}
@@ -89,7 +88,6 @@ def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
 
 def exit_initialization_mode(slave):
     params = {p.name: slave._values[p.name] for p in slave.component_class.parameters}
-    slave._initialized = True
     inputs = set(slave._input_names)
     slave._settable = {t: {vr: n for vr, n in names.items() if n in inputs}
                        for t, names in slave._settable.items()}

@@ -52,7 +52,7 @@ from typing import Optional, Tuple, Union
 import numpy as np
 
 from .array_checks import matrix, square, symmetrize, vector
-from .component import InputError, ParameterError
+from .errors import InputError, ParameterError
 from .innovation_stats import checked_cholesky, chi2_gate, nis_from_cholesky
 
 ArrayLike = Union[np.ndarray, float, list]

@@ -25,6 +25,4 @@ REGISTRY = {cls.model_name: cls for cls in (
     ImuGnssReplay,
     UkfAhrs, FuzzyUkfAhrs)}
 
-__all__ = ["REGISTRY", "TrajectoryImu", "GnssReceiver", "Kf", "SageHusaFading", "Iakf",
-           "NewtonRobustKf", "Igg3RobustKf", "InsOnly", "Ukf", "CtfaUkf", "ImmUkf",
-           "ImuGnssReplay", "UkfAhrs", "FuzzyUkfAhrs"]
+__all__ = ["REGISTRY", *REGISTRY]

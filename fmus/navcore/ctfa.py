@@ -40,7 +40,7 @@ from typing import Tuple
 
 import numpy as np
 
-from navcore.component import InputError, ParameterError
+from navcore.errors import InputError, ParameterError
 from navcore.innovation_stats import CTFA_THRESHOLDS_PAPER_000, chi2_lower_quantile
 
 #: thresholds printed in paper 000 (eq. 25) for a 3-dimensional measurement

@@ -22,7 +22,6 @@ from .constants import DPH, DPSH, UG
 from .imu_errors import ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_LIMITS, GYRO_BIAS_LIMITS
 from .ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from .latency import SolutionHistory
-from .rotations import _euler_from_rows
 from .strapdown import Strapdown
 from .timing import same_time, time_tolerance
 
@@ -304,7 +303,7 @@ class InsGnssFilter(Component):
         out["nav_time"] = self.nav_time
         out["nav_lat"], out["nav_lon"], out["nav_h"] = nav.lat, nav.lon, nav.h
         out["nav_vn"], out["nav_ve"], out["nav_vd"] = nav.v_ned.tolist()
-        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = _euler_from_rows(nav.C_bn.tolist())
+        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = nav.euler()
         update = out.update
         update(zip(_BG_NAMES, engine.gyro_bias.tolist()))
         update(zip(_BA_NAMES, engine.accel_bias.tolist()))

@@ -39,7 +39,7 @@ from typing import Any, Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from navcore.component import InputError, ParameterError
+from navcore.errors import InputError, ParameterError
 from navcore.innovation_stats import (checked_cholesky, gaussian_log_likelihood,
                                       log_det_from_cholesky, nis_from_cholesky)
 

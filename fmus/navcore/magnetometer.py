@@ -46,6 +46,9 @@ def _soft_iron(text: Any) -> np.ndarray:
     return np.array(values).reshape(3, 3)
 
 
+#: phases of the vibration on the three axes [rad]
+_AXIS_PHASES = np.array([0.0, 2.0, 4.0]) * math.pi / 3
+
 class MagnetometerModel:
     """Magnetometer and vibration disturbance of the module docstring."""
 
@@ -123,5 +126,5 @@ class MagnetometerModel:
         if not self.vibrating(t):
             return np.zeros(3)
         phase = 2.0 * math.pi * self.vibration_frequency * (t - self.vibration_start)
-        sine = self.vibration_amplitude * np.sin(phase + np.array([0.0, 2.0, 4.0]) * math.pi / 3)
+        sine = self.vibration_amplitude * np.sin(phase + _AXIS_PHASES)
         return sine + self.vibration_noise * self._z[3:]

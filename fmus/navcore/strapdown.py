@@ -92,10 +92,6 @@ def _gravity(lat, h):
     return g0 * (1.0 - 2.0 / _A * (1.0 + _F + _M - 2.0 * _F * s2) * h + 3.0 * h * h / (_A * _A))
 
 
-def _cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
 def _solve_skew(wx, wy, wz, r):
     """Solve (I + [w x]) x = r in closed form:
     (I + [w x])^-1 = (I - [w x] + w w^T) / (1 + |w|^2)."""
@@ -274,7 +270,6 @@ class Strapdown:
         """
         dt = float(dt)
         v = np.asarray(self.v_ned, dtype=float).tolist()
-        C = np.asarray(self.C_bn, dtype=float).tolist()
         v1 = [float(v_ned[0]), float(v_ned[1]), float(v_ned[2])]
         C1 = C_bn.tolist() if isinstance(C_bn, np.ndarray) else [list(map(float, r)) for r in C_bn]
         lat, lon, h = float(lat), float(lon), float(h)

@@ -70,7 +70,7 @@ from typing import Any, Callable, Dict, NamedTuple, Optional, Tuple
 import numpy as np
 from scipy.linalg import lapack
 
-from navcore.component import InputError, ParameterError
+from navcore.errors import InputError, ParameterError
 from navcore.innovation_stats import (gaussian_log_likelihood, log_det_from_cholesky,
                                       nis_from_cholesky)
 
