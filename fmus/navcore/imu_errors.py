@@ -180,7 +180,7 @@ class ImuErrorModel:
                     "_vibration_sigma_dt")
     derived_fields = ("noise_intensity_gain", "noise_level_windows", "seed", "constant_bias",
                       "g_sensitivity", "gyro_matrix", "accel_matrix", "_increment_matrix",
-                      "_reference_offset",
+                      "_reference_offset", "_level_bias",
                       "_gm_sigma", "_gm_tau", "_white_density", "_vibration_sigma",
                       "_vibration_on")
 
@@ -231,12 +231,11 @@ class ImuErrorModel:
         self._vibration_sigma = np.repeat([si["vib_gyro"], si["vib_accel"]], 3)
         self._vibration_on = bool(si["vib_gyro"] > 0.0 or si["vib_accel"] > 0.0)
 
-        # coefficients that depend on dt only, recomputed when dt changes
+        # coefficients that depend on dt only, recomputed when dt changes; tuples of floats,
+        # as apply() uses them (they are state: a restored model keeps its dt and these)
         self._cached_dt = None
-        self._gm_phi = np.ones(6)
-        self._gm_drive = np.zeros(6)
-        self._white_sigma_dt = np.zeros(6)
-        self._vibration_sigma_dt = np.zeros(6)
+        self._gm_phi = (1.0,) * 6
+        self._gm_drive = self._white_sigma_dt = self._vibration_sigma_dt = (0.0,) * 6
 
     def _si_values(self, params: Dict[str, Any]) -> Dict[str, float]:
         """The numeric parameters, checked, in SI units (datasheet units converted once)."""
@@ -297,6 +296,9 @@ class ImuErrorModel:
         f_ref = np.array([0.0, 0.0, -level_reference_g * G0])
         self._reference_offset = np.concatenate((self.g_sensitivity @ f_ref,
                                                  (self.accel_matrix - np.eye(3)) @ f_ref))
+        #: constant bias minus the reference offset, as floats (the constant term of apply)
+        self._level_bias = tuple(c - r for c, r in zip(self.constant_bias.tolist(),
+                                                       self._reference_offset.tolist()))
 
     def _init_gauss_markov(self, si: Dict[str, float], gm_initial: np.ndarray) -> None:
         """Gauss-Markov biases (gyro 3, accel 3): steady-state sigma and correlation time;
@@ -330,11 +332,11 @@ class ImuErrorModel:
     # -- measurement --------------------------------------------------------------------
     def _set_dt(self, dt: float) -> None:
         phi = np.exp(-dt / self._gm_tau)
-        self._gm_phi = phi
+        self._gm_phi = tuple(phi.tolist())
         # exact discretisation: the stationary variance sigma^2 is preserved
-        self._gm_drive = self._gm_sigma * np.sqrt(1.0 - phi * phi)
-        self._white_sigma_dt = self._white_density * math.sqrt(dt)
-        self._vibration_sigma_dt = self._vibration_sigma * dt
+        self._gm_drive = tuple((self._gm_sigma * np.sqrt(1.0 - phi * phi)).tolist())
+        self._white_sigma_dt = tuple((self._white_density * math.sqrt(dt)).tolist())
+        self._vibration_sigma_dt = tuple((self._vibration_sigma * dt).tolist())
         self._cached_dt = dt
 
     def apply(self, t_end: float, dt: float, dtheta, dvel, intensity: float = 0.0):
@@ -372,22 +374,22 @@ class ImuErrorModel:
         gm_start = self.gm_bias.tolist()
         # gm_end = phi * gm_start + drive * z[6:]
         gm_end = [p * g + d * w for p, g, d, w in
-                  zip(self._gm_phi.tolist(), gm_start, self._gm_drive.tolist(), z[6:])]
+                  zip(self._gm_phi, gm_start, self._gm_drive, z[6:])]
         self.gm_bias = np.array(gm_end)
 
         window = self.noise_factor(t_end - 0.5 * dt) if self.noise_level_windows else 1.0
         # white = white_sigma_dt * (window * (1 + gain * intensity))
         scale = window * (1.0 + self.noise_intensity_gain * intensity)
-        white = [w * scale for w in self._white_sigma_dt.tolist()]
+        white = [w * scale for w in self._white_sigma_dt]
         if self._vibration_on and intensity > 0.0:
             vib_scale = window * intensity
             # independent Gaussian sources add in variance: one draw per axis suffices
             white = [math.sqrt(w * w + v * v) for w, v in
-                     zip(white, [s * vib_scale for s in self._vibration_sigma_dt.tolist()])]
+                     zip(white, [s * vib_scale for s in self._vibration_sigma_dt])]
 
-        # out = M x + (constant - reference + (gm_start + gm_end) / 2) dt + white * z[:6]
-        out = [(o + ((c - r) + 0.5 * (g0 + g1)) * dt) + w * n for o, c, r, g0, g1, w, n in
-               zip((self._increment_matrix @ x).tolist(), self.constant_bias.tolist(),
-                   self._reference_offset.tolist(), gm_start, gm_end, white, z)]
+        # out = M x + ((constant - reference) + (gm_start + gm_end) / 2) dt + white * z[:6]
+        out = [(o + (b + 0.5 * (g0 + g1)) * dt) + w * n for o, b, g0, g1, w, n in
+               zip((self._increment_matrix @ x).tolist(), self._level_bias, gm_start, gm_end,
+                   white, z)]
         out = np.array(out)
         return out[:3], out[3:]
