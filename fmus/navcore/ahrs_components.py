@@ -121,8 +121,8 @@ class AhrsFilter(Component):
                 f"{imu_dt!r} s starts at {begin!r} s, but the last IMU interval integrated "
                 f"ended at nav_time = {self.nav_time!r} s; step the filter at least as often "
                 "as the IMU delivers samples")
-        f_b = np.array([inputs[f"imu_dvel_{a}"] for a in signals.AXES_BODY]) / imu_dt
-        m_b = np.array([inputs[f"mag_{a}"] for a in signals.AXES_BODY])
+        f_b = np.array([inputs[n] for n in signals.IMU_DVEL_NAMES]) / imu_dt
+        m_b = np.array([inputs[n] for n in signals.MAG_NAMES])
         mag_fresh = abs(inputs["mag_time"] - imu_time) <= self.params["max_mag_age"] + 1e-9
         engine = self.engine
         self.nav_time = imu_time
@@ -133,8 +133,7 @@ class AhrsFilter(Component):
             self.last_update = imu_time
             self._write_solution(sigmas=True)
             return out
-        engine.accumulate(np.array([inputs[f"imu_dtheta_{a}"] for a in signals.AXES_BODY]),
-                          imu_dt)
+        engine.accumulate(np.array([inputs[n] for n in signals.IMU_DTHETA_NAMES]), imu_dt)
         due = imu_time - self.last_update >= self.params["update_interval"] - 1e-9
         if due and mag_fresh:
             engine.update(f_b, m_b)
@@ -157,8 +156,7 @@ class AhrsFilter(Component):
         if sigmas:
             for name, s in zip(("std_roll", "std_pitch", "std_yaw"), engine.euler_sigma()):
                 out[name] = float(s)
-        for i, a in enumerate(signals.AXES_BODY):
-            out[f"nav_bg_{a}"] = float(engine.gyro_bias[i])
+        out.update(zip(signals.NAV_BG_NAMES, engine.gyro_bias.tolist()))
         out["r_scale_accel"], out["r_scale_mag"] = (float(s) for s in engine.r_scale)
         if not all(math.isfinite(out[k]) for k in ("nav_roll", "nav_pitch", "nav_yaw")):
             raise DivergenceError(f"{self.model_name}: the attitude became non-finite at "

@@ -85,8 +85,6 @@ _GNSS_VALUE_NAMES = ("gnss_time", "gnss_lat", "gnss_lon", "gnss_h", "gnss_vn", "
                      "gnss_vd")
 
 _STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
-_BG_NAMES = tuple(f"nav_bg_{a}" for a in signals.AXES_BODY)
-_BA_NAMES = tuple(f"nav_ba_{a}" for a in signals.AXES_BODY)
 
 
 class InsGnssFilter(Component):
@@ -305,8 +303,8 @@ class InsGnssFilter(Component):
         out["nav_vn"], out["nav_ve"], out["nav_vd"] = nav.v_ned.tolist()
         out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = nav.euler()
         update = out.update
-        update(zip(_BG_NAMES, engine.gyro_bias.tolist()))
-        update(zip(_BA_NAMES, engine.accel_bias.tolist()))
+        update(zip(signals.NAV_BG_NAMES, engine.gyro_bias.tolist()))
+        update(zip(signals.NAV_BA_NAMES, engine.accel_bias.tolist()))
         update(zip(_STD_NAMES, np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0)).tolist()))
         if not math.isfinite(sum(out.values())):  # one pass over every output
             bad = next(k for k, v in out.items() if not math.isfinite(v))

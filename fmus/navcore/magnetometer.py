@@ -55,7 +55,7 @@ class MagnetometerModel:
     state_fields = ("rng", "_z")
     derived_fields = ("field_ned", "noise", "hard_iron", "soft_iron", "vibration_start",
                       "vibration_noise", "vibration_amplitude", "vibration_frequency",
-                      "vibration_mag_factor")
+                      "vibration_mag_factor", "vibration_on")
 
     #: name -> (default, unit, description) of every parameter
     PARAMETERS: Dict[str, Tuple[Any, str, str, Any]] = {
@@ -105,13 +105,15 @@ class MagnetometerModel:
         self.vibration_amplitude = value("vibration_accel_amplitude_mps2", nonnegative=True)
         self.vibration_frequency = value("vibration_frequency_hz", nonnegative=True)
         self.vibration_mag_factor = value("vibration_mag_factor", nonnegative=True)
+        #: the vibration disturbance does something once it starts
+        self.vibration_on = (self.vibration_noise > 0.0 or self.vibration_amplitude > 0.0
+                             or self.vibration_mag_factor != 1.0)
         self.rng = np.random.default_rng([int(seed), 3003])
         self._z = np.zeros(6)          # the current sample's normals (measure, then accel)
 
     def vibrating(self, t: float) -> bool:
-        return t >= self.vibration_start and (
-            self.vibration_noise > 0.0 or self.vibration_amplitude > 0.0
-            or self.vibration_mag_factor != 1.0)
+        """The vibration disturbance acts at time ``t``."""
+        return self.vibration_on and t >= self.vibration_start
 
     def measure(self, t: float, C_bn: np.ndarray) -> np.ndarray:
         """Magnetometer reading [T] at time ``t`` for the attitude ``C_bn``; draws the sample's

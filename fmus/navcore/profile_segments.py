@@ -332,9 +332,8 @@ def _rotation_angle(rec, tau):
 
 def _rotated_euler(rec, angle):
     a = rec["axis"]
-    C0 = _euler_rows(rec["roll0"], rec["pitch0"], rec["psi0"])
     return _euler_from_rows(_matmul_rows(_rodrigues_rows(a[0] * angle, a[1] * angle,
-                                                         a[2] * angle), C0))
+                                                         a[2] * angle), rec["C0"]))
 
 
 def _compile_rotation(rd, rec, roll_off, pitch_off, psi):
@@ -345,6 +344,8 @@ def _compile_rotation(rd, rec, roll_off, pitch_off, psi):
     if not norm > 0.0:
         rd.fail("axis_n", "axis_n, axis_e, axis_d must not all be zero")
     rec["axis"] = tuple(c / norm for c in axis)
+    # the attitude at the segment start, rotated about the axis by _rotated_euler
+    rec["C0"] = tuple(map(tuple, _euler_rows(rec["roll0"], rec["pitch0"], rec["psi0"])))
     which = rd.one_of("rate_deg", "angle_deg")
     if which == "rate_deg":
         rec["rate"] = rd.get("rate_deg") * _D2R

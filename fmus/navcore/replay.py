@@ -34,6 +34,12 @@ from .timing import time_tolerance
 
 _TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
+# output names, built once: the step writes them per IMU line
+_TRUTH_OUTPUTS = tuple("truth_" + name for name in _TRUTH_NAMES)
+_GNSS_NAMES = tuple("gnss_" + name for name in _GNSS_VALUES)
+#: per body axis: the (dtheta, dvel, gyro, accel) output names
+_IMU_NAMES = tuple(zip(signals.IMU_DTHETA_NAMES, signals.IMU_DVEL_NAMES, signals.IMU_GYRO_NAMES,
+                       signals.IMU_ACCEL_NAMES))
 
 
 class ImuGnssReplay(Component):
@@ -72,31 +78,30 @@ class ImuGnssReplay(Component):
         self.start_time = float(start_time)
         self.period = float(self.imu[0, 1])
         # first IMU interval ending after the start
-        self.next_imu = int(np.searchsorted(self.imu[:, 0], self._limit(self.start_time),
-                                            side="right"))
+        limit = self._limit(self.start_time)
+        self.next_imu = int(np.searchsorted(self.imu[:, 0], limit, side="right"))
         self.n_gnss = 0
         self.n_truth = 0
         self.out = {p.name: p.default() for p in self.outputs}
         self.out["imu_time"] = self.start_time
         self.out["gnss_time"] = self.start_time
         self.out["truth_time"] = self.start_time
-        self._advance(self.start_time)
+        self._advance(limit)
         return dict(self.out)
 
     def _limit(self, t):
         return t + time_tolerance(self.period, t)
 
-    def _advance(self, t_end):
-        """GNSS and truth lines up to t_end."""
-        limit = self._limit(t_end)
+    def _advance(self, limit):
+        """GNSS and truth lines up to ``limit`` (a step's end plus the time tolerance)."""
         out = self.out
         n = int(np.searchsorted(self.gnss[:, 0], limit, side="right"))
         if n != self.n_gnss:
             self.n_gnss = n
             row = self.gnss[n - 1].tolist()
             out["gnss_time"] = row[0]
-            for name, value in zip(_GNSS_VALUES, row[1:7]):
-                out["gnss_" + name] = value
+            for name, value in zip(_GNSS_NAMES, row[1:7]):
+                out[name] = value
             out["gnss_valid"] = row[7] == 1.0
             out["gnss_outlier"] = row[8] == 1.0
             out["gnss_epoch"] = n
@@ -106,19 +111,20 @@ class ImuGnssReplay(Component):
                 self.n_truth = n
                 row = self.truth[n - 1].tolist()
                 out["truth_time"] = row[0]
-                for name, value in zip(_TRUTH_NAMES, row[1:]):
-                    out["truth_" + name] = value
+                for name, value in zip(_TRUTH_OUTPUTS, row[1:]):
+                    out[name] = value
 
     def step(self, t, h, inputs):
         t_end = t + h
-        n = int(np.searchsorted(self.imu[:, 0], self._limit(t_end), side="right"))
+        limit = self._limit(t_end)
+        n = int(np.searchsorted(self.imu[:, 0], limit, side="right"))
         if n == self.next_imu:
             due = float(self.imu[-1, 0]) + self.period          # the next line, were there one
-            if n == len(self.imu) and self._limit(t_end) >= due:
+            if n == len(self.imu) and limit >= due:
                 raise InputError(f"{self.model_name}: the log {self.log_folder} ends at "
                                  f"{float(self.imu[-1, 0])!r} s; no IMU interval in "
                                  f"({float(t)!r}, {float(t_end)!r}] s")
-            self._advance(t_end)
+            self._advance(limit)
             return self.out        # no IMU line reached: the outputs hold
         self.next_imu = n
         row = self.imu[n - 1].tolist()
@@ -126,10 +132,10 @@ class ImuGnssReplay(Component):
         dt = row[1]
         out["imu_time"] = row[0]
         out["imu_dt"] = dt
-        for i, a in enumerate(signals.AXES_BODY):
-            out[f"imu_dtheta_{a}"] = row[2 + i]
-            out[f"imu_dvel_{a}"] = row[5 + i]
-            out[f"imu_gyro_{a}"] = row[2 + i] / dt
-            out[f"imu_accel_{a}"] = row[5 + i] / dt
-        self._advance(t_end)
+        for i, (dtheta, dvel, gyro, accel) in enumerate(_IMU_NAMES):
+            out[dtheta] = row[2 + i]
+            out[dvel] = row[5 + i]
+            out[gyro] = row[2 + i] / dt
+            out[accel] = row[5 + i] / dt
+        self._advance(limit)
         return out

@@ -7,8 +7,6 @@ table into ports.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import signals
@@ -85,7 +83,7 @@ class TrajectoryImu(Component):
         mag = self.magnetometer
         # the magnetometer/vibration model runs (and draws) only when it is switched on, so a
         # scenario without it keeps its numbers and its speed
-        self.mag_on = bool(mag.field_ned.any() or mag.vibrating(math.inf))
+        self.mag_on = bool(mag.field_ned.any() or mag.vibration_on)
         self.start_time = float(start_time)
         self.n = 0
         truth = self.generator.state()
@@ -141,15 +139,11 @@ class TrajectoryImu(Component):
         out["imu_dt"] = dt = self.dt
         dth, dv = dtheta.tolist(), dvel.tolist()   # plain floats: the outputs are state
         update = out.update
-        update(zip(_DTHETA_NAMES, dth))
-        update(zip(_DVEL_NAMES, dv))
-        update(zip(_GYRO_NAMES, [x / dt for x in dth]))
-        update(zip(_ACCEL_NAMES, [x / dt for x in dv]))
+        update(zip(signals.IMU_DTHETA_NAMES, dth))
+        update(zip(signals.IMU_DVEL_NAMES, dv))
+        update(zip(signals.IMU_GYRO_NAMES, [x / dt for x in dth]))
+        update(zip(signals.IMU_ACCEL_NAMES, [x / dt for x in dv]))
         return out
-
-
-_DTHETA_NAMES, _DVEL_NAMES, _GYRO_NAMES, _ACCEL_NAMES = (
-    tuple(f"imu_{q}_{a}" for a in signals.AXES_BODY) for q in ("dtheta", "dvel", "gyro", "accel"))
 
 
 # ---------------------------------------------------------------------------------------

@@ -71,6 +71,12 @@ MAG = (
     *(real(f"mag_{a}", "T", f"magnetic flux density along body {a}") for a in AXES_BODY),
 )
 
+# names of the per-axis signals (body x, y, z), built once for the components that write or
+# read them every sample
+IMU_DTHETA_NAMES, IMU_DVEL_NAMES, IMU_GYRO_NAMES, IMU_ACCEL_NAMES = (
+    tuple(p.name for p in IMU[i:i + 3]) for i in (2, 5, 8, 11))
+MAG_NAMES = tuple(p.name for p in MAG[1:])
+
 GNSS = (
     real("gnss_time", "s", "time the latest fix was taken", limits=TIME),
     *state_ports("gnss", "measured"),
@@ -95,6 +101,8 @@ _NAV = (
     *(real(f"nav_bg_{a}", "rad/s", f"estimated gyro bias, body {a}") for a in AXES_BODY),
     *(real(f"nav_ba_{a}", "m/s2", f"estimated accelerometer bias, body {a}") for a in AXES_BODY),
 )
+NAV_BG_NAMES = tuple(p.name for p in _NAV[10:13])
+NAV_BA_NAMES = tuple(p.name for p in _NAV[13:16])
 
 _STD = (
     *(real(f"std_p{a}", "m", f"1-sigma of the position error, {a.upper()}") for a in AXES_NED),
