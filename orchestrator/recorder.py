@@ -26,7 +26,6 @@ so an interrupted or failed run leaves no half-written file.
 """
 from __future__ import annotations
 
-import csv
 import json
 import os
 import tempfile
@@ -36,7 +35,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence
 import numpy as np
 
 from .errors import NavfmuError
-from .results import Results, TIME_HEADER, _umask
+from .results import Results, TIME_HEADER, _umask, write_csv_table
 
 #: rows per chunk of a streamed run (about 1-3 MB of buffers for the scenarios' ~100 columns)
 DEFAULT_CHUNK_ROWS = 4096
@@ -148,17 +147,15 @@ class ParquetSink(_FileSink):
 
 
 class CsvSink(_FileSink):
-    """Stream a run into the CSV of :meth:`Results.to_csv` (same header, same digits)."""
-
-    def __init__(self, path, fmt: str = "%.17g"):
-        super().__init__(path)
-        self.fmt = fmt
+    """Stream a run into the CSV of :meth:`Results.to_csv` (the same bytes, written by
+    :func:`~orchestrator.results.write_csv_table` chunk by chunk)."""
 
     def write(self, chunk: Results) -> None:
+        titles = None
         if self._handle is None:
-            self._handle = open(self.tmp, "w", newline="")
-            csv.writer(self._handle, lineterminator="\n").writerow(chunk.header())
-        np.savetxt(self._handle, chunk.table(), fmt=self.fmt, delimiter=",")
+            self._handle = open(self.tmp, "wb")
+            titles = chunk.header()
+        write_csv_table(self._handle, chunk.table(), titles)
 
     def _finish(self, header: Results) -> None:
         self._handle.flush()

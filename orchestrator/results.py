@@ -5,13 +5,15 @@ the target with ``os.replace``, so a reader never sees a half-written file and a
 leaves the previous file (or none) in place.
 
 * CSV: one file, header ``time [s]`` then ``Component.variable [unit]`` (no brackets for a
-  variable without unit), values with 17 significant digits (a float64 round trip is exact).
+  variable without unit), each value the shortest decimal text that reads back as the same
+  float64 (:func:`write_csv_table`, the one writer of results CSVs).
 * NPZ: numpy's uncompressed archive; arrays plus one JSON document with the column names,
   units, step times and metadata.  No pickles; use it for long runs.
 """
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
 import re
@@ -28,6 +30,9 @@ from .errors import NavfmuError
 TIME_HEADER = "time [s]"
 _HEADER_RE = re.compile(r"^(?P<name>.*?)(?: \[(?P<unit>[^\]]*)\])?$")
 NPZ_FORMAT = "navfmu-results-1"
+#: values formatted per polars call (about 20 MB of text), so the text of a long run is never
+#: held whole in memory
+CSV_BLOCK_VALUES = 1 << 20
 
 
 def _umask() -> int:
@@ -60,6 +65,40 @@ def atomic_write(path, write: Callable[[Any], None], binary: bool = False) -> Pa
             pass
         raise
     return path
+
+
+def write_csv_table(f, table: np.ndarray, titles=None) -> None:
+    """Append the rows of ``table`` (n_rows, n_columns) to the binary file ``f`` as CSV lines,
+    after one title line if ``titles`` is given (``csv.writer``, UTF-8).
+
+    The one definition of a results CSV's text: comma-separated, ``\\n`` line ends, every
+    value the shortest decimal text that reads back as the same float64 (polars' writer:
+    ``0.1``, ``3.0``, ``5e-324``, ``1.7976931348623157e+308``; the exponent form may vary
+    between polars versions, the value does not), ``NaN``, ``inf`` and ``-inf`` for the
+    non-finite values (the sign and payload of a NaN are not kept), ``-0.0`` for negative
+    zero.  Python's ``float``, ``numpy.loadtxt`` and ``polars.read_csv`` read every value back
+    bit for bit.  The lines of a table do not depend on how its rows are split between calls,
+    so a run streamed chunk by chunk writes the bytes of the run written at once.  polars is
+    imported here, on first use, not when the module is imported (it starts a thread pool).
+    """
+    if titles is not None:
+        text = io.StringIO()
+        csv.writer(text, lineterminator="\n").writerow(titles)
+        f.write(text.getvalue().encode("utf-8"))
+    table = np.asarray(table, dtype=np.float64)
+    if table.shape[0] == 0:
+        return
+    import polars as pl
+
+    rows = max(1, CSV_BLOCK_VALUES // max(1, table.shape[1]))
+    block = io.BytesIO()
+    for first in range(0, table.shape[0], rows):
+        block.seek(0)
+        block.truncate()
+        pl.DataFrame(np.asfortranarray(table[first:first + rows]), orient="row").write_csv(
+            block, include_header=False)
+        with block.getbuffer() as text:
+            f.write(text)
 
 
 @dataclass
@@ -116,15 +155,11 @@ class Results:
         return np.column_stack([self.time] + [self.data[c] for c in self.data])
 
     # -- files --------------------------------------------------------------------------
-    def to_csv(self, path, fmt: str = "%.17g") -> Path:
-        """Write one CSV file (atomically); returns the path."""
+    def to_csv(self, path) -> Path:
+        """Write one CSV file (atomically, :func:`write_csv_table`); returns the path."""
         table = self.table()
-
-        def write(f):
-            csv.writer(f, lineterminator="\n").writerow(self.header())
-            np.savetxt(f, table, fmt=fmt, delimiter=",")
-
-        return atomic_write(path, write)
+        return atomic_write(path, lambda f: write_csv_table(f, table, self.header()),
+                            binary=True)
 
     def to_npz(self, path) -> Path:
         """Write a binary ``.npz`` archive (atomically); returns the path."""
@@ -148,7 +183,7 @@ class Results:
         path = Path(path)
         if not path.is_file():
             raise NavfmuError(f"results file not found: {path}")
-        with open(path, newline="") as f:
+        with open(path, newline="", encoding="utf-8") as f:
             header = next(csv.reader([f.readline()]), None)
             if not header or header[0] != TIME_HEADER:
                 raise NavfmuError(f"{path}: not a results CSV (the first column must be "
@@ -200,4 +235,4 @@ class Results:
                    metadata=index.get("metadata", {}))
 
 
-__all__ = ["Results", "atomic_write", "TIME_HEADER"]
+__all__ = ["Results", "atomic_write", "write_csv_table", "TIME_HEADER"]

@@ -346,11 +346,11 @@ def test_failed_write_leaves_no_file(write_ssd, tmp_path, monkeypatch):
     out = tmp_path / "out"
     out.mkdir()
 
-    def broken_savetxt(f, table, **kw):
-        f.write("0,1,2\n")  # half a file ...
+    def broken_writer(f, table, titles=None):
+        f.write(b"0,1,2\n")  # half a file ...
         raise OSError("disk full")  # ... then the failure
 
-    monkeypatch.setattr(results_module.np, "savetxt", broken_savetxt)
+    monkeypatch.setattr(results_module, "write_csv_table", broken_writer)
     with pytest.raises(OSError, match="disk full"):
         res.to_csv(out / "r.csv")
     assert os.listdir(out) == []
