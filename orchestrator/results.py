@@ -30,9 +30,9 @@ from .errors import NavfmuError
 TIME_HEADER = "time [s]"
 _HEADER_RE = re.compile(r"^(?P<name>.*?)(?: \[(?P<unit>[^\]]*)\])?$")
 NPZ_FORMAT = "navfmu-results-1"
-#: values formatted per polars call (about 20 MB of text), so the text of a long run is never
-#: held whole in memory
-CSV_BLOCK_VALUES = 1 << 20
+#: values formatted per polars call: about 5 MB of text, so the text of a long run is never
+#: held whole in memory (and such blocks wrote faster than larger ones, docs/speed.md)
+CSV_BLOCK_VALUES = 1 << 18
 
 
 def _umask() -> int:
