@@ -32,6 +32,9 @@ from __future__ import annotations
 import copy
 import math
 
+import numpy as np
+
+from . import ideal_track
 from .component import ParameterError
 from .constants import G0
 from .motion_profiles import load_profile
@@ -50,11 +53,15 @@ class TrajectoryGenerator:
     ``|dtheta|/dt`` (inertial body rate, earth rate included) and ``last_accel_norm``
     [m/s^2] is ``|v_k - v_{k-1}|/dt`` (acceleration over the earth, without gravity: zero at
     rest), the manoeuvre-intensity measures used by the IMU error model.
+
+    The samples are shared, through :mod:`navcore.ideal_track`, with every other generator
+    of the same profile and step in this process: a sample another generator has computed
+    from the same state is read, not recomputed (the same floats).
     """
 
     state_fields = ("_seg", "_k", "time", "lat", "lon", "h", "_v", "_euler", "_ins",
                     "last_rate_norm", "last_accel_norm")
-    derived_fields = ("profile", "dt", "_segments", "_duration")
+    derived_fields = ("profile", "dt", "_segments", "_duration", "_track_key")
 
     def __init__(self, profile, dt):
         if not isinstance(profile, dict):
@@ -75,6 +82,15 @@ class TrajectoryGenerator:
         self._ins = Strapdown(self.lat, self.lon, self.h, self._v, _euler_rows(*self._euler))
         self.last_rate_norm = 0.0
         self.last_accel_norm = 0.0
+        self._track_key = ideal_track.track_key(self.profile, self.dt)
+        ideal_track.register(self._track_key, self._track_row())
+
+    def _track_row(self):
+        """This state, as a track row (the increments of the latest sample are the inverse
+        strapdown's memory of them)."""
+        ins = self._ins
+        return (self.lat, self.lon, self.h, *self._v, *self._euler, *ins._dtheta_prev,
+                *ins._dvel_prev, self.last_rate_norm, self.last_accel_norm, float(self._seg))
 
     @property
     def duration(self):
@@ -117,6 +133,20 @@ class TrajectoryGenerator:
         """Advance by dt; return (truth dict at the new time, dtheta [rad, body, ndarray 3],
         dvel [m/s, body, ndarray 3]) with the increments over the step."""
         k = self._k + 1
+        track = ideal_track.find(self._track_key)
+        if track is None:
+            return self._compute(k)
+        state = (self.lat, self.lon, self.h, *self._v)
+        if k < track.n:
+            row = track.row(k, state)
+            if row is not None:
+                return self._read(k, row)
+        out = self._compute(k)
+        if k == track.n:
+            track.record(k, state, self._track_row())
+        return out
+
+    def _compute(self, k):
         t = k * self.dt
         V, psi, psi_dot, gamma, roll_off, pitch_off = self._kinematics(t)
         v_next = self._velocity(V, psi, gamma)
@@ -135,3 +165,23 @@ class TrajectoryGenerator:
         self._v = v_next
         self._euler = euler
         return self.state(), dtheta, dvel
+
+    def _read(self, k, row):
+        """Sample ``k`` from its track row: the state :meth:`_compute` would leave."""
+        lat, lon, h = row[0], row[1], row[2]
+        v_next, euler = row[3:6], row[6:9]
+        dtheta, dvel = row[9:12], row[12:15]
+        ins = self._ins
+        ins._v_prev = tuple(ins.v_ned.tolist())
+        ins.lat, ins.lon, ins.h = lat, lon, h
+        ins.v_ned = np.array(v_next)
+        ins.C_bn = np.array(_euler_rows(*euler))
+        ins._dtheta_prev, ins._dvel_prev = dtheta, dvel
+        self.last_rate_norm, self.last_accel_norm = row[15], row[16]
+        self._seg = int(row[17])
+        self._k = k
+        self.time = k * self.dt
+        self.lat, self.lon, self.h = lat, lon, h
+        self._v = v_next
+        self._euler = euler
+        return self.state(), np.array(dtheta), np.array(dvel)

@@ -1,0 +1,164 @@
+"""The shared track of ideal samples (navcore.ideal_track): generators that read it give the
+numbers they would compute, bit for bit.
+
+These are self-consistency tests (the generator with the track against the generator without
+it): the generator's own numbers are checked against references in test_trajectory.py,
+test_strapdown.py and test_pyins_oracle.py.
+"""
+import threading
+
+import numpy as np
+import pytest
+
+from navcore import ideal_track, state
+from navcore.motion_profiles import load_profile
+from navcore.trajectory import TrajectoryGenerator
+
+
+def key_of(profile, dt):
+    return ideal_track.track_key(load_profile(profile), dt)
+
+
+@pytest.fixture(autouse=True)
+def fresh_tracks():
+    ideal_track.clear()
+    yield
+    ideal_track.clear()
+
+
+def fly(gen, n):
+    """n samples: (truth dict, dtheta, dvel, rate norm, accel norm) each."""
+    out = []
+    for _ in range(n):
+        s, dtheta, dvel = gen.step()
+        out.append((s, dtheta.tolist(), dvel.tolist(), gen.last_rate_norm,
+                    gen.last_accel_norm))
+    return out
+
+
+def untracked(monkeypatch, profile, dt, n, prepare=None):
+    """The samples computed with no track at all."""
+    with monkeypatch.context() as m:
+        m.setattr(ideal_track, "find", lambda key: None)
+        m.setattr(ideal_track, "register", lambda key, row: None)
+        gen = TrajectoryGenerator(profile, dt)
+        if prepare is not None:
+            prepare(gen)
+        return fly(gen, n)
+
+
+def refuse_to_compute(monkeypatch):
+    def compute(self, k):
+        raise AssertionError(f"sample {k} computed instead of read from the track")
+    monkeypatch.setattr(TrajectoryGenerator, "_compute", compute)
+
+
+@pytest.mark.parametrize("profile, dt, n", [
+    ("uav_maneuver", 0.1, 36_500),     # every segment type of the profile, past its end
+    ("turntable_240s", 0.01, 24_000),  # rotations at rest
+])
+def test_read_samples_equal_computed_ones_self_consistency(monkeypatch, profile, dt, n):
+    reference = untracked(monkeypatch, profile, dt, n)
+    first = fly(TrajectoryGenerator(profile, dt), n)
+    assert ideal_track.find(key_of(profile, dt)) is None    # flown once: nothing recorded
+    second = fly(TrajectoryGenerator(profile, dt), n)      # records the track
+    assert ideal_track.find(key_of(profile, dt)).n == n + 1
+    gen = TrajectoryGenerator(profile, dt)
+    with monkeypatch.context() as m:
+        refuse_to_compute(m)
+        third = fly(gen, n)                                 # reads every sample
+    assert first == reference and second == reference and third == reference
+    # the reading generator's state is the computing one's, every field
+    with monkeypatch.context() as m:
+        m.setattr(ideal_track, "find", lambda key: None)
+        computing = TrajectoryGenerator(profile, dt)
+        fly(computing, n)
+    assert _same_tree(state.capture(gen), state.capture(computing))
+
+
+def _same_tree(a, b):
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same_tree(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)):
+        return len(a) == len(b) and all(_same_tree(x, y) for x, y in zip(a, b))
+    if isinstance(a, np.ndarray):
+        return a.dtype == b.dtype and np.array_equal(a, b)
+    return type(a) is type(b) and a == b
+
+
+def test_state_restored_from_a_reading_generator_continues_exactly(monkeypatch):
+    for _ in range(2):
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 3000)
+    gen = TrajectoryGenerator("aircraft_500s", 0.01)
+    fly(gen, 1500)                                   # read from the track
+    tree = state.capture(gen)
+    ideal_track.clear()                              # as in another process
+    restored = TrajectoryGenerator("aircraft_500s", 0.01)
+    state.restore(restored, tree)
+    reference = untracked(monkeypatch, "aircraft_500s", 0.01, 3000)
+    assert fly(restored, 1500) == reference[1500:]
+
+
+def test_a_generator_off_the_track_computes(monkeypatch):
+    """A state that is not the recorded one (here its latitude one ulp off) is stepped by
+    computing, exactly as without the track."""
+    for _ in range(2):
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 2000)
+
+    def nudge(g):
+        fly(g, 700)
+        g.lat = np.nextafter(g.lat, 1.0)
+        g._ins.lat = g.lat
+
+    reference = untracked(monkeypatch, "aircraft_500s", 0.01, 600, prepare=nudge)
+    gen = TrajectoryGenerator("aircraft_500s", 0.01)
+    nudge(gen)
+    assert fly(gen, 600) == reference
+
+
+def test_a_generator_off_the_track_records_nothing(monkeypatch):
+    """An off-track generator at the end of the track does not extend it: the next
+    generator still gets the computed samples."""
+    for _ in range(2):
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 700)   # the track ends at 700
+    gen = TrajectoryGenerator("aircraft_500s", 0.01)
+    fly(gen, 700)
+    gen.h += 1.0
+    gen._ins.h = gen.h
+    fly(gen, 100)
+    reference = untracked(monkeypatch, "aircraft_500s", 0.01, 800)
+    assert fly(TrajectoryGenerator("aircraft_500s", 0.01), 800) == reference
+
+
+def test_recording_stops_at_the_sample_limit(monkeypatch):
+    monkeypatch.setattr(ideal_track, "MAX_SAMPLES", 500)
+    reference = untracked(monkeypatch, "aircraft_500s", 0.01, 1200)
+    runs = [fly(TrajectoryGenerator("aircraft_500s", 0.01), 1200) for _ in range(3)]
+    assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 501          # the start and 500 samples
+    assert all(run == reference for run in runs)
+
+
+def test_tracks_are_per_profile_and_step(monkeypatch):
+    for dt in (0.01, 0.02, 0.01, 0.02):
+        fly(TrajectoryGenerator("aircraft_500s", dt), 300)
+    keys = [key_of("aircraft_500s", dt) for dt in (0.01, 0.02)]
+    assert keys[0] != keys[1]
+    assert all(ideal_track.find(k).n == 301 for k in keys)
+    reference = untracked(monkeypatch, "aircraft_500s", 0.02, 300)
+    assert fly(TrajectoryGenerator("aircraft_500s", 0.02), 300) == reference
+
+
+def test_threads_sharing_a_track_get_the_computed_samples(monkeypatch):
+    reference = untracked(monkeypatch, "aircraft_500s", 0.01, 4000)
+    fly(TrajectoryGenerator("aircraft_500s", 0.01), 10)     # the next one starts the track
+    results = [None] * 4
+
+    def worker(i):
+        results[i] = fly(TrajectoryGenerator("aircraft_500s", 0.01), 4000)
+
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert all(r == reference for r in results)
