@@ -87,6 +87,10 @@ def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> 
     (:meth:`Simulation.run`, no output files) per base step, medians and their ratios (the
     CPU time of this process is the steadier one on a loaded machine)."""
     sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
+    # the runs alternate in this process: none may read the ideal samples of another
+    # (navcore.ideal_track), or the later runs would look cheaper per step
+    from navcore.ideal_track import SWITCH
+    os.environ[SWITCH] = "0"
     from orchestrator.master import Simulation
     from orchestrator.build import ensure_fmus
     from orchestrator.scenarios import load_scenario, registry

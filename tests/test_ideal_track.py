@@ -162,3 +162,21 @@ def test_threads_sharing_a_track_get_the_computed_samples(monkeypatch):
     for t in threads:
         t.join()
     assert all(r == reference for r in results)
+
+
+def test_benchmarks_measure_single_runs(monkeypatch):
+    """navfmu bench's runs start no track (each costs what a single run costs), and the
+    switch is put back afterwards."""
+    import os
+
+    from orchestrator.bench import single_run_costs
+
+    monkeypatch.delenv(ideal_track.SWITCH, raising=False)
+    with single_run_costs():
+        for _ in range(3):
+            fly(TrajectoryGenerator("aircraft_500s", 0.01), 50)
+    assert ideal_track.find(key_of("aircraft_500s", 0.01)) is None
+    assert ideal_track.SWITCH not in os.environ
+    for _ in range(2):
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 50)
+    assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 51

@@ -17,10 +17,16 @@ numbers, bit for bit.
 Memory: ``ROW`` floats (8 bytes each) per sample, at most ``MAX_SAMPLES`` samples per
 process over all tracks (beyond it samples are computed and not recorded) and at most
 ``MAX_TRACKS`` tracks (the oldest is dropped first).  :func:`clear` drops every track.
+
+The environment variable ``NAVFMU_SHARED_SAMPLES=0`` (read when a generator starts) starts no
+track: every run then costs what a single run costs, which is what a benchmark comparing two
+runs in one process must measure (``navfmu bench`` and ``benchmarks/ab_speed.py --flat`` set
+it).
 """
 from __future__ import annotations
 
 import json
+import os
 import struct
 import threading
 from array import array
@@ -39,6 +45,9 @@ MAX_TRACKS = 8
 MAX_SEEN = 64
 
 Key = Tuple[str, float]
+
+#: the environment variable that, set to 0, starts no track
+SWITCH = "NAVFMU_SHARED_SAMPLES"
 
 
 class IdealTrack:
@@ -93,7 +102,7 @@ def track_key(profile: dict, dt: float) -> Key:
 def register(key: Key, start_row) -> None:
     """A generator of ``key`` starts at ``start_row`` (its state at sample 0).  The second
     one in this process starts the track: a profile flown once records nothing."""
-    if key in _TRACKS:
+    if key in _TRACKS or os.environ.get(SWITCH, "1") == "0":
         return
     with _TRACKS_LOCK:
         _SEEN[key] = _SEEN.get(key, 0) + 1
