@@ -164,6 +164,28 @@ def test_threads_sharing_a_track_get_the_computed_samples(monkeypatch):
     assert all(r == reference for r in results)
 
 
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs fork")
+def test_a_forked_child_records_while_a_parent_thread_held_the_lock():
+    import multiprocessing
+
+    for _ in range(2):
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 20)
+    track = ideal_track.find(key_of("aircraft_500s", 0.01))
+
+    def child():
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 40)   # records samples 21..40
+        assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 41
+
+    with track.lock:                                           # held at the fork
+        proc = multiprocessing.get_context("fork").Process(target=child)
+        proc.start()
+    proc.join(30)
+    if proc.is_alive():    # deadlocked on the parent's lock
+        proc.kill()
+        proc.join()
+    assert proc.exitcode == 0
+
+
 def test_benchmarks_measure_single_runs(monkeypatch):
     """navfmu bench's runs start no track (each costs what a single run costs), and the
     switch is put back afterwards."""

@@ -127,6 +127,19 @@ def clear() -> None:
         _SEEN.clear()
 
 
+def _fresh_locks_in_child() -> None:
+    """A forked child starts with unlocked locks: a lock held by another thread of the parent
+    at the fork would otherwise never be released in the child."""
+    global _TRACKS_LOCK
+    _TRACKS_LOCK = threading.Lock()
+    for t in _TRACKS.values():
+        t.lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_fresh_locks_in_child)
+
+
 def _drop(key: Key) -> None:
     global _recorded
     _recorded -= _TRACKS.pop(key).n - 1
