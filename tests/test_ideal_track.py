@@ -170,13 +170,11 @@ def test_a_forked_child_records_while_a_parent_thread_held_the_lock():
 
     for _ in range(2):
         fly(TrajectoryGenerator("aircraft_500s", 0.01), 20)
-    track = ideal_track.find(key_of("aircraft_500s", 0.01))
-
     def child():
         fly(TrajectoryGenerator("aircraft_500s", 0.01), 40)   # records samples 21..40
         assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 41
 
-    with track.lock:                                           # held at the fork
+    with ideal_track._LOCK:                                    # held at the fork
         proc = multiprocessing.get_context("fork").Process(target=child)
         proc.start()
     proc.join(30)
@@ -202,3 +200,9 @@ def test_benchmarks_measure_single_runs(monkeypatch):
     for _ in range(2):
         fly(TrajectoryGenerator("aircraft_500s", 0.01), 50)
     assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 51
+    # a track that exists before is neither read nor extended inside
+    track = ideal_track.find(key_of("aircraft_500s", 0.01))
+    with single_run_costs(), monkeypatch.context() as m:
+        m.setattr(TrajectoryGenerator, "_read", lambda self, k, row: pytest.fail("read"))
+        fly(TrajectoryGenerator("aircraft_500s", 0.01), 100)
+    assert track.n == 51

@@ -181,11 +181,11 @@ class IakfEngine(SageHusaFadingEngine):
     """
 
     state_fields = ("compression", "tau")
-    derived_fields = ("outlier_gate", "outlier_alpha")
+    derived_fields = ("outlier_alpha",)
 
     def __init__(self, config, nav, *, outlier_alpha, **kwargs):
         super().__init__(config, nav, **kwargs)
-        self.outlier_gate = chi2_gate(outlier_alpha, self.m)
+        chi2_gate(outlier_alpha, self.m)   # checks the level (compression_factor gates)
         self.outlier_alpha = float(outlier_alpha)
         self.compression = 1.0
         self.tau = 0.0

@@ -8,8 +8,8 @@ comparison or of a tuning loop therefore recompute the same samples again and ag
 inverse strapdown step included.  A *track* holds, for one (profile, dt), every sample some
 generator of this process has computed: the first generator to reach sample ``k`` records
 it, the others read it.  A track starts with the second generator of its profile and step
-in the process, so a single run (or a host that flies a profile once) records nothing.  A sample is read only by a generator whose state is the recorded
-one of sample ``k - 1`` (its position and velocity are compared), so a generator restored
+in the process, so a single run (or a host that flies a profile once) records nothing.
+A sample is read only by a generator whose state is the recorded one of sample ``k - 1`` (its position and velocity are compared), so a generator restored
 from a state that is not on the track simply computes, as it would without the track.
 The recorded values are the floats the computation produced: reading them gives the same
 numbers, bit for bit.
@@ -18,10 +18,10 @@ Memory: ``ROW`` floats (8 bytes each) per sample, at most ``MAX_SAMPLES`` sample
 process over all tracks (beyond it samples are computed and not recorded) and at most
 ``MAX_TRACKS`` tracks (the oldest is dropped first).  :func:`clear` drops every track.
 
-The environment variable ``NAVFMU_SHARED_SAMPLES=0`` (read when a generator starts) starts no
-track: every run then costs what a single run costs, which is what a benchmark comparing two
-runs in one process must measure (``navfmu bench`` and ``benchmarks/ab_speed.py --flat`` set
-it).
+The environment variable ``NAVFMU_SHARED_SAMPLES=0`` (read at each generator's first sample)
+turns the tracks off: no track starts, none is read or extended, and every run costs what a
+single run costs, which is what a benchmark comparing two runs in one process must measure
+(``navfmu bench`` and ``benchmarks/ab_speed.py --flat`` set it).
 """
 from __future__ import annotations
 
@@ -57,32 +57,28 @@ class IdealTrack:
     def __init__(self, start_row):
         self.values = array("d", start_row)
         self.n = 1
-        #: position and velocity of the last row
-        self.last = tuple(start_row[:6])
-        self.lock = threading.Lock()
+
+    def _holds(self, k: int, state) -> bool:
+        """Whether row ``k`` holds ``state`` (lat, lon, h, vn, ve, vd)."""
+        return _STATE.unpack_from(self.values, k * _ROW.size) == state
 
     def row(self, k: int, state) -> Optional[tuple]:
-        """Row ``k`` if it is recorded and row ``k - 1`` holds ``state`` (lat, lon, h, vn,
-        ve, vd)."""
-        if k >= self.n:
+        """Row ``k`` if it is recorded and row ``k - 1`` holds ``state``."""
+        if k >= self.n or not self._holds(k - 1, state):
             return None
-        offset = (k - 1) * _ROW.size
-        if _STATE.unpack_from(self.values, offset) != state:
-            return None
-        return _ROW.unpack_from(self.values, offset + _ROW.size)
+        return _ROW.unpack_from(self.values, k * _ROW.size)
 
     def record(self, k: int, state, row) -> None:
         """Append ``row`` as row ``k`` if the track ends at row ``k - 1`` and that row
-        holds ``state`` (lat, lon, h, vn, ve, vd), the state ``row`` was computed from."""
+        holds ``state``, the state ``row`` was computed from."""
         global _recorded
         if _recorded >= MAX_SAMPLES:
             return
-        with self.lock:
-            if k != self.n or state != self.last:
+        with _LOCK:
+            if k != self.n or not self._holds(k - 1, state):
                 return
             self.values.frombytes(_ROW.pack(*row))
             self.n = k + 1
-            self.last = row[:6]
             _recorded += 1
 
 
@@ -91,7 +87,10 @@ _TRACKS: Dict[Key, IdealTrack] = {}
 _SEEN: Dict[Key, int] = {}
 #: samples recorded in the tracks kept
 _recorded = 0
-_TRACKS_LOCK = threading.Lock()
+#: the switch as read at the latest generator's first sample
+_enabled = True
+#: guards the tracks, their rows and the counts (threads of one process may share a track)
+_LOCK = threading.Lock()
 
 
 def track_key(profile: dict, dt: float) -> Key:
@@ -100,11 +99,14 @@ def track_key(profile: dict, dt: float) -> Key:
 
 
 def register(key: Key, start_row) -> None:
-    """A generator of ``key`` starts at ``start_row`` (its state at sample 0).  The second
-    one in this process starts the track: a profile flown once records nothing."""
-    if key in _TRACKS or os.environ.get(SWITCH, "1") == "0":
+    """A generator of ``key`` takes its first sample from ``start_row`` (its state at sample
+    0).  The second one in this process starts the track: a profile flown once records
+    nothing."""
+    global _enabled
+    _enabled = os.environ.get(SWITCH, "1") != "0"
+    if key in _TRACKS or not _enabled:
         return
-    with _TRACKS_LOCK:
+    with _LOCK:
         _SEEN[key] = _SEEN.get(key, 0) + 1
         if len(_SEEN) > MAX_SEEN:
             del _SEEN[next(iter(_SEEN))]
@@ -115,29 +117,28 @@ def register(key: Key, start_row) -> None:
 
 
 def find(key: Key) -> Optional[IdealTrack]:
-    """The track of ``key`` if there is one."""
-    return _TRACKS.get(key)
+    """The track of ``key`` if there is one and tracks are on (the switch as the latest
+    generator to start found it: off, no generator reads or extends a track)."""
+    return _TRACKS.get(key) if _enabled else None
 
 
 def clear() -> None:
     """Drop every track."""
-    with _TRACKS_LOCK:
+    with _LOCK:
         for key in list(_TRACKS):
             _drop(key)
         _SEEN.clear()
 
 
-def _fresh_locks_in_child() -> None:
-    """A forked child starts with unlocked locks: a lock held by another thread of the parent
-    at the fork would otherwise never be released in the child."""
-    global _TRACKS_LOCK
-    _TRACKS_LOCK = threading.Lock()
-    for t in _TRACKS.values():
-        t.lock = threading.Lock()
+def _fresh_lock_in_child() -> None:
+    """A forked child starts with an unlocked lock: a lock held by another thread of the
+    parent at the fork would otherwise never be released in the child."""
+    global _LOCK
+    _LOCK = threading.Lock()
 
 
 if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_fresh_locks_in_child)
+    os.register_at_fork(after_in_child=_fresh_lock_in_child)
 
 
 def _drop(key: Key) -> None:

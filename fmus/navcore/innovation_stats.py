@@ -37,6 +37,7 @@ import numpy as np
 from scipy import special
 from scipy.linalg import lapack
 
+from .array_checks import square
 from .errors import InputError, ParameterError
 
 #: paper 004's per-observation chi-square gate (section 2.1): chi2(1) upper quantile at
@@ -132,14 +133,7 @@ def chi_square_per_observation(innovation, S) -> np.ndarray:
     if not np.all(np.isfinite(v)):
         raise InputError("innovation: contains NaN or inf")
     m = v.shape[-1]
-    S = np.asarray(S, dtype=float)
-    if S.ndim == 0:
-        S = S.reshape(1, 1)
-    if S.shape != (m, m):
-        raise InputError(f"S: expected shape ({m}, {m}), got {S.shape}")
-    if not np.all(np.isfinite(S)):
-        raise InputError("S: contains NaN or inf")
-    s = np.diag(S)
+    s = np.diag(square("S", S, m))
     if np.any(s <= 0.0):
         raise InputError(f"S: diagonal must be > 0, got {s}")
     return v * v / s

@@ -16,7 +16,7 @@ from .imu_errors import INTENSITY_REFERENCE_RATE, ImuErrorModel
 from .magnetometer import MagnetometerModel
 from .rotations import _euler_rows
 from .timing import samples_reached, time_tolerance
-from .trajectory import TrajectoryGenerator, load_profile
+from .trajectory import TrajectoryGenerator
 
 #: accepted seeds (numpy's generators take non-negative integers; FMI Integers are 32 bit)
 SEED_LIMITS = Limits(0, 2**31 - 1)
@@ -74,8 +74,7 @@ class TrajectoryImu(Component):
 
     def initialize(self, start_time):
         self.dt = self.params["imu_period"]
-        profile = load_profile(self.params["profile"])
-        self.generator = TrajectoryGenerator(profile, self.dt)
+        self.generator = TrajectoryGenerator(self.params["profile"], self.dt)
         error_params = {k: self.params[k] for k in ImuErrorModel.PARAMETERS}
         self.errors = ImuErrorModel(error_params, self.params["seed"])
         self.magnetometer = MagnetometerModel(

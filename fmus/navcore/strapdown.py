@@ -317,13 +317,18 @@ class Strapdown:
         fx, fy, fz = _solve_skew(0.5 * gx + c12 * px, 0.5 * gy + c12 * py,
                                  0.5 * gz + c12 * pz, rhs)
 
+        self._move_to(lat, lon, h, tuple(v), v1, C1, (gx, gy, gz), (fx, fy, fz))
+        return np.array((gx, gy, gz)), np.array((fx, fy, fz))
+
+    def _move_to(self, lat, lon, h, v_prev, v1, C1, dtheta, dvel):
+        """Take the state an update with increments ``dtheta``, ``dvel`` (3-tuples) from
+        velocity ``v_prev`` reaches: position, ``v1``, ``C1`` (row lists)."""
         self.lat, self.lon, self.h = lat, lon, h
-        self._v_prev = tuple(v)
+        self._v_prev = v_prev
         self.v_ned = np.array(v1)
         self.C_bn = np.array(C1)
-        self._dtheta_prev = (gx, gy, gz)
-        self._dvel_prev = (fx, fy, fz)
-        return np.array((gx, gy, gz)), np.array((fx, fy, fz))
+        self._dtheta_prev = dtheta
+        self._dvel_prev = dvel
 
     # -- closed-loop feedback ----------------------------------------------------------
     def correct(self, dr_ned, dv_ned, phi_ned):

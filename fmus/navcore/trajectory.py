@@ -83,7 +83,6 @@ class TrajectoryGenerator:
         self.last_rate_norm = 0.0
         self.last_accel_norm = 0.0
         self._track_key = ideal_track.track_key(self.profile, self.dt)
-        ideal_track.register(self._track_key, self._track_row())
 
     def _track_row(self):
         """This state, as a track row (the increments of the latest sample are the inverse
@@ -133,14 +132,15 @@ class TrajectoryGenerator:
         """Advance by dt; return (truth dict at the new time, dtheta [rad, body, ndarray 3],
         dvel [m/s, body, ndarray 3]) with the increments over the step."""
         k = self._k + 1
+        if k == 1:   # counted when it flies, not when built (a state restore builds one too)
+            ideal_track.register(self._track_key, self._track_row())
         track = ideal_track.find(self._track_key)
         if track is None:
             return self._compute(k)
         state = (self.lat, self.lon, self.h, *self._v)
-        if k < track.n:
-            row = track.row(k, state)
-            if row is not None:
-                return self._read(k, row)
+        row = track.row(k, state)
+        if row is not None:
+            return self._read(k, row)
         out = self._compute(k)
         if k == track.n:
             track.record(k, state, self._track_row())
@@ -159,11 +159,7 @@ class TrajectoryGenerator:
         self.last_accel_norm = math.sqrt(ax * ax + ay * ay + az * az) / self.dt
         gx, gy, gz = dtheta.tolist()
         self.last_rate_norm = math.sqrt(gx * gx + gy * gy + gz * gz) / self.dt
-        self._k = k
-        self.time = t
-        self.lat, self.lon, self.h = lat, lon, h
-        self._v = v_next
-        self._euler = euler
+        self._moved(k, lat, lon, h, v_next, euler)
         return self.state(), dtheta, dvel
 
     def _read(self, k, row):
@@ -172,16 +168,16 @@ class TrajectoryGenerator:
         v_next, euler = row[3:6], row[6:9]
         dtheta, dvel = row[9:12], row[12:15]
         ins = self._ins
-        ins._v_prev = tuple(ins.v_ned.tolist())
-        ins.lat, ins.lon, ins.h = lat, lon, h
-        ins.v_ned = np.array(v_next)
-        ins.C_bn = np.array(_euler_rows(*euler))
-        ins._dtheta_prev, ins._dvel_prev = dtheta, dvel
+        ins._move_to(lat, lon, h, tuple(ins.v_ned.tolist()), v_next, _euler_rows(*euler),
+                     dtheta, dvel)
         self.last_rate_norm, self.last_accel_norm = row[15], row[16]
         self._seg = int(row[17])
+        self._moved(k, lat, lon, h, v_next, euler)
+        return self.state(), np.array(dtheta), np.array(dvel)
+
+    def _moved(self, k, lat, lon, h, v_next, euler):
         self._k = k
         self.time = k * self.dt
         self.lat, self.lon, self.h = lat, lon, h
         self._v = v_next
         self._euler = euler
-        return self.state(), np.array(dtheta), np.array(dvel)
