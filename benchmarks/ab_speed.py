@@ -31,34 +31,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
+from checkouts import alternating, build_fmus, run_python
+
 HERE = Path(__file__).resolve().parents[1]
 SCENARIOS = ("aircraft_500s", "aircraft_outliers", "uav_maneuver")
 
 
-def _env(checkout: Path) -> dict:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(checkout / "fmus"), str(checkout)])
-    env.setdefault("MPLBACKEND", "Agg")
-    return env
-
-
 def _call(checkout: Path, args, what: str) -> float:
     """Wall time [s] of ``python ARGS`` run in ``checkout`` on its own sources."""
-    t0 = time.perf_counter()
-    done = subprocess.run([sys.executable, *args], cwd=checkout, env=_env(checkout),
-                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    wall = time.perf_counter() - t0
-    if done.returncode:
-        raise SystemExit(f"ab_speed: {what} failed in {checkout}:\n{done.stderr[-2000:]}")
-    return wall
+    return run_python(checkout, args, what, "ab_speed")[0]
 
 
 def _task_args(task: str, out: Path, stop, campaign_stop, runs: int, scenario: str):
@@ -83,14 +70,12 @@ def seed_loop(scenario: str, runs: int, stop) -> None:
 
 def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> str:
     """Per-step cost of a ``short`` and a ``long`` run of ``scenario`` in this checkout,
-    alternating ``pairs`` times in this process: wall and CPU time of the co-simulation loop
-    (:meth:`Simulation.run`, no output files) per base step, medians and their ratios (the
-    CPU time of this process is the steadier one on a loaded machine)."""
+    alternating ``pairs`` times in this process: wall and CPU time of :meth:`Simulation.run`
+    (instantiation to teardown, no output files) per base step, medians and their ratios (the
+    CPU time of this process is the steadier one on a loaded machine).  The runs alternate in
+    one process, so none may read the ideal samples of another (``single_run_costs``)."""
     sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
-    # the runs alternate in this process: none may read the ideal samples of another
-    # (navcore.ideal_track), or the later runs would look cheaper per step
-    from navcore.ideal_track import SWITCH
-    os.environ[SWITCH] = "0"
+    from orchestrator.bench import single_run_costs
     from orchestrator.master import Simulation
     from orchestrator.build import ensure_fmus
     from orchestrator.scenarios import load_scenario, registry
@@ -100,13 +85,14 @@ def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> 
         ensure_fmus(model, log=lambda *a: None)
     cost = {short: [], long: []}
     cpu = {short: [], long: []}
-    for i in range(pairs):
-        for stop in ((short, long) if i % 2 == 0 else (long, short)):
+    for i, order in alternating(pairs, (short, long)):
+        for stop in order:
             sim = Simulation(model, backend=backend,
                              registry=registry() if backend == "direct" else None)
             t0, c0 = time.perf_counter(), time.process_time()
-            res = sim.run(stop_time=stop)
-            steps = len(res.time) - 1
+            with single_run_costs():
+                res = sim.run(stop_time=stop)
+            steps = res.metadata["n_steps"]
             cost[stop].append((time.perf_counter() - t0) / steps)
             cpu[stop].append((time.process_time() - c0) / steps)
             print(f"pair {i + 1}/{pairs} {scenario} {stop:g} s ({backend}): "
@@ -124,12 +110,11 @@ def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> 
 def measure(other: Path, tasks, pairs: int, stop, campaign_stop, runs: int, scenario: str):
     """{task: [(this_s, other_s), ...]} over ``pairs`` alternating pairs."""
     checkouts = {"this": HERE, "other": other}
-    for label, checkout in checkouts.items():
-        _call(checkout, ["-m", "orchestrator.cli", "build"], "the FMU build")
+    for checkout in checkouts.values():
+        build_fmus(checkout, "ab_speed")
     times = {t: [] for t in tasks}
     with tempfile.TemporaryDirectory(prefix="navfmu-ab-") as tmp:
-        for i in range(pairs):
-            order = ("this", "other") if i % 2 == 0 else ("other", "this")
+        for i, order in alternating(pairs, ("this", "other")):
             for task in tasks:
                 wall = {}
                 for label in order:

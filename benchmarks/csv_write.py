@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from checkouts import alternating
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from orchestrator.results import Results, atomic_write  # noqa: E402
@@ -68,14 +69,13 @@ def main(argv=None) -> None:
         t0 = time.perf_counter()
         import polars  # noqa: F401  (its import, once per process, timed apart)
         print(f"import polars: {time.perf_counter() - t0:.3f} s")
-        for i in range(args.rounds):
-            writers = [("savetxt %.17g", lambda: savetxt_17g(res, old)),
-                       ("to_csv (polars)", lambda: res.to_csv(new))]
-            for name, call in writers if i % 2 == 0 else writers[::-1]:
-                times[name].append(_timed(call))
-            readers = [("from_csv (loadtxt)", lambda: Results.from_csv(new)),
-                       ("polars.read_csv", lambda: polars_read(new))]
-            for name, call in readers if i % 2 == 0 else readers[::-1]:
+        writers = [("savetxt %.17g", lambda: savetxt_17g(res, old)),
+                   ("to_csv (polars)", lambda: res.to_csv(new))]
+        readers = [("from_csv (loadtxt)", lambda: Results.from_csv(new)),
+                   ("polars.read_csv", lambda: polars_read(new))]
+        for (_, w_order), (_, r_order) in zip(alternating(args.rounds, writers),
+                                              alternating(args.rounds, readers)):
+            for name, call in w_order + r_order:
                 times[name].append(_timed(call))
         same = np.array_equal(Results.from_csv(old).table(), polars_read(new), equal_nan=True)
         print(f"sizes: savetxt {old.stat().st_size / 1e6:.1f} MB, polars "

@@ -26,13 +26,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from checkouts import alternating, build_fmus, last_json, run_python
 
 HERE = Path(__file__).resolve().parents[1]
 
@@ -46,7 +46,7 @@ def child(scenario: str, held: bool, backend: str, out: str) -> None:
     import orchestrator.results as results
     from orchestrator.cli import main
 
-    phases = {"loop": 0.0, "csv": 0.0, "held_calls": 0}
+    phases = {"loop": 0.0, "csv": 0.0, "held_calls": 0, "n_steps": 0}
     if held:
         real_advance = component.Component.advance
 
@@ -62,9 +62,10 @@ def child(scenario: str, held: bool, backend: str, out: str) -> None:
 
     real_loop, real_csv = master.Simulation._loop, results.Results.to_csv
 
-    def loop(self, *args, **kwargs):
-        ns = real_loop(self, *args, **kwargs)
+    def loop(self, step, record, recording, n_steps, *args, **kwargs):
+        ns = real_loop(self, step, record, recording, n_steps, *args, **kwargs)
         phases["loop"] += ns * 1e-9
+        phases["n_steps"] += n_steps
         return ns
 
     def to_csv(self, *args, **kwargs):
@@ -89,21 +90,17 @@ def child(scenario: str, held: bool, backend: str, out: str) -> None:
 
 
 def _run_child(scenario, held, backend, out):
-    env = dict(os.environ, MPLBACKEND="Agg")
-    cmd = [sys.executable, str(Path(__file__).resolve()), scenario, "--child", "--backend",
-           backend, "--out", out] + (["--held"] if held else [])
-    done = subprocess.run(cmd, cwd=HERE, env=env, capture_output=True, text=True)
-    if done.returncode:
-        raise SystemExit(f"run_floor: {scenario} failed:\n{done.stderr[-2000:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    args = [str(Path(__file__).resolve()), scenario, "--child", "--backend", backend, "--out",
+            out] + (["--held"] if held else [])
+    return last_json(run_python(HERE, args, scenario, "run_floor")[1])
 
 
 def measure(scenario: str, pairs: int, backend: str):
     """{"full": [phases, ...], "held": [...]} over ``pairs`` alternating pairs."""
     runs = {"full": [], "held": []}
     with tempfile.TemporaryDirectory(prefix="navfmu-floor-") as tmp:
-        for i in range(pairs):
-            for kind in (("full", "held") if i % 2 == 0 else ("held", "full")):
+        for i, order in alternating(pairs, ("full", "held")):
+            for kind in order:
                 phases = _run_child(scenario, kind == "held", backend, str(Path(tmp) / kind))
                 runs[kind].append(phases)
                 print(f"pair {i + 1}/{pairs} {kind}: total {phases['total']:.2f} s, loop "
@@ -111,7 +108,7 @@ def measure(scenario: str, pairs: int, backend: str):
     return runs
 
 
-def summary(scenario: str, backend: str, runs, n_steps: int) -> str:
+def summary(scenario: str, backend: str, runs) -> str:
     med = {kind: {p: statistics.median(r[p] for r in runs[kind])
                   for p in ("total", "loop", "csv")} for kind in runs}
     for m in med.values():
@@ -120,20 +117,13 @@ def summary(scenario: str, backend: str, runs, n_steps: int) -> str:
              f"{'phase':8s} {'full':>8s} {'held':>8s}"]
     for p in ("total", "loop", "csv", "rest"):
         lines.append(f"{p:8s} {med['full'][p]:8.2f} {med['held'][p]:8.2f}")
+    n_steps = runs["full"][0]["n_steps"]
     per_step = 1e6 / n_steps
     lines.append(f"per base step: loop {med['full']['loop'] * per_step:.1f} us, floor "
                  f"{med['held']['loop'] * per_step:.1f} us, the components' own work "
                  f"{(med['full']['loop'] - med['held']['loop']) * per_step:.1f} us "
                  f"({n_steps} base steps)")
     return "\n".join(lines)
-
-
-def _n_steps(scenario: str) -> int:
-    sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
-    from orchestrator.scenarios import load_scenario
-
-    model = load_scenario(HERE / "models" / scenario)
-    return round((model.stop_time - model.start_time) / model.base_step)
 
 
 def main(argv=None) -> None:
@@ -148,10 +138,9 @@ def main(argv=None) -> None:
     if args.child:
         child(args.scenario, args.held, args.backend, args.out)
         return
-    subprocess.run([sys.executable, "-m", "orchestrator.cli", "build"], cwd=HERE, check=True,
-                   stdout=subprocess.DEVNULL, env=dict(os.environ))
+    build_fmus(HERE, "run_floor")
     runs = measure(args.scenario, args.pairs, args.backend)
-    print(summary(args.scenario, args.backend, runs, _n_steps(args.scenario)))
+    print(summary(args.scenario, args.backend, runs))
 
 
 if __name__ == "__main__":

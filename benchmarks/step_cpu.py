@@ -20,12 +20,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
-import subprocess
-import sys
 import time
 from pathlib import Path
+
+from checkouts import alternating, last_json, run_python
 
 HERE = Path(__file__).resolve().parents[1]
 
@@ -51,21 +50,16 @@ def child(scenario: str, stop: float) -> None:
 
 
 def _run(checkout: Path, scenario: str, stop: float) -> dict:
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(checkout / "fmus"), str(checkout)]))
-    done = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--child", scenario,
-                           "--stop", str(stop)], cwd=checkout, env=env, capture_output=True,
-                          text=True)
-    if done.returncode:
-        raise SystemExit(f"step_cpu: {scenario} failed in {checkout}:\n{done.stderr[-2000:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    args = [str(Path(__file__).resolve()), "--child", scenario, "--stop", str(stop)]
+    return last_json(run_python(checkout, args, scenario, "step_cpu")[1])
 
 
 def compare(other: Path, scenarios, pairs: int, stop: float) -> None:
     checkouts = {"this": HERE, "other": other.resolve()}
     for scenario in scenarios:
         costs = {"this": [], "other": []}
-        for i in range(pairs):
-            for label in (("this", "other") if i % 2 == 0 else ("other", "this")):
+        for _, order in alternating(pairs, ("this", "other")):
+            for label in order:
                 costs[label].append(_run(checkouts[label], scenario, stop))
         print(f"\n{scenario}, {stop:g} s, CPU us per base step, medians of {pairs} pairs")
         print(f"{'component':16s} {'this':>8s} {'other':>8s} {'ratio':>6s}")

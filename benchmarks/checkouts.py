@@ -1,0 +1,49 @@
+"""What the benchmark scripts share: running Python on a checkout's own sources, and the
+alternating order of the pairs.  Standard library only: the scripts also run this file's
+folder inside another checkout (``ab_speed.py``, ``step_cpu.py``)."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+
+def checkout_env(checkout: Path) -> dict:
+    """The environment of a child on ``checkout``'s sources (plots without a display)."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(checkout / "fmus"), str(checkout)])
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+def run_python(checkout: Path, args, what: str, script: str = "benchmark"):
+    """``(wall time [s], stdout)`` of ``python ARGS`` run in ``checkout`` on its own sources;
+    a failure ends the benchmark with the tail of its stderr."""
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, *args], cwd=checkout, env=checkout_env(checkout),
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if done.returncode:
+        raise SystemExit(f"{script}: {what} failed in {checkout}:\n{done.stderr[-2000:]}")
+    return wall, done.stdout
+
+
+def last_json(stdout: str):
+    """The JSON a child printed as its last line."""
+    return json.loads(stdout.strip().splitlines()[-1])
+
+
+def build_fmus(checkout: Path, script: str = "benchmark") -> None:
+    """Build ``checkout``'s FMUs (untimed, before the first pair)."""
+    run_python(checkout, ["-m", "orchestrator.cli", "build"], "the FMU build", script)
+
+
+def alternating(pairs: int, items):
+    """``(i, order)`` for ``i`` in ``range(pairs)``: ``items`` in order, then reversed, and so on,
+    so that neither side always runs first."""
+    items = tuple(items)
+    for i in range(pairs):
+        yield i, (items if i % 2 == 0 else items[::-1])
