@@ -1,8 +1,12 @@
 """Shared test fixtures (generic; no navigation)."""
 from __future__ import annotations
 
+import collections
+import struct
 import textwrap
 from pathlib import Path
+
+import numpy as np
 
 import pytest
 
@@ -90,3 +94,32 @@ def navfmu_cli(capsys):
         return exc.value.code, out, err
 
     return run
+
+
+def bits(x: float) -> bytes:
+    return struct.pack(">d", x)
+
+
+def assert_same(a, b, where="component"):
+    """Bit-identical object graphs (declared objects by their attributes)."""
+    assert type(a) is type(b), where
+    if isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), where
+    elif isinstance(a, float):
+        assert bits(a) == bits(b), where
+    elif isinstance(a, np.random.Generator):
+        assert a.bit_generator.state == b.bit_generator.state, where
+    elif isinstance(a, (list, tuple, collections.deque)):
+        assert len(a) == len(b) and getattr(a, "maxlen", 0) == getattr(b, "maxlen", 0), where
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, f"{where}[{i}]")
+    elif isinstance(a, dict):
+        assert a.keys() == b.keys(), where
+        for k in a:
+            assert_same(a[k], b[k], f"{where}.{k}")
+    elif hasattr(a, "__dict__"):
+        assert vars(a).keys() == vars(b).keys(), where
+        for k in vars(a):
+            assert_same(getattr(a, k), getattr(b, k), f"{where}.{k}")
+    else:
+        assert a == b, where

@@ -26,7 +26,6 @@ tests' own, independent of :mod:`orchestrator.metrics`.
 from __future__ import annotations
 
 import dataclasses
-import time as _time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, Optional, Sequence
@@ -117,7 +116,6 @@ class FilterRun:
     model: str
     rows: np.ndarray                       # recorded rows of the sensor record
     outputs: Dict[str, np.ndarray] = field(default_factory=dict)
-    seconds_per_step: float = 0.0          # mean wall time of the instance's do_step
     component: object = None               # the navcore component, to continue it
 
     def truth(self, name: str) -> np.ndarray:
@@ -154,15 +152,15 @@ def _started_instance(sensors: SensorRecord, filter_class, overrides) -> DirectI
 
 
 def run_filter(sensors: SensorRecord, filter_class=None, overrides: Optional[Dict] = None,
-               record: str = "epochs", names: Optional[Sequence[str]] = None,
+               names: Optional[Sequence[str]] = None,
                start_row: int = 0, stop_row: Optional[int] = None,
                component=None) -> FilterRun:
     """Replay ``sensors`` into a filter through the direct backend.
 
     ``filter_class``: a navcore InsGnssFilter subclass (default: the scenario's filter);
-    ``overrides``: parameters replacing the scenario's filter.ssv values.  ``record``:
-    'epochs' (one row per GNSS fix, after the filter has processed it) or 'all' (every base
-    step).  ``names``: outputs to record (default: every Real/Integer/Boolean output).
+    ``overrides``: parameters replacing the scenario's filter.ssv values.  One row is recorded
+    per GNSS fix, after the filter has processed it.  ``names``: outputs to record (default:
+    every Real/Integer/Boolean output).
     ``component``/``start_row``/``stop_row``: continue an existing, already started
     component from a given row (used by the state save/restore tests).
     """
@@ -176,27 +174,23 @@ def run_filter(sensors: SensorRecord, filter_class=None, overrides: Optional[Dic
     instance.prepare(FILTER_INPUT_NAMES, names)
     real_in, int_in, bool_in = (instance.input_names[t] for t in ("Real", "Integer", "Boolean"))
     columns = [[FILTER_INPUT_NAMES.index(n) for n in group] for group in (real_in, int_in, bool_in)]
-    out_order = [names.index(n) for t in ("Real", "Integer", "Boolean")
-                 for n in instance.output_names[t]]
+    order = np.argsort([names.index(n) for t in ("Real", "Integer", "Boolean")
+                        for n in instance.output_names[t]])
     n = len(sensors.time) if stop_row is None else stop_row
     wanted = np.zeros(len(sensors.time), dtype=bool)
-    wanted[sensors.epoch_rows if record == "epochs" else slice(None)] = True
+    wanted[sensors.epoch_rows] = True
     rows, values = [], []
     h = sensors.h
-    elapsed = 0
     for k in range(start_row, n):
         row = sensors.filter_inputs[k]
         instance.set_inputs(row[columns[0]], row[columns[1]], row[columns[2]])
-        t0 = _time.perf_counter_ns()
         instance.do_step(k * h, h)
-        elapsed += _time.perf_counter_ns() - t0
         if wanted[k]:
             rows.append(k)
-            values.append(np.concatenate(instance.get_outputs())[np.argsort(out_order)])
+            values.append(np.concatenate(instance.get_outputs())[order])
     arr = np.array(values, dtype=float) if values else np.zeros((0, len(names)))
     return FilterRun(sensors, cls.model_name, np.array(rows, dtype=int),
-                     {name: arr[:, i] for i, name in enumerate(names)},
-                     elapsed * 1e-9 / max(1, n - start_row), instance.component)
+                     {name: arr[:, i] for i, name in enumerate(names)}, instance.component)
 
 
 def rms(a, axis=0):

@@ -5,11 +5,12 @@ These are self-consistency tests (the generator with the track against the gener
 it): the generator's own numbers are checked against references in test_trajectory.py,
 test_strapdown.py and test_pyins_oracle.py.
 """
+import math
 import threading
 
-import numpy as np
 import pytest
 
+from conftest import assert_same
 from navcore import ideal_track, state
 from navcore.motion_profiles import load_profile
 from navcore.trajectory import TrajectoryGenerator
@@ -67,23 +68,14 @@ def test_read_samples_equal_computed_ones_self_consistency(monkeypatch, profile,
     with monkeypatch.context() as m:
         refuse_to_compute(m)
         third = fly(gen, n)                                 # reads every sample
-    assert first == reference and second == reference and third == reference
+    for run in (first, second, third):
+        assert_same(run, reference, "samples")
     # the reading generator's state is the computing one's, every field
     with monkeypatch.context() as m:
         m.setattr(ideal_track, "find", lambda key: None)
         computing = TrajectoryGenerator(profile, dt)
         fly(computing, n)
-    assert _same_tree(state.capture(gen), state.capture(computing))
-
-
-def _same_tree(a, b):
-    if isinstance(a, dict):
-        return a.keys() == b.keys() and all(_same_tree(a[k], b[k]) for k in a)
-    if isinstance(a, (list, tuple)):
-        return len(a) == len(b) and all(_same_tree(x, y) for x, y in zip(a, b))
-    if isinstance(a, np.ndarray):
-        return a.dtype == b.dtype and np.array_equal(a, b)
-    return type(a) is type(b) and a == b
+    assert_same(state.capture(gen), state.capture(computing), "state")
 
 
 def test_state_restored_from_a_reading_generator_continues_exactly(monkeypatch):
@@ -96,7 +88,7 @@ def test_state_restored_from_a_reading_generator_continues_exactly(monkeypatch):
     restored = TrajectoryGenerator("aircraft_500s", 0.01)
     state.restore(restored, tree)
     reference = untracked(monkeypatch, "aircraft_500s", 0.01, 3000)
-    assert fly(restored, 1500) == reference[1500:]
+    assert_same(fly(restored, 1500), reference[1500:], "samples")
 
 
 def test_a_generator_off_the_track_computes(monkeypatch):
@@ -107,13 +99,13 @@ def test_a_generator_off_the_track_computes(monkeypatch):
 
     def nudge(g):
         fly(g, 700)
-        g.lat = np.nextafter(g.lat, 1.0)
+        g.lat = math.nextafter(g.lat, 1.0)
         g._ins.lat = g.lat
 
     reference = untracked(monkeypatch, "aircraft_500s", 0.01, 600, prepare=nudge)
     gen = TrajectoryGenerator("aircraft_500s", 0.01)
     nudge(gen)
-    assert fly(gen, 600) == reference
+    assert_same(fly(gen, 600), reference, "samples")
 
 
 def test_a_generator_off_the_track_records_nothing(monkeypatch):
@@ -127,7 +119,7 @@ def test_a_generator_off_the_track_records_nothing(monkeypatch):
     gen._ins.h = gen.h
     fly(gen, 100)
     reference = untracked(monkeypatch, "aircraft_500s", 0.01, 800)
-    assert fly(TrajectoryGenerator("aircraft_500s", 0.01), 800) == reference
+    assert_same(fly(TrajectoryGenerator("aircraft_500s", 0.01), 800), reference, "samples")
 
 
 def test_recording_stops_at_the_sample_limit(monkeypatch):
@@ -135,7 +127,8 @@ def test_recording_stops_at_the_sample_limit(monkeypatch):
     reference = untracked(monkeypatch, "aircraft_500s", 0.01, 1200)
     runs = [fly(TrajectoryGenerator("aircraft_500s", 0.01), 1200) for _ in range(3)]
     assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 501          # the start and 500 samples
-    assert all(run == reference for run in runs)
+    for run in runs:
+        assert_same(run, reference, "samples")
 
 
 def test_tracks_are_per_profile_and_step(monkeypatch):
@@ -145,7 +138,7 @@ def test_tracks_are_per_profile_and_step(monkeypatch):
     assert keys[0] != keys[1]
     assert all(ideal_track.find(k).n == 301 for k in keys)
     reference = untracked(monkeypatch, "aircraft_500s", 0.02, 300)
-    assert fly(TrajectoryGenerator("aircraft_500s", 0.02), 300) == reference
+    assert_same(fly(TrajectoryGenerator("aircraft_500s", 0.02), 300), reference, "samples")
 
 
 def test_threads_sharing_a_track_get_the_computed_samples(monkeypatch):
@@ -161,7 +154,8 @@ def test_threads_sharing_a_track_get_the_computed_samples(monkeypatch):
         t.start()
     for t in threads:
         t.join()
-    assert all(r == reference for r in results)
+    for r in results:
+        assert_same(r, reference, "samples")
 
 
 @pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs fork")

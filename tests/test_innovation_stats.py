@@ -58,6 +58,8 @@ def test_both_nis_forms_equal_the_definition_with_the_explicit_inverse():
         assert nis(v, S) == pytest.approx(definition, rel=1e-11)
         v_checked, L = checked_cholesky(v, S, "test")
         assert nis_from_cholesky(L, v_checked) == pytest.approx(definition, rel=1e-11)
+        assert chi_square_statistic(v, S) == pytest.approx(definition, rel=1e-11)
+        # and it is the Cholesky form itself, to the bit (pins the delegation, not the value)
         assert chi_square_statistic(v, S) == nis_from_cholesky(L, v_checked)
         assert nis_from_cholesky(L, v_checked, general_solve=True) == pytest.approx(
             definition, rel=1e-11)

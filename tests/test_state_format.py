@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import assert_same, bits
 from navcore import components, state, state_format
 from navcore.components import REGISTRY
 from navcore.errors import StateError, StateFormatError
@@ -82,10 +83,6 @@ def handmade_blob(payload_node, identity=IDENTITY, version=1):
 
 def b64(data: bytes) -> str:
     return base64.b64encode(data).decode()
-
-
-def bits(x: float) -> bytes:
-    return struct.pack(">d", x)
 
 
 def test_decode_reads_a_handmade_blob_bit_exactly():
@@ -176,31 +173,6 @@ def stepped(cls, n, start=0):
 def run(component, k0, n):
     cls = type(component)
     return [dict(component.step(k * H, H, inputs_at(cls, k))) for k in range(k0, k0 + n)]
-
-
-def assert_same(a, b, where="component"):
-    """Bit-identical object graphs (declared objects by their attributes)."""
-    assert type(a) is type(b), where
-    if isinstance(a, np.ndarray):
-        assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), where
-    elif isinstance(a, float):
-        assert bits(a) == bits(b), where
-    elif isinstance(a, np.random.Generator):
-        assert a.bit_generator.state == b.bit_generator.state, where
-    elif isinstance(a, (list, tuple, collections.deque)):
-        assert len(a) == len(b) and getattr(a, "maxlen", 0) == getattr(b, "maxlen", 0), where
-        for i, (x, y) in enumerate(zip(a, b)):
-            assert_same(x, y, f"{where}[{i}]")
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for k in a:
-            assert_same(a[k], b[k], f"{where}.{k}")
-    elif hasattr(a, "__dict__"):
-        assert vars(a).keys() == vars(b).keys(), where
-        for k in vars(a):
-            assert_same(getattr(a, k), getattr(b, k), f"{where}.{k}")
-    else:
-        assert a == b, where
 
 
 def declared_objects(obj, where):
