@@ -11,6 +11,7 @@ from navcore import ideal_track
 
 from . import prechecks
 from .cli_options import filter_names
+from .comparison_text import _num
 from .errors import NavfmuError
 from .master import Simulation
 from .progress import progress_bars
@@ -187,13 +188,10 @@ def format_filter_bench(out: Dict[str, Any]) -> str:
         f"  {'filter':14s} {'ms per cycle':>12s} {'ratio':>7s} {'paper [ms]':>11s} "
         f"{'paper ratio':>12s} {'wall [s]':>9s}"]
 
-    def num(value, fmt):
-        return format(value, fmt) if value is not None else f"{'-':>{len(format(0.0, fmt))}s}"
-
     for name, r in rows.items():
         lines.append(f"  {name:14s} {r['time_per_cycle_ms']:12.4f} {r['ratio']:7.2f} "
-                     f"{num(r['paper_time_per_cycle_ms'], '11.3f')} "
-                     f"{num(r['paper_ratio'], '12.2f')} {r['wall_s']:9.2f}")
+                     f"{_num(r['paper_time_per_cycle_ms'], '11.3f')} "
+                     f"{_num(r['paper_ratio'], '12.2f')} {r['wall_s']:9.2f}")
     lines.append(f"  one cycle = one do_step of the filter FMU ({first['cycle_s']:g} s); ratios "
                  f"to {out['baseline']}, the first filter")
     return "\n".join(lines)
@@ -207,7 +205,6 @@ def _libcosim_text(model_name, stop, out) -> str:
             f"{out['ratio_unrecorded']:.2f})")
 
 
-@single_run_costs()
 def bench_command(scenario=None, stop=100.0, repeat=3, filters=None, against_libcosim=False,
                   executors=False, runs=8, workers=2, as_json=False, log=print) -> str:
     """``navfmu bench``: the measurement its options choose (FMU path against direct, the
@@ -225,15 +222,17 @@ def bench_command(scenario=None, stop=100.0, repeat=3, filters=None, against_lib
         from .campaign_bench import bench_executors, format_bench as format_executors
 
         names = [f.strip() for f in (filters or "Kf").split(",") if f.strip()]
-        out = bench_executors(str(scenario), names, runs=runs, stop_time=stop, workers=workers,
-                              log=log)
+        with single_run_costs():
+            out = bench_executors(str(scenario), names, runs=runs, stop_time=stop,
+                                  workers=workers, log=log)
         return json.dumps(out, indent=2) if as_json else format_executors(out)
     model = load_scenario(scenario)
     if against_libcosim:
         from .libcosim_run import bench_against_libcosim
 
         ensure_fmus(model, log=log)
-        out = bench_against_libcosim(scenario or model.path, stop, repeat)
+        with single_run_costs():
+            out = bench_against_libcosim(scenario, stop, repeat)
         return json.dumps(out, indent=2) if as_json else _libcosim_text(model.name, stop, out)
     if filters is not None:
         with progress_bars() as progress_bar:

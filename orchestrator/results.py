@@ -91,6 +91,8 @@ def write_csv_table(f, table: np.ndarray, titles=None) -> None:
     import polars as pl
 
     rows = max(1, CSV_BLOCK_VALUES // max(1, table.shape[1]))
+    # each block through a buffer of its own: polars writing to ``f`` itself may overtake
+    # bytes still in ``f``'s Python buffer (the title line, with polars 1.0)
     block = io.BytesIO()
     for first in range(0, table.shape[0], rows):
         block.seek(0)
