@@ -8,7 +8,7 @@ back to back is what holds; absolute times do not), for every pair:
   paper scenarios ``aircraft_500s``, ``aircraft_outliers`` and ``uav_maneuver``;
 * a campaign of ``--runs`` seeds (default 10) of ``--campaign-scenario`` through the direct
   backend, in one process per checkout: for seed ``s = 1..runs`` the scenario with
-  ``trajectory.seed = gnss.seed = s``, through ``orchestrator.scenarios.simulate_scenario``
+  ``trajectory.seed = gnss.seed = s``, through ``orchestrator.running.scenarios.simulate_scenario``
   (the same work in any checkout, also in those that predate ``navfmu montecarlo``).
 
 Each task runs once in each checkout per pair, the order of the two checkouts swapping from
@@ -37,7 +37,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from checkouts import alternating, build_fmus, run_python
+from checkouts import alternating, argument_parser, build_fmus, layout_module, run_python
 
 HERE = Path(__file__).resolve().parents[1]
 SCENARIOS = ("aircraft_500s", "aircraft_outliers", "uav_maneuver")
@@ -59,11 +59,10 @@ def _task_args(task: str, out: Path, stop, campaign_stop, runs: int, scenario: s
 
 def seed_loop(scenario: str, runs: int, stop) -> None:
     """The campaign task, run inside a checkout: ``runs`` seeds through the direct backend."""
-    from orchestrator.scenarios import load_scenario, simulate_scenario
-
-    model = load_scenario(Path("models") / scenario)
+    scenarios = layout_module("orchestrator.running.scenarios")
+    model = scenarios.load_scenario(Path("models") / scenario)
     for seed in range(1, runs + 1):
-        simulate_scenario(model, backend="direct", stop_time=stop, build=False,
+        scenarios.simulate_scenario(model, backend="direct", stop_time=stop, build=False,
                           parameters={"trajectory.seed": seed, "gnss.seed": seed},
                           log=lambda *a, **k: None)
 
@@ -75,10 +74,10 @@ def flat(scenario: str, short: float, long: float, pairs: int, backend: str) -> 
     CPU time of this process is the steadier one on a loaded machine).  The runs alternate in
     one process, so none may read the ideal samples of another (``single_run_costs``)."""
     sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
-    from orchestrator.bench import single_run_costs
-    from orchestrator.master import Simulation
-    from orchestrator.build import ensure_fmus
-    from orchestrator.scenarios import load_scenario, registry
+    from orchestrator.cli.bench import single_run_costs
+    from orchestrator.cosim.master import Simulation
+    from orchestrator.building.build import ensure_fmus
+    from orchestrator.running.scenarios import load_scenario, registry
 
     model = load_scenario(HERE / "models" / scenario)
     if backend == "fmu":
@@ -141,9 +140,8 @@ def summary(times) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argument_parser(__doc__, pairs=5)
     parser.add_argument("--other", type=Path, help="the other checkout (its root folder)")
-    parser.add_argument("--pairs", type=int, default=5, help="alternating pairs (default 5)")
     parser.add_argument("--stop", type=float, help="stop time of the scenario runs [s] "
                         "(default: each scenario's own)")
     parser.add_argument("--campaign-stop", type=float,

@@ -47,3 +47,31 @@ def alternating(pairs: int, items):
     items = tuple(items)
     for i in range(pairs):
         yield i, (items if i % 2 == 0 else items[::-1])
+
+
+def argument_parser(doc: str, pairs: int):
+    """The command line of a benchmark script: its docstring's first paragraph as the
+    description and the number of alternating pairs (``--pairs``, default ``pairs``)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
+    parser.add_argument("--pairs", type=int, default=pairs,
+                        help=f"alternating pairs (default {pairs})")
+    return parser
+
+
+#: modules renamed when the packages were grouped into wings (new last name -> old name)
+_FLAT_NAMES = {"run_results": "results", "commands": "cli", "registry": "components"}
+
+
+def layout_module(name: str):
+    """The module ``name`` as the wing layout calls it (``orchestrator.running.scenarios``), or,
+    in a checkout from before the wings, the flat module it was (``orchestrator.scenarios``),
+    so that a script can measure this checkout against an older one."""
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ModuleNotFoundError:
+        package, last = name.split(".")[0], name.rsplit(".", 1)[1]
+        return importlib.import_module(f"{package}.{_FLAT_NAMES.get(last, last)}")

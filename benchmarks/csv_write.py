@@ -23,7 +23,7 @@ import numpy as np
 from checkouts import alternating
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from orchestrator.results import Results, atomic_write  # noqa: E402
+from orchestrator.results.run_results import Results, atomic_write  # noqa: E402
 
 
 def savetxt_17g(res: Results, path: Path) -> None:

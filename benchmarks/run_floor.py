@@ -32,7 +32,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from checkouts import alternating, build_fmus, last_json, run_python
+from checkouts import alternating, argument_parser, build_fmus, last_json, run_python
 
 HERE = Path(__file__).resolve().parents[1]
 
@@ -41,10 +41,10 @@ def child(scenario: str, held: bool, backend: str, out: str) -> None:
     """One run in this interpreter; prints its phases as one JSON line."""
     t_start = time.perf_counter()
     sys.path[:0] = [str(HERE / "fmus"), str(HERE)]
-    import navcore.component as component
-    import orchestrator.master as master
-    import orchestrator.results as results
-    from orchestrator.cli import main
+    import navcore.core.component as component
+    import orchestrator.cosim.master as master
+    import orchestrator.results.run_results as results
+    from orchestrator.cli.commands import main
 
     phases = {"loop": 0.0, "csv": 0.0, "held_calls": 0, "n_steps": 0}
     if held:
@@ -127,9 +127,8 @@ def summary(scenario: str, backend: str, runs) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argument_parser(__doc__, pairs=3)
     parser.add_argument("scenario", help="a folder name under models/")
-    parser.add_argument("--pairs", type=int, default=3, help="alternating pairs (default 3)")
     parser.add_argument("--backend", choices=("fmu", "direct"), default="fmu")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--held", action="store_true", help=argparse.SUPPRESS)

@@ -24,7 +24,7 @@ import statistics
 import time
 from pathlib import Path
 
-from checkouts import alternating, last_json, run_python
+from checkouts import alternating, last_json, layout_module, run_python
 
 HERE = Path(__file__).resolve().parents[1]
 
@@ -32,14 +32,14 @@ HERE = Path(__file__).resolve().parents[1]
 def child(scenario: str, stop: float) -> None:
     """One timed run inside a checkout (the current folder); prints the costs as JSON."""
     time.perf_counter_ns = time.process_time_ns      # before the master reads its clock
-    from orchestrator.master import Simulation
-    from orchestrator.scenarios import load_scenario, registry, swap_filter
+    Simulation = layout_module("orchestrator.cosim.master").Simulation
+    scenarios = layout_module("orchestrator.running.scenarios")
 
     name, _, filter_name = scenario.partition(":")
-    model = load_scenario(Path("models") / name)
+    model = scenarios.load_scenario(Path("models") / name)
     if filter_name:
-        model = swap_filter(model, filter_name)
-    res = Simulation(model, backend="direct", registry=registry()).run(stop_time=stop)
+        model = scenarios.swap_filter(model, filter_name)
+    res = Simulation(model, backend="direct", registry=scenarios.registry()).run(stop_time=stop)
     meta = res.metadata
     n_steps = meta["n_steps"]
     cost = {n: 1e6 * res.exchange_step_time_s[n] * calls / n_steps

@@ -11,7 +11,7 @@ repository root:
 import argparse
 from pathlib import Path
 
-from orchestrator import sweep
+from orchestrator.campaigns import sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "models" / "uav_maneuver_mems"

@@ -1,8 +1,8 @@
-"""FMU slave 'CtfaUkf': a thin FMI shell over navcore.components.CtfaUkf (see fmushell)."""
+"""FMU slave 'CtfaUkf': a thin FMI shell over navcore.components.registry.CtfaUkf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class CtfaUkf(Fmi2Slave):

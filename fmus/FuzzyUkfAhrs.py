@@ -1,8 +1,10 @@
-"""FMU slave 'FuzzyUkfAhrs': a thin FMI shell over navcore.ahrs_components.FuzzyUkfAhrs (see fmushell)."""
+"""FMU slave 'FuzzyUkfAhrs': a thin FMI shell over
+navcore.components.ahrs_components.FuzzyUkfAhrs (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import ahrs_components
+from navcore.components import ahrs_components
 
 
 class FuzzyUkfAhrs(Fmi2Slave):

@@ -1,8 +1,10 @@
-"""FMU slave 'GnssReceiver': a thin FMI shell over navcore.components.GnssReceiver (see fmushell)."""
+"""FMU slave 'GnssReceiver': a thin FMI shell over
+navcore.components.registry.GnssReceiver (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class GnssReceiver(Fmi2Slave):

@@ -1,8 +1,8 @@
-"""FMU slave 'Iakf': a thin FMI shell over navcore.components.Iakf (see fmushell)."""
+"""FMU slave 'Iakf': a thin FMI shell over navcore.components.registry.Iakf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class Iakf(Fmi2Slave):

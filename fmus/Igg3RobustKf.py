@@ -1,8 +1,10 @@
-"""FMU slave 'Igg3RobustKf': a thin FMI shell over navcore.components.Igg3RobustKf (see fmushell)."""
+"""FMU slave 'Igg3RobustKf': a thin FMI shell over
+navcore.components.registry.Igg3RobustKf (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class Igg3RobustKf(Fmi2Slave):

@@ -1,8 +1,8 @@
-"""FMU slave 'ImmUkf': a thin FMI shell over navcore.components.ImmUkf (see fmushell)."""
+"""FMU slave 'ImmUkf': a thin FMI shell over navcore.components.registry.ImmUkf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class ImmUkf(Fmi2Slave):

@@ -1,8 +1,10 @@
-"""FMU slave 'ImuGnssReplay': a thin FMI shell over navcore.replay.ImuGnssReplay (see fmushell)."""
+"""FMU slave 'ImuGnssReplay': a thin FMI shell over
+navcore.components.replay.ImuGnssReplay (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class ImuGnssReplay(Fmi2Slave):

@@ -1,8 +1,8 @@
-"""FMU slave 'InsOnly': a thin FMI shell over navcore.components.InsOnly (see fmushell)."""
+"""FMU slave 'InsOnly': a thin FMI shell over navcore.components.registry.InsOnly (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class InsOnly(Fmi2Slave):

@@ -1,8 +1,8 @@
-"""FMU slave 'Kf': a thin FMI shell over navcore.components.Kf (see fmushell)."""
+"""FMU slave 'Kf': a thin FMI shell over navcore.components.registry.Kf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class Kf(Fmi2Slave):

@@ -1,8 +1,10 @@
-"""FMU slave 'NewtonRobustKf': a thin FMI shell over navcore.components.NewtonRobustKf (see fmushell)."""
+"""FMU slave 'NewtonRobustKf': a thin FMI shell over
+navcore.components.registry.NewtonRobustKf (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class NewtonRobustKf(Fmi2Slave):

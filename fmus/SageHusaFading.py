@@ -1,8 +1,10 @@
-"""FMU slave 'SageHusaFading': a thin FMI shell over navcore.components.SageHusaFading (see fmushell)."""
+"""FMU slave 'SageHusaFading': a thin FMI shell over
+navcore.components.registry.SageHusaFading (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class SageHusaFading(Fmi2Slave):

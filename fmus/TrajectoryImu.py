@@ -1,8 +1,10 @@
-"""FMU slave 'TrajectoryImu': a thin FMI shell over navcore.components.TrajectoryImu (see fmushell)."""
+"""FMU slave 'TrajectoryImu': a thin FMI shell over
+navcore.components.registry.TrajectoryImu (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class TrajectoryImu(Fmi2Slave):

@@ -1,8 +1,8 @@
-"""FMU slave 'Ukf': a thin FMI shell over navcore.components.Ukf (see fmushell)."""
+"""FMU slave 'Ukf': a thin FMI shell over navcore.components.registry.Ukf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class Ukf(Fmi2Slave):

@@ -1,8 +1,10 @@
-"""FMU slave 'UkfAhrs': a thin FMI shell over navcore.ahrs_components.UkfAhrs (see fmushell)."""
+"""FMU slave 'UkfAhrs': a thin FMI shell over
+navcore.components.ahrs_components.UkfAhrs (see fmushell)."""
+
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import ahrs_components
+from navcore.components import ahrs_components
 
 
 class UkfAhrs(Fmi2Slave):

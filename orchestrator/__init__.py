@@ -1,21 +1,29 @@
 """navfmu's co-simulation master: SSP loading, fixed-step multirate stepping, recording.
 
 The master is generic: it knows FMUs, connections and steps, nothing about navigation.
-See :mod:`orchestrator.master` for the exact stepping semantics.
+See :mod:`orchestrator.cosim.master` for the exact stepping semantics.
 
 The names below are imported on first use, so that ``navfmu`` starts (and installs its
-Ctrl-C handling, :mod:`orchestrator.interrupts`) before numpy, fmpy and scipy load.
+Ctrl-C handling, :mod:`orchestrator.cosim.interrupts`) before numpy, fmpy and scipy load.
 """
 import importlib
 
 _EXPORTS = {
-    "NavfmuError": "errors", "SspError": "errors", "WiringError": "errors",
+    "NavfmuError": "errors",
+    "SspError": "errors",
+    "WiringError": "errors",
     "SimulationError": "errors",
-    "SystemModel": "ssp", "ComponentSpec": "ssp", "Connection": "ssp", "load_ssd": "ssp",
-    "Results": "results",
-    "Instance": "backends", "FmuInstance": "fmu_instance", "DirectInstance": "direct_instance",
-    "VarInfo": "backends",
-    "Simulation": "master", "simulate": "master",
+    "SystemModel": "model.ssp",
+    "ComponentSpec": "model.ssp",
+    "Connection": "model.ssp",
+    "load_ssd": "model.ssp",
+    "Results": "results.run_results",
+    "Instance": "cosim.backends",
+    "FmuInstance": "cosim.fmu_instance",
+    "DirectInstance": "cosim.direct_instance",
+    "VarInfo": "cosim.backends",
+    "Simulation": "cosim.master",
+    "simulate": "cosim.master",
 }
 
 __all__ = list(_EXPORTS)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from orchestrator.campaign import Campaign, CampaignSpec, run_campaign
+from orchestrator.campaigns.campaign import Campaign, CampaignSpec, run_campaign
 from direct_replay import MODELS
 
 

@@ -43,13 +43,17 @@ def component_xml(name: str, source: str, connectors=(), parameters=None,
     for c in connectors:
         cname, kind, typ = c[:3]
         unit = f' unit="{c[3]}"' if len(c) > 3 else ""
-        lines.append(f'<ssd:Connector name="{cname}" kind="{kind}"><ssc:{typ}{unit}/></ssd:Connector>')
+        lines.append(
+            f'<ssd:Connector name="{cname}" kind="{kind}"><ssc:{typ}{unit}/></ssd:Connector>'
+        )
     lines.append("</ssd:Connectors>")
     if parameters:
         lines.append("<ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues>"
                      "<ssv:ParameterSet version=\"1.0\" name=\"p\"><ssv:Parameters>")
         for pname, (typ, value) in parameters.items():
-            lines.append(f'<ssv:Parameter name="{pname}"><ssv:{typ} value="{value}"/></ssv:Parameter>')
+            lines.append(
+                f'<ssv:Parameter name="{pname}"><ssv:{typ} value="{value}"/></ssv:Parameter>'
+            )
         lines.append("</ssv:Parameters></ssv:ParameterSet></ssd:ParameterValues>"
                      "</ssd:ParameterBinding></ssd:ParameterBindings>")
     if step_hint is not None:
@@ -85,7 +89,7 @@ def write_ssd(tmp_path):
 @pytest.fixture
 def navfmu_cli(capsys):
     """Run the ``navfmu`` command line in-process: ``(exit status, stdout, stderr)``."""
-    from orchestrator.cli import main
+    from orchestrator.cli.commands import main
 
     def run(*args):
         with pytest.raises(SystemExit) as exc:

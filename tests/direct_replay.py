@@ -1,12 +1,12 @@
 """A scenario's sensors run once through the product, then replayed into any number of filters.
 
 A test helper over the product's own code, no SSD reading or stepping of its own: the
-scenario folder is loaded by :func:`orchestrator.scenarios.load_scenario`, its sensor
+scenario folder is loaded by :func:`orchestrator.running.scenarios.load_scenario`, its sensor
 components (``trajectory`` and ``gnss`` and the connections between them) are run by the
-master on the direct backend (:class:`orchestrator.master.Simulation`: the trajectory every
+master on the direct backend (:class:`orchestrator.cosim.master.Simulation`: the trajectory every
 base step, the receiver decimated by its step hint, Gauss-Seidel order), and a filter is
 stepped on the recorded rows through the direct backend's instance
-(:class:`orchestrator.direct_instance.DirectInstance`), at the base step, with the IMU
+(:class:`orchestrator.cosim.direct_instance.DirectInstance`), at the base step, with the IMU
 outputs of the step and the receiver's latest outputs: what the master does with the whole
 scenario.
 
@@ -21,7 +21,7 @@ Usage::
 The sensor record is computed once and replayed into any number of filters (what the
 Monte Carlo tests do: the truth/IMU/GNSS of a seed are shared by every filter compared).
 The error formulas here (:meth:`FilterRun.position_error_ned`, :func:`rms_table`) are the
-tests' own, independent of :mod:`orchestrator.metrics`.
+tests' own, independent of :mod:`orchestrator.results.metrics`.
 """
 from __future__ import annotations
 
@@ -32,11 +32,12 @@ from typing import Dict, Optional, Sequence
 
 import numpy as np
 
-from navcore import earth, signals
-from orchestrator.direct_instance import DirectInstance
-from orchestrator.master import Simulation
-from orchestrator.scenarios import FILTER_COMPONENT, load_scenario, registry
-from orchestrator.ssp import SystemModel
+from navcore.ins import earth
+from navcore.core import signals
+from orchestrator.cosim.direct_instance import DirectInstance
+from orchestrator.cosim.master import Simulation
+from orchestrator.running.scenarios import FILTER_COMPONENT, load_scenario, registry
+from orchestrator.model.ssp import SystemModel
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 #: the components that make a scenario's sensor record

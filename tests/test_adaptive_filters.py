@@ -1,4 +1,4 @@
-"""Adaptive / robust filters of papers 001 and 004 (navcore.adaptive_filters + components).
+"""Adaptive / robust filters of papers 001 and 004 (navcore.filters.adaptive_filters + components).
 
 Default tests run short stretches of the scenarios through the navcore components directly
 (tests/direct_replay.py: the direct backend, no FMI): no NaN, diagnostics that behave as the
@@ -13,12 +13,14 @@ import copy
 import numpy as np
 import pytest
 
-from navcore import components, signals
-from navcore.adaptive_filters import UNUSABLE_VARIANCE_FACTOR, NewtonRobustKfEngine, masked_update
-from navcore.component import ParameterError
-from navcore.innovation_stats import CHI2_THRESHOLD_PAPER_004
-from navcore.ins_gnss_kf import KfConfig, KfEngine
-from navcore.strapdown import Strapdown
+from navcore.components import registry as components
+from navcore.core import signals
+from navcore.filters.adaptive_filters import (UNUSABLE_VARIANCE_FACTOR, NewtonRobustKfEngine,
+    masked_update)
+from navcore.core.component import ParameterError
+from navcore.filters.innovation_stats import CHI2_THRESHOLD_PAPER_004
+from navcore.filters.ins_gnss_kf import KfConfig, KfEngine
+from navcore.ins.strapdown import Strapdown
 
 from direct_replay import MODELS, rms_table, run_filter, simulate_sensors
 
@@ -311,7 +313,7 @@ def _campaign(scenario, filters, out):
 
 def _pooled(records):
     """filter -> pooled RMS position N/E/D and velocity N/E/D over the runs."""
-    from orchestrator.metric_comparisons import pooled_rms
+    from orchestrator.results.metric_comparisons import pooled_rms
 
     return {f: np.array([pooled_rms([r["metrics"][g][a] for r in rows])
                          for g in ("position_rms_m", "velocity_rms_mps") for a in "ned"])

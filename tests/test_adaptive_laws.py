@@ -1,5 +1,7 @@
-"""Tests of navcore.adaptive_laws and navcore.robust_laws: the adaptation laws of papers 001
+"""Tests of navcore.filters.adaptive_laws and navcore.filters.robust_laws: the adaptation laws of
+papers 001
 and 004 (and the chi-square gate and per-observation statistic they use)."""
+
 import copy
 import math
 import pickle
@@ -9,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from navcore.adaptive_laws import (
+from navcore.filters.adaptive_laws import (
     compression_factor,
     divergence_test,
     fading_factor,
@@ -19,14 +21,15 @@ from navcore.adaptive_laws import (
     sage_husa_r_update,
     sage_husa_weight,
 )
-from navcore.innovation_stats import CHI2_THRESHOLD_PAPER_004, chi2_gate, chi_square_per_observation
-from navcore.robust_laws import (
+from navcore.filters.innovation_stats import (CHI2_THRESHOLD_PAPER_004, chi2_gate,
+    chi_square_per_observation)
+from navcore.filters.robust_laws import (
     ObservationHistory,
     chi_square_faults,
     igg3_weight,
     newton_forward_extrapolate,
 )
-from navcore.component import InputError, ParameterError
+from navcore.core.component import InputError, ParameterError
 
 
 # ----------------------------------------------------------------------------------------

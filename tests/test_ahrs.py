@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from navcore import signals
-from navcore.ahrs import triad_attitude
-from navcore.ahrs_components import FuzzyUkfAhrs, UkfAhrs
-from navcore.component import ParameterError
-from navcore.components import TrajectoryImu
-from navcore.rotations import wrap_angle
+from navcore.core import signals
+from navcore.filters.ahrs import triad_attitude
+from navcore.components.ahrs_components import FuzzyUkfAhrs, UkfAhrs
+from navcore.core.component import ParameterError
+from navcore.components.registry import TrajectoryImu
+from navcore.ins.rotations import wrap_angle
 
 H, INCL = 5.4e-5, math.radians(56.8)
 FIELD_NED = np.array([H * math.cos(INCL), 0.0, H * math.sin(INCL)])
@@ -64,7 +64,9 @@ def test_noiseless_magnetometer_is_the_rotated_field(profiles):
 
 def test_hard_and_soft_iron(profiles):
     soft = "1.02,0.01,0,0.01,0.98,0,0,0,1.01"
-    traj, out = _trajectory(profiles(TABLE), mag_hard_iron_x=1e-6, mag_hard_iron_z=-2e-6, mag_soft_iron=soft)
+    traj, out = _trajectory(
+        profiles(TABLE), mag_hard_iron_x=1e-6, mag_hard_iron_z=-2e-6, mag_soft_iron=soft
+    )
     C_bn = Rotation.from_euler("ZYX", [out["truth_yaw"], out["truth_pitch"],
                                        out["truth_roll"]]).as_matrix()
     S = np.array([float(v) for v in soft.split(",")]).reshape(3, 3)
@@ -97,9 +99,12 @@ def test_rotate_segment_checks_its_parameters(profiles):
                                                   "axis_n": 0, "axis_d": 0, "rate_deg": 5}]}
     with pytest.raises(ParameterError, match="axis_n"):
         TrajectoryImu(profile=profiles(bad)).initialize(0.0)
-    tilt = {"start": {**TABLE["start"], "yaw_deg": 0.0}, "segments": [{"type": "rotate", "duration": 5.0,
-                                                   "axis_e": 1, "axis_d": 0,
-                                                   "angle_deg": 120}]}
+    tilt = {
+        "start": {**TABLE["start"], "yaw_deg": 0.0},
+        "segments": [
+            {"type": "rotate", "duration": 5.0, "axis_e": 1, "axis_d": 0, "angle_deg": 120}
+        ],
+    }
     with pytest.raises(ParameterError, match="pitch"):
         TrajectoryImu(profile=profiles(tilt)).initialize(0.0)
 

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator import metrics as nav_metrics
-from orchestrator import scenarios
-from orchestrator.ssp import load_ssd
+from orchestrator.results import metrics as nav_metrics
+from orchestrator.running import scenarios
+from orchestrator.model.ssp import load_ssd
 
 MODEL_DIR = Path(__file__).resolve().parent.parent / "models" / "ahrs_turntable"
 BEFORE, AFTER = (0.0, 100.0), (121.0, 240.0)
@@ -156,7 +156,7 @@ def test_field_values_come_from_igrf():
 @pytest.mark.parametrize("name", ["UkfAhrs", "FuzzyUkfAhrs"])
 def test_fmu_and_direct_paths_give_identical_numbers(name):
     """Through the FMUs and the navcore objects, across the start of the vibration."""
-    from orchestrator import build as fmu_build
+    from orchestrator.building import build as fmu_build
 
     fmu_build.build(log=None)
     model = scenarios.load_scenario(MODEL_DIR)
@@ -173,7 +173,7 @@ def test_fmu_and_direct_paths_give_identical_numbers(name):
 def test_streamed_run_gives_the_in_memory_window_metrics(tmp_path):
     """A run streamed to Parquet (compare --format parquet) accumulates the paper's windows
     chunk by chunk; the numbers equal those of the same run held in memory."""
-    from orchestrator import windows
+    from orchestrator.results import windows
 
     model = scenarios.load_scenario(MODEL_DIR)
     reference = scenarios.paper_reference(model)

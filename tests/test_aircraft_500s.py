@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator import scenarios
-from orchestrator.metric_comparisons import rms_table
+from orchestrator.building import build as fmu_build
+from orchestrator.running import scenarios
+from orchestrator.results.metric_comparisons import rms_table
 
 MODEL = fmu_build.ROOT / "models" / "aircraft_500s"
 

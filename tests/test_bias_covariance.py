@@ -1,7 +1,7 @@
 """Bias-error covariance of the Kf and Ukf engines against the Gauss-Markov variance formula.
 
 A first-order Gauss-Markov bias error ``d(db)/dt = -db / tau + w`` with the driver of
-``navcore.error_model.process_noise_density`` (``q = 2 sigma^2 / tau``) has the variance
+``navcore.ins.error_model.process_noise_density`` (``q = 2 sigma^2 / tau``) has the variance
 ``P(t) = P0 exp(-2 t / tau) + sigma^2 (1 - exp(-2 t / tau))``; a random constant (``tau = 0``)
 keeps ``P0``.  The bias rows do not depend on the other states, so without updates each
 engine's bias block must follow this formula whatever the navigation does.
@@ -18,11 +18,11 @@ import math
 import numpy as np
 import pytest
 
-from navcore.error_model import BA, BG, N_STATES
-from navcore.components import Ukf
-from navcore.ins_gnss_kf import KfConfig, KfEngine
-from navcore.strapdown import Strapdown
-from navcore.ukf_filters import UkfEngine
+from navcore.ins.error_model import BA, BG, N_STATES
+from navcore.components.registry import Ukf
+from navcore.filters.ins_gnss_kf import KfConfig, KfEngine
+from navcore.ins.strapdown import Strapdown
+from navcore.filters.ukf_filters import UkfEngine
 
 DT = 0.05
 DURATION = 100.0

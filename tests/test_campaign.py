@@ -14,8 +14,8 @@ import numpy as np
 import psutil
 import pytest
 
-from navcore import components
-from orchestrator.campaign import CampaignSpec, read_run, run_campaign, run_one
+from navcore.components import registry as components
+from orchestrator.campaigns.campaign import CampaignSpec, read_run, run_campaign, run_one
 from orchestrator.errors import NavfmuError
 from direct_replay import MODELS, rms_table, run_filter, simulate_sensors
 
@@ -40,7 +40,7 @@ def _numbers(out, spec):
 
 def test_one_run_equals_the_replay_loop():
     """Run 2 (seeds 3/3) of a campaign (the whole system in the master, metrics of
-    orchestrator.metrics at the GNSS fixes) equals the filter replayed on the sensors alone
+    orchestrator.results.metrics at the GNSS fixes) equals the filter replayed on the sensors alone
     (tests/direct_replay.py) with that helper's own error formulas (the slow tests' numbers)."""
     sensors = simulate_sensors(MODELS / "aircraft_outliers", stop_time=60.0,
                                overrides={"trajectory": {"seed": 3}, "gnss": {"seed": 3}})
@@ -104,8 +104,8 @@ def test_seeds_follow_campaign_seed_and_run_index_and_series_on_request(tmp_path
     frame = pd.read_parquet(tmp_path / "series" / "Kf" / "run-0001.parquet")
     assert len(frame) == 401 and "filter.nav_lat [rad]" in frame.columns
     # the metrics of the run are those of its kept series
-    from orchestrator.metrics import filter_metrics
-    from orchestrator.recorder import read_parquet
+    from orchestrator.results.metrics import filter_metrics
+    from orchestrator.results.recorder import read_parquet
 
     again = filter_metrics(read_parquet(tmp_path / "series" / "Kf" / "run-0001.parquet"), "filter")
     assert again["position_rms_m"] == pytest.approx(
@@ -197,7 +197,7 @@ def test_killed_worker_then_killed_driver_then_restart_completes(tmp_path):
     (["--runs", "2", "--filters", "Kf", "--seed-offset", "radar=3"], ["radar", "trajectory"]),
 ])
 def test_bad_campaign_options_one_error_line(capsys, tmp_path, args, words):
-    from orchestrator.cli import main
+    from orchestrator.cli.commands import main
 
     out = tmp_path / "mc"
     with pytest.raises(SystemExit) as exc:

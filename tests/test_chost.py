@@ -26,7 +26,7 @@ import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from orchestrator import build as fmu_build
+from orchestrator.building import build as fmu_build
 
 ROOT = Path(__file__).resolve().parent.parent
 HOST_SOURCE = Path(__file__).resolve().parent / "chost" / "fmi2_host.c"

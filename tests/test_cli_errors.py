@@ -9,9 +9,9 @@ import sys
 
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator.cli import main
-from orchestrator.outputs import MARKER
+from orchestrator.building import build as fmu_build
+from orchestrator.cli.commands import main
+from orchestrator.results.outputs import MARKER
 
 MODEL = fmu_build.ROOT / "models" / "aircraft_500s"
 
@@ -187,16 +187,24 @@ def test_component_log_with_debug(capsys, scenario, tmp_path):
 
 # -- checks before the run -------------------------------------------------------------------
 PRE_RUN = {
-    "infinite_stop": (["--stop", "inf"], "navfmu: error: --stop: the stop time must be a finite "
-                                         "number of seconds, got inf"),
-    "stop_before_start": (["--stop", "-5"], "navfmu: error: --stop: the stop time -5 s must be "
-                                            "after the start time 0 s"),
-    "recording_too_large": (["--stop", "1e7"], "navfmu: error: --stop: the run would record "
-                                               "1000000001 rows x 78 variables"),
-    "stop_beyond_the_profile": (["--stop", "600"],
-                                "navfmu: error: component 'trajectory' (TrajectoryImu.fmu): the run "
-                                "ends at 600 s, after the end of profile 'aircraft_500s' at 500 s; "
-                                "stop by 500 s or set parameter 'extend_profile' = true"),
+    "infinite_stop": (
+        ["--stop", "inf"],
+        "navfmu: error: --stop: the stop time must be a finite " "number of seconds, got inf",
+    ),
+    "stop_before_start": (
+        ["--stop", "-5"],
+        "navfmu: error: --stop: the stop time -5 s must be " "after the start time 0 s",
+    ),
+    "recording_too_large": (
+        ["--stop", "1e7"],
+        "navfmu: error: --stop: the run would record " "1000000001 rows x 78 variables",
+    ),
+    "stop_beyond_the_profile": (
+        ["--stop", "600"],
+        "navfmu: error: component 'trajectory' (TrajectoryImu.fmu): the run "
+        "ends at 600 s, after the end of profile 'aircraft_500s' at 500 s; "
+        "stop by 500 s or set parameter 'extend_profile' = true",
+    ),
 }
 
 

@@ -9,11 +9,12 @@ import types
 
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator import metric_comparisons
-from orchestrator import metrics as nav_metrics
-from orchestrator import bench, comparison, comparison_text, run_outputs, scenarios
-from orchestrator.cli import main
+from orchestrator.building import build as fmu_build
+from orchestrator.results import metric_comparisons
+from orchestrator.results import metrics as nav_metrics
+from orchestrator.cli import bench
+from orchestrator.running import comparison, comparison_text, run_outputs, scenarios
+from orchestrator.cli.commands import main
 
 MODELS = fmu_build.ROOT / "models"
 NUMBER = re.compile(r"-?\d+\.\d+")

@@ -1,4 +1,4 @@
-"""The physical constants of navcore.constants against the standards' printed numbers.
+"""The physical constants of navcore.ins.constants against the standards' printed numbers.
 
 WGS-84: NIMA TR8350.2, 3rd ed. (2000), table 3.1 (defining parameters a, 1/f, omega, GM),
 table 3.3 (semi-minor axis b, first eccentricity squared e^2) and table 3.4 (normal gravity
@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from navcore import constants, earth
+from navcore.ins import constants, earth
 
 
 def test_wgs84_defining_parameters_as_printed():
@@ -28,7 +28,7 @@ def test_wgs84_derived_geometry_matches_table_3_3():
 def test_wgs84_normal_gravity_as_printed_and_reproduced_by_the_earth_model():
     assert constants.WGS84_GAMMA_E == 9.7803253359
     assert constants.WGS84_GAMMA_P == 9.8321849378
-    # Somigliana's formula of navcore.earth gives the printed values at the equator and
+    # Somigliana's formula of navcore.ins.earth gives the printed values at the equator and
     # the poles on the ellipsoid (h = 0)
     assert earth.gravity(0.0, 0.0) == pytest.approx(9.7803253359, abs=1e-10)
     assert earth.gravity(math.pi / 2, 0.0) == pytest.approx(9.8321849378, abs=1e-10)

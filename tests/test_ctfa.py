@@ -4,10 +4,10 @@ import copy
 import numpy as np
 import pytest
 
-from navcore.component import InputError, ParameterError
-from navcore.ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_q_scale, ctfa_thresholds
-from navcore.innovation_stats import chi_square_statistic
-from navcore.unscented import UnscentedKalmanFilter
+from navcore.core.component import InputError, ParameterError
+from navcore.filters.ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_q_scale, ctfa_thresholds
+from navcore.filters.innovation_stats import chi_square_statistic
+from navcore.filters.unscented import UnscentedKalmanFilter
 
 QMIN = np.diag([1e-6, 2e-6, 3e-6])
 QMAX = 10.0 * QMIN          # the paper takes Q_max as an integer multiple of Q_min
@@ -61,7 +61,9 @@ def test_schedule_at_thresholds_below_and_above():
     assert np.allclose(scheduled_q(PAPER_T2), QMAX, rtol=1e-15)
     assert np.array_equal(scheduled_q(3.0), QMIN)                        # Q_0 = Q_min
     Q_prev = 0.5 * (QMIN + QMAX)
-    assert np.allclose(scheduled_q(3.0, previous_weight=0.5), Q_prev, rtol=1e-15)  # eq. 25: keep Q_{k-1}
+    assert np.allclose(
+        scheduled_q(3.0, previous_weight=0.5), Q_prev, rtol=1e-15
+    )  # eq. 25: keep Q_{k-1}
     assert np.allclose(scheduled_q(50.0, previous_weight=0.5), QMAX, rtol=1e-15)
     assert ctfa_q_scale(3.0) == 0.0 and ctfa_q_scale(3.0, previous_weight=0.4) == 0.4
     assert ctfa_q_scale(PAPER_T1) == 0.0 and ctfa_q_scale(PAPER_T2) == 1.0
@@ -100,7 +102,9 @@ def test_schedule_follows_eq25_with_memory():
         assert np.allclose(Q, Q_paper, rtol=1e-14)
     snapshot = copy.deepcopy(schedule)
     schedule.reset()
-    assert np.array_equal(schedule.Q, QMIN) and snapshot.weight == pytest.approx(expected_weights[-1])
+    assert np.array_equal(schedule.Q, QMIN) and snapshot.weight == pytest.approx(
+        expected_weights[-1]
+    )
 
 
 def test_chi_square_statistic_matches_definition_and_ukf_nis():
@@ -112,7 +116,9 @@ def test_chi_square_statistic_matches_definition_and_ukf_nis():
     ukf = UnscentedKalmanFilter(15, x0=rng.normal(size=15), P0=np.eye(15))
     H = np.hstack([np.eye(3), np.zeros((3, 12))])           # paper 000 eq. 4
     info = ukf.update(rng.normal(size=3), lambda x: H @ x, np.diag([2.56, 4.42, 3.43]) ** 2)
-    assert chi_square_statistic(info["innovation"], info["S"]) == pytest.approx(info["nis"], rel=1e-12)
+    assert chi_square_statistic(info["innovation"], info["S"]) == pytest.approx(
+        info["nis"], rel=1e-12
+    )
 
 
 def test_chi_square_statistic_exceedance_rates():

@@ -18,12 +18,12 @@ import math
 
 import numpy as np
 
-from navcore import earth
-from navcore.error_model import ATT, N_STATES, POS, VEL, system_matrix
-from navcore.ins_gnss_kf import KfConfig, KfEngine
-from navcore.rotations import euler_to_dcm, rotvec_to_dcm
-from navcore.strapdown import Strapdown
-from navcore.trajectory import TrajectoryGenerator
+from navcore.ins import earth
+from navcore.ins.error_model import ATT, N_STATES, POS, VEL, system_matrix
+from navcore.filters.ins_gnss_kf import KfConfig, KfEngine
+from navcore.ins.rotations import euler_to_dcm, rotvec_to_dcm
+from navcore.ins.strapdown import Strapdown
+from navcore.ins.trajectory import TrajectoryGenerator
 
 PROFILE = {"start": {"lat_deg": 40.1, "lon_deg": 118.6, "h": 1000.0, "speed": 120.0,
                      "yaw_deg": 30.0},

@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from navcore import earth
-from navcore.error_model import N_STATES, system_matrix, transition_matrix
-from navcore.rotations import euler_to_dcm
+from navcore.ins import earth
+from navcore.ins.error_model import N_STATES, system_matrix, transition_matrix
+from navcore.ins.rotations import euler_to_dcm
 
 
 def _skew(v):

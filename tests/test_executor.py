@@ -7,7 +7,7 @@ import operator
 import pytest
 
 from orchestrator.errors import NavfmuError
-from orchestrator.executor import Executor, Task, TaskError
+from orchestrator.campaigns.executor import Executor, Task, TaskError
 
 
 def _tasks(n=6):
@@ -38,8 +38,10 @@ def test_same_results_dask_local_cluster():
 @pytest.mark.parametrize("workers", [1, 2], ids=["serial", "pool"])
 def test_failed_task_is_named(workers):
     tasks = _tasks(3) + [Task(key="bad", func=math.sqrt, args=(-1.0,))]
-    with Executor(workers=workers) as ex, pytest.raises(TaskError, match="task 'bad' failed: "
-                                                                          "ValueError: math domain"):
+    with (
+        Executor(workers=workers) as ex,
+        pytest.raises(TaskError, match="task 'bad' failed: " "ValueError: math domain"),
+    ):
         list(ex.run(tasks))
 
 

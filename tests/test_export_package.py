@@ -10,14 +10,14 @@ from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import component_xml, ssd_text
-from orchestrator import build as fmu_build
-from orchestrator.cli import main
+from orchestrator.building import build as fmu_build
+from orchestrator.cli.commands import main
 from orchestrator.errors import SspError
-from orchestrator.export import export, without_step_hints
-from orchestrator.master import Simulation
-from orchestrator.fmu_path import FMU_PATH_VARIABLE
-from orchestrator.ssp import load_ssd
-from orchestrator.ssp_archive import load_model
+from orchestrator.packaging.export import export, without_step_hints
+from orchestrator.cosim.master import Simulation
+from orchestrator.model.fmu_path import FMU_PATH_VARIABLE
+from orchestrator.model.ssp import load_ssd
+from orchestrator.model.ssp_archive import load_model
 
 MODEL = Path(__file__).resolve().parents[1] / "models" / "aircraft_500s"
 
@@ -76,7 +76,7 @@ def test_cli_refuses_a_wrong_extension(built, command, out, tmp_path, capsys):
 def test_archive_beyond_its_bounds_or_escaping_is_refused(tmp_path, monkeypatch):
     import zipfile
 
-    from orchestrator import ssp_archive
+    from orchestrator.model import ssp_archive
 
     big = tmp_path / "big.ssp"
     with zipfile.ZipFile(big, "w") as zf:

@@ -23,9 +23,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description
 
-from orchestrator import build as fmu_build
+from orchestrator.building import build as fmu_build
 from test_fmus import FMU_NAMES, TRAJ_PARAMS, _Fmu
 from test_native_library import require_patched
 

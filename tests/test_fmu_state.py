@@ -2,8 +2,8 @@
 bit, crafted, foreign or damaged ones are refused without side effect.
 
 A refused blob or state is fmi2Error from fmi2DeSerializeFMUstate or fmi2SetFMUstate with an
-Error-status message (the FMUs' patched pythonfmu library, orchestrator/native_library.py; the
-tests skip with its reason where it could not be built); the tests check that, that the
+Error-status message (the FMUs' patched pythonfmu library,
+orchestrator/building/native_library.py; the tests skip with its reason where it could not be built); the tests check that, that the
 attack's side effect did not happen, and that the instance then continues exactly from its
 previous state.  The fallback of pythonfmu's own library (fmi2OK, the message, fmi2Discard at
 the next fmi2DoStep) is tested in tests/test_native_library.py.
@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from navcore.components import REGISTRY
-from navcore.state_format import MAGIC
+from navcore.components.registry import REGISTRY
+from navcore.core.state_format import MAGIC
 from test_fmus import FMU_NAMES, _Fmu, dist  # noqa: F401  (dist: the build fixture)
 from test_native_library import require_patched
 from test_state_format import (FILTER_PARAMS, H, b64, handmade_blob, inputs_at, params_of,
@@ -157,8 +157,13 @@ def attack_blob(case, blob, foreign_blob, pwn):
         return reblob(blob, lambda n: at(n, "component", "fields")["dict"]
                       .__setitem__("engine", {"pickle": payload}))
     if case == "code in a parameter":
-        return reblob(blob, lambda n: at(n, "component", "params")["dict"].__setitem__(
-            "measurement", f"__import__('pickle').loads(__import__('base64').b64decode('{payload}'))"))
+        return reblob(
+            blob,
+            lambda n: at(n, "component", "params")["dict"].__setitem__(
+                "measurement",
+                f"__import__('pickle').loads(__import__('base64').b64decode('{payload}'))",
+            ),
+        )
     if case == "100 MB blob":
         return MAGIC + b"0" * (100 * 1024 * 1024)
     if case == "another FMU's blob":

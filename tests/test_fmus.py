@@ -15,7 +15,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
-from orchestrator import build as fmu_build
+from orchestrator.building import build as fmu_build
 from test_native_library import require_patched
 
 FMU_NAMES = [s.stem for s in fmu_build.slave_scripts()]
@@ -321,7 +321,7 @@ def test_build_after_an_fmu_ran_in_the_process(dist, tmp_path):
 import sys
 from pathlib import Path
 from fmpy import simulate_fmu
-from orchestrator import build
+from orchestrator.building import build
 simulate_fmu({str(dist / "InsOnly.fmu")!r}, stop_time=0.05, step_size=0.01)
 print("usable", build.builder_usable())
 build.build(["InsOnly"], force=True, dist=Path({str(tmp_path)!r}), log=None)

@@ -20,12 +20,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from navcore import components
-from navcore.errors import NavcoreError
-from orchestrator import build as fmu_build
-from orchestrator import scenarios
-from orchestrator.direct_instance import DirectInstance
-from orchestrator.fmu_instance import FmuInstance
+from navcore.components import registry as components
+from orchestrator.building import build as fmu_build
+from orchestrator.running import scenarios
+from orchestrator.cosim.direct_instance import DirectInstance
+from orchestrator.cosim.fmu_instance import FmuInstance
 from orchestrator.errors import NavfmuError, SimulationError
 
 MODELS = fmu_build.ROOT / "models"

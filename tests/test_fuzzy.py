@@ -1,5 +1,7 @@
-"""The Mamdani inference of paper 003 (navcore.fuzzy) on hand-computed inputs, and the
-covariance-matching adaptation (navcore.ahrs.FuzzyAdaptiveR) on white noise of known size."""
+"""The Mamdani inference of paper 003 (navcore.filters.fuzzy) on hand-computed inputs, and the
+covariance-matching adaptation (navcore.filters.ahrs.FuzzyAdaptiveR) on white noise of known size.
+"""
+
 from __future__ import annotations
 
 import math
@@ -7,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from navcore.ahrs import FuzzyAdaptiveR
-from navcore.component import ParameterError
-from navcore.fuzzy import FuzzyRScale, memberships
+from navcore.filters.ahrs import FuzzyAdaptiveR
+from navcore.core.component import ParameterError
+from navcore.filters.fuzzy import FuzzyRScale, memberships
 
 LN12, LN15 = math.log(1.2), math.log(1.5)
 
@@ -86,7 +88,7 @@ def test_adaptation_finds_the_true_noise_level():
 
 def test_any_values_within_the_declared_ranges_are_valid():
     """A tuner may pick any corner of the ranges: every one builds a valid inference."""
-    from navcore.fuzzy import FEET, OUTPUT_VERTICES
+    from navcore.filters.fuzzy import FEET, OUTPUT_VERTICES
 
     specs = {**FEET, **OUTPUT_VERTICES}
     rng = np.random.default_rng(4)

@@ -1,12 +1,14 @@
-"""The genetic algorithm of paper 003 (orchestrator.genetic): operators against the paper's
+"""The genetic algorithm of paper 003 (orchestrator.campaigns.genetic): operators against the
+paper's
 formulas, genes in bounds, elitism, reproducibility, and convergence on an analytic cost."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from orchestrator.errors import NavfmuError
-from orchestrator.genetic import (GeneticAlgorithm, arithmetic_crossover, decode,
+from orchestrator.campaigns.genetic import (GeneticAlgorithm, arithmetic_crossover, decode,
                                   nonuniform_mutation, roulette)
 
 

@@ -1,13 +1,13 @@
-"""Tests of navcore.gnss_errors: noise statistics, steps, outliers, outages, errors."""
+"""Tests of navcore.sensors.gnss_errors: noise statistics, steps, outliers, outages, errors."""
 import copy
 import math
 
 import numpy as np
 import pytest
 
-from navcore.component import InputError, ParameterError
-from navcore.earth import lla_delta_to_ned
-from navcore.gnss_errors import GnssErrorModel, parse_records
+from navcore.core.component import InputError, ParameterError
+from navcore.ins.earth import lla_delta_to_ned
+from navcore.sensors.gnss_errors import GnssErrorModel, parse_records
 
 LAT, LON, H = math.radians(40.1), math.radians(118.6), 100.0    # paper 001 start point
 V = np.array([50.0, -20.0, 1.0])

@@ -1,4 +1,4 @@
-"""The shared track of ideal samples (navcore.ideal_track): generators that read it give the
+"""The shared track of ideal samples (navcore.ins.ideal_track): generators that read it give the
 numbers they would compute, bit for bit.
 
 These are self-consistency tests (the generator with the track against the generator without
@@ -11,9 +11,10 @@ import threading
 import pytest
 
 from conftest import assert_same
-from navcore import ideal_track, state
-from navcore.motion_profiles import load_profile
-from navcore.trajectory import TrajectoryGenerator
+from navcore.ins import ideal_track
+from navcore.core import state
+from navcore.ins.motion_profiles import load_profile
+from navcore.ins.trajectory import TrajectoryGenerator
 
 
 def key_of(profile, dt):
@@ -126,7 +127,7 @@ def test_recording_stops_at_the_sample_limit(monkeypatch):
     monkeypatch.setattr(ideal_track, "MAX_SAMPLES", 500)
     reference = untracked(monkeypatch, "aircraft_500s", 0.01, 1200)
     runs = [fly(TrajectoryGenerator("aircraft_500s", 0.01), 1200) for _ in range(3)]
-    assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 501          # the start and 500 samples
+    assert ideal_track.find(key_of("aircraft_500s", 0.01)).n == 501  # the start and 500 samples
     for run in runs:
         assert_same(run, reference, "samples")
 
@@ -183,7 +184,7 @@ def test_benchmarks_measure_single_runs(monkeypatch):
     switch is put back afterwards."""
     import os
 
-    from orchestrator.bench import single_run_costs
+    from orchestrator.cli.bench import single_run_costs
 
     monkeypatch.delenv(ideal_track.SWITCH, raising=False)
     with single_run_costs():

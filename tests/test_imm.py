@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from navcore.component import InputError, ParameterError
-from navcore.imm import (ImmBank, imm_combine, imm_mix,
+from navcore.core.component import InputError, ParameterError
+from navcore.filters.imm import (ImmBank, imm_combine, imm_mix,
                          imm_update_probabilities, log_likelihood)
-from navcore.unscented import UnscentedKalmanFilter
+from navcore.filters.unscented import UnscentedKalmanFilter
 
 
 class LinearKalmanFilter:
@@ -150,7 +150,9 @@ def test_identical_models_keep_stationary_probabilities_and_equal_single_kf():
     stationary = np.array([0.75, 0.25])                  # solves pi = Pi^T pi
     assert np.allclose(Pi.T @ stationary, stationary)
     Q = 0.5 * G @ G.T
-    bank = ImmBank([LinearKalmanFilter(np.zeros(2), 10.0 * np.eye(2)) for _ in range(2)], Pi, stationary)
+    bank = ImmBank(
+        [LinearKalmanFilter(np.zeros(2), 10.0 * np.eye(2)) for _ in range(2)], Pi, stationary
+    )
     single = LinearKalmanFilter(np.zeros(2), 10.0 * np.eye(2))
     for z in zs:
         bank.predict(lambda flt, j: flt.predict(F, Q))
@@ -165,8 +167,9 @@ def test_identical_models_keep_stationary_probabilities_and_equal_single_kf():
 def test_bank_of_ukfs_equals_bank_of_linear_kfs():
     _, _, zs = simulate_switching_target(seed=3, n_steps=200)
     kfs = ImmBank([LinearKalmanFilter(np.zeros(2), 100.0 * np.eye(2)) for _ in range(2)], STICKY)
-    ukfs = ImmBank([UnscentedKalmanFilter(2, x0=np.zeros(2), P0=100.0 * np.eye(2)) for _ in range(2)],
-                   STICKY)
+    ukfs = ImmBank(
+        [UnscentedKalmanFilter(2, x0=np.zeros(2), P0=100.0 * np.eye(2)) for _ in range(2)], STICKY
+    )
     for z in zs:
         kfs.predict(lambda flt, j: flt.predict(F, QS[j]))
         ukfs.predict(lambda flt, j: flt.predict(lambda x: F @ x, QS[j]))
@@ -192,8 +195,11 @@ def test_mixing_once_per_measurement_interval_and_feedback():
     x_combined = bank.x.copy()
     bank.subtract_from_states(x_combined)
     assert np.allclose(bank.x, 0.0, atol=1e-12)
-    assert np.allclose(imm_combine(bank.mu, [f.x for f in bank.filters], [f.P for f in bank.filters])[0],
-                       0.0, atol=1e-12)
+    assert np.allclose(
+        imm_combine(bank.mu, [f.x for f in bank.filters], [f.P for f in bank.filters])[0],
+        0.0,
+        atol=1e-12,
+    )
     assert np.allclose(snapshot.x, x_combined)
 
 

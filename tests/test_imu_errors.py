@@ -1,12 +1,12 @@
-"""Tests of navcore.imu_errors: statistics with fixed seeds, matrices, windows, errors."""
+"""Tests of navcore.sensors.imu_errors: statistics with fixed seeds, matrices, windows, errors."""
 import copy
 import math
 
 import numpy as np
 import pytest
 
-from navcore.component import InputError, ParameterError
-from navcore.imu_errors import DPH, DPSH, G0, UG, ImuErrorModel, parse_windows
+from navcore.core.component import InputError, ParameterError
+from navcore.sensors.imu_errors import DPH, DPSH, G0, UG, ImuErrorModel, parse_windows
 
 ZERO3 = np.zeros(3)
 
@@ -268,7 +268,7 @@ def test_serialized_state_in_a_fresh_model_continues_bit_for_bit_across_dt_chang
     """The per-dt coefficients are state with the dt they belong to: a fresh model given the
     serialized state of one that ran at dt = 0.02 continues like the uninterrupted one, at
     that dt and after changing to 0.01 (uninterrupted run vs restored copy)."""
-    from navcore import state, state_format
+    from navcore.core import state, state_format
 
     dth, dv = np.array([1e-3, -2e-3, 5e-4]), np.array([0.01, 0.0, -0.098])
     model = ImuErrorModel(FULL, 42)

@@ -1,11 +1,11 @@
-"""navcore.innovation_stats: the NIS in its two arithmetic forms against the definition, and
+"""navcore.filters.innovation_stats: the NIS in its two arithmetic forms against the definition, and
 the chi-square quantiles against scipy.stats.chi2 (bit for bit) and printed tables."""
 import numpy as np
 import pytest
 from scipy import stats
 
-from navcore.component import InputError, ParameterError
-from navcore.innovation_stats import (CHI2_THRESHOLD_PAPER_004, CTFA_THRESHOLDS_PAPER_000,
+from navcore.core.component import InputError, ParameterError
+from navcore.filters.innovation_stats import (CHI2_THRESHOLD_PAPER_004, CTFA_THRESHOLDS_PAPER_000,
                                       checked_cholesky, chi2_gate, chi2_lower_quantile,
                                       chi2_upper_quantile, chi_square_statistic,
                                       gaussian_log_likelihood, log_det_from_cholesky, nis,

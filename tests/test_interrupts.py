@@ -21,8 +21,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator.outputs import MARKER
+from orchestrator.building import build as fmu_build
+from orchestrator.results.outputs import MARKER
 
 MODEL = fmu_build.ROOT / "models" / "aircraft_500s"
 PARALLEL = 4

@@ -1,12 +1,12 @@
 """The master's Jacobi exchange (libcosim's fixed-step rules) with toy components, exact numbers
-worked out by hand from rule 3J of orchestrator/master.py."""
+worked out by hand from rule 3J of orchestrator/cosim/master.py."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from orchestrator.errors import NavfmuError
-from orchestrator.master import Simulation
+from orchestrator.cosim.master import Simulation
 from test_master import REGISTRY, chain_model
 
 

@@ -12,9 +12,9 @@ import math
 import numpy as np
 from scipy import stats
 
-from navcore.components import GnssReceiver, Kf, TrajectoryImu
-from navcore.earth import radii
-from navcore.rotations import euler_to_dcm
+from navcore.components.registry import GnssReceiver, Kf, TrajectoryImu
+from navcore.ins.earth import radii
+from navcore.ins.rotations import euler_to_dcm
 
 DT = 0.02          # 50 Hz IMU keeps the 20 runs short
 DURATION = 120.0

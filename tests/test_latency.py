@@ -13,9 +13,11 @@ import numpy as np
 import pytest
 
 import direct_replay
-from navcore import components, earth, signals
-from orchestrator import build as fmu_build
-from orchestrator import scenarios
+from navcore.components import registry as components
+from navcore.ins import earth
+from navcore.core import signals
+from orchestrator.building import build as fmu_build
+from orchestrator.running import scenarios
 
 MODEL = fmu_build.ROOT / "models" / "aircraft_500s"
 FILTERS = ["Kf", "SageHusaFading", "Iakf", "NewtonRobustKf", "Igg3RobustKf", "InsOnly", "Ukf",
@@ -276,7 +278,7 @@ def test_jacobi_exchange_as_in_libcosim_applies_every_fix():
 def test_state_with_a_rollback_history_continues_bit_for_bit(name):
     """The history (checkpoints as engine state trees, stored increments, a pending fix)
     goes through the FMU state format: a restored filter continues exactly."""
-    from navcore import state_format
+    from navcore.core import state_format
 
     f = components.REGISTRY[name](init_lat=LAT, init_h=100.0)
     f.start(0.0)

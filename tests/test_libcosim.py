@@ -6,12 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator import scenarios
-from orchestrator.master import Simulation
+from orchestrator.building import build as fmu_build
+from orchestrator.running import scenarios
+from orchestrator.cosim.master import Simulation
 
 pytest.importorskip("libcosimpy", reason="libcosimpy (the test extra) is not installed")
-from orchestrator.libcosim_run import run_libcosim  # noqa: E402
+from orchestrator.cosim.libcosim_run import run_libcosim  # noqa: E402
 
 MODELS = sorted(p for p in (Path(__file__).resolve().parents[1] / "models").iterdir()
                 if (p / "SystemStructure.ssd").is_file())
@@ -73,7 +73,7 @@ def test_gauss_seidel_differs_from_libcosim_where_the_rules_differ(built):
                          ids=lambda p: p.name)
 def test_a_packaged_archive_runs_in_libcosim_with_the_folders_numbers(built, model_dir,
                                                                       tmp_path):
-    from orchestrator.package import package
+    from orchestrator.packaging.package import package
 
     archive = package(model_dir, tmp_path / "scenario.ssp")
     folder = run_libcosim(model_dir, 3.0)
@@ -87,7 +87,7 @@ def test_a_packaged_archive_runs_in_libcosim_with_the_folders_numbers(built, mod
 def test_paper_scenarios_full_length_in_libcosim(built, model_dir):
     """Full length: libcosim's RMS per axis within 5 % of our default master's, every fix
     applied (needs filters that apply a fix at gnss_time within a latency bound)."""
-    from orchestrator import metrics
+    from orchestrator.results import metrics
 
     theirs = run_libcosim(model_dir)
     ours = Simulation(scenarios.load_scenario(model_dir)).run()

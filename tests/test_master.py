@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from conftest import component_xml, connection_xml, ssd_text
-from navcore.component import Component, InputError, boolean, integer, real
-from orchestrator import results as results_module
+from navcore.core.component import Component, InputError, boolean, integer, real
+from orchestrator.results import run_results as results_module
 from orchestrator.errors import NavfmuError, SimulationError, WiringError
-from orchestrator.master import Simulation, step_order
-from orchestrator.results import Results
-from orchestrator.ssp import Connection, load_ssd
+from orchestrator.cosim.master import Simulation, step_order
+from orchestrator.results.run_results import Results
+from orchestrator.model.ssp import Connection, load_ssd
 
 
 # -- toy components ---------------------------------------------------------------------
@@ -279,7 +279,7 @@ def test_swap_variant_file_applies_to_the_swapped_in_model_only(write_ssd, tmp_p
 
 
 def test_direct_instance_state_round_trip():
-    from orchestrator.direct_instance import DirectInstance
+    from orchestrator.cosim.direct_instance import DirectInstance
 
     inst = DirectInstance.from_registry("Accumulator", "acc", REGISTRY)
     inst.prepare(["u", "count_in"], ["s"])
@@ -318,7 +318,9 @@ def test_failure_mid_run_names_component_and_time(write_ssd, tmp_path):
     msg = str(info.value)
     # the ramp reaches 1.5 > 1.3 in the step ending at t = 1.5
     first, detail = msg.splitlines()[:2]
-    assert first.startswith("component 'gain' (LimitedGain): ") and "'u' = 1.5 is too large" in first
+    assert (
+        first.startswith("component 'gain' (LimitedGain): ") and "'u' = 1.5 is too large" in first
+    )
     assert "(step from t = 1.25 s to t = 1.5 s failed)" in detail
     assert info.value.component == "gain" and info.value.time == 1.25
 
@@ -506,7 +508,7 @@ def test_fmu_swap_with_missing_variable(write_ssd, toy_fmus):
 
 
 def test_fmu_instance_errors(tmp_path):
-    from orchestrator.fmu_instance import FmuInstance
+    from orchestrator.cosim.fmu_instance import FmuInstance
 
     with pytest.raises(NavfmuError, match="FMU file not found: .*nothing.fmu"):
         FmuInstance(tmp_path / "nothing.fmu", "x")

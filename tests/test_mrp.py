@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from navcore import mrp
-from navcore.ahrs import quat_euler
-from navcore.rotations import euler_to_dcm
+from navcore.ins import mrp
+from navcore.filters.ahrs import quat_euler
+from navcore.ins.rotations import euler_to_dcm
 
 RNG = np.random.default_rng(3)
 EULER = np.column_stack((RNG.uniform(-math.pi, math.pi, 200), RNG.uniform(-1.5, 1.5, 200),

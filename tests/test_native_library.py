@@ -1,5 +1,5 @@
-"""The patched pythonfmu library (orchestrator/native_library.py, native/vendor/pythonfmu-export):
-it compiles here with the interface of the wheel's library, every built FMU carries it, and
+"""The patched pythonfmu library (orchestrator/building/native_library.py,
+native/vendor/pythonfmu-export): it compiles here with the interface of the wheel's library, every built FMU carries it, and
 without it (no compiler, Windows, NAVFMU_PYTHONFMU_LIBRARY=wheel) a refused call reports as
 pythonfmu's own library allows: fmi2OK, an Error-status message, fmi2Discard at the next step.
 The fmi2Error answers themselves are tested where the calls are (test_fmu_state.py,
@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from orchestrator import build as fmu_build
-from orchestrator import native_library
+from orchestrator.building import build as fmu_build
+from orchestrator.building import native_library
 
 FMI2_OK, FMI2_DISCARD, FMI2_ERROR = 0, 2, 3
 #: the Python C-API functions the patch calls that upstream's library does not
@@ -114,7 +114,7 @@ def wheel_kf(tmp_path_factory):
     """Kf.fmu built with pythonfmu's own library (a fresh process: the choice variable)."""
     dist = tmp_path_factory.mktemp("wheel_dist")
     env = dict(os.environ, **{native_library.CHOICE_VARIABLE: "wheel"})
-    code = ("import sys; from pathlib import Path; from orchestrator import build; "
+    code = ("import sys; from pathlib import Path; from orchestrator.building import build; "
             "build.build(['Kf'], force=True, dist=Path(sys.argv[1]))")
     proc = subprocess.run([sys.executable, "-c", code, str(dist)], capture_output=True,
                           text=True, env=env, cwd=str(fmu_build.ROOT), timeout=600)

@@ -10,12 +10,13 @@ import math
 
 import pytest
 
-from navcore import components, signals
-from navcore.component import InputError, Limits, ParameterError
+from navcore.components import registry as components
+from navcore.core import signals
+from navcore.core.component import InputError, Limits, ParameterError
 from navcore.errors import StepSizeError
-from navcore.filter_component import InsGnssFilter
-from navcore.gnss_errors import GnssErrorModel
-from navcore.imu_errors import ImuErrorModel
+from navcore.components.filter_component import InsGnssFilter
+from navcore.sensors.gnss_errors import GnssErrorModel
+from navcore.sensors.imu_errors import ImuErrorModel
 
 NUMERIC = [(cls, p) for cls in components.REGISTRY.values() for p in cls.parameters
            if p.type in ("Real", "Integer")]

@@ -1,5 +1,5 @@
 """Per-phase statistics of filter outputs over a scenario's declared phase windows
-(orchestrator.phases), on hand-made results whose phase means are known exactly."""
+(orchestrator.results.phases), on hand-made results whose phase means are known exactly."""
 from __future__ import annotations
 
 import types
@@ -7,9 +7,9 @@ import types
 import numpy as np
 import pytest
 
-from orchestrator import phases
+from orchestrator.results import phases
 from orchestrator.errors import NavfmuError
-from orchestrator.results import Results
+from orchestrator.results.run_results import Results
 
 REFERENCE = {"phases": {"windows": [{"label": "strong", "t0": 0, "t1": 10},
                                     {"label": "low", "t0": 10, "t1": 20},

@@ -8,8 +8,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from orchestrator import plots
-from orchestrator.results import Results
+from orchestrator.results import plots
+from orchestrator.results.run_results import Results
 
 N = 2001
 T = np.linspace(0.0, 200.0, N)

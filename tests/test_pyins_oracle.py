@@ -15,7 +15,7 @@ The 1 h runs are slow tests; the default run has 10 min versions with the bounds
 (10 min / 1 h)^2 = 1/36 (errors of a free inertial solution growing quadratically).
 
 Gravity.  pyins's normal gravity (``pyins.earth.gravity``) is Somigliana's formula times
-``1 - 2 h / a``; navcore's (``navcore.earth.gravity``) is Somigliana times
+``1 - 2 h / a``; navcore's (``navcore.ins.earth.gravity``) is Somigliana times
 ``1 - 2/a (1 + f + m - 2 f sin^2 L) h + 3 h^2 / a^2``, the WGS-84 normal gravity above the
 ellipsoid to second order in height (NIMA TR8350.2, 3rd ed., eq. 4-3; Groves 2013, eq. 2.134).
 The two differ by the ellipsoidal and centrifugal terms (f + m - 2 f sin^2 L) of the free-air
@@ -33,9 +33,9 @@ import math
 import numpy as np
 import pytest
 
-from navcore import earth, strapdown
-from navcore.strapdown import Strapdown
-from navcore.trajectory import TrajectoryGenerator
+from navcore.ins import earth, strapdown
+from navcore.ins.strapdown import Strapdown
+from navcore.ins.trajectory import TrajectoryGenerator
 
 pyins_sim = pytest.importorskip("pyins.sim")
 pyins_earth = pytest.importorskip("pyins.earth")
@@ -125,7 +125,9 @@ def test_gravity_difference_is_what_the_vertical_channel_makes_of_it():
     """With navcore's own gravity on pyins's increments at rest, the height error is the
     response of the unstable vertical channel to the constant gravity difference
     dg = g_navcore - g_pyins (down positive): dd'' = (2 g / R) dd + dg, so
-    dd(t) = dg / w^2 (cosh(w t) - 1), w^2 = 2 g / sqrt(R_N R_E).  Within 0.2 % after 10 min (measured 0.014 %)."""
+    dd(t) = dg / w^2 (cosh(w t) - 1), w^2 = 2 g / sqrt(R_N R_E).  Within 0.2 % after 10 min
+    (measured 0.014 %).
+    """
     ref, imu = _stationary(SHORT)
     _, _, dd = _integrate(ref, imu)
     lat, h = math.radians(55.0), 150.0
@@ -193,7 +195,7 @@ def test_ideal_increments_differ_by_the_gravity_difference():
     pyins's on the down axis by (g_pyins - g_navcore) dt on average (specific force = a - g),
     within 5 % over the run: the one real difference between the two."""
     dtheta, dvel, p_dtheta, p_dvel, states = _both_increments()
-    from navcore.rotations import euler_to_dcm
+    from navcore.ins.rotations import euler_to_dcm
 
     diff_down = []
     expected = []

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import resource
 import subprocess
 import sys
 from pathlib import Path
@@ -13,9 +12,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator import metrics as nav_metrics
-from orchestrator import recorder, scenarios
-from orchestrator.master import Simulation
+from orchestrator.results import metrics as nav_metrics
+from orchestrator.results import recorder
+from orchestrator.running import scenarios
+from orchestrator.cosim.master import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "models" / "aircraft_outliers"
@@ -146,7 +146,7 @@ def test_uav_60_min_three_filters_memory_flat_and_files_small(tmp_path):
 
 
 def test_compare_streams_parquet_into_the_output_folder(tmp_path, capsys):
-    from orchestrator.cli import main
+    from orchestrator.cli.commands import main
 
     out = tmp_path / "cmp"
     with pytest.raises(SystemExit) as exc:

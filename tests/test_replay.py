@@ -9,13 +9,14 @@ import shutil
 import numpy as np
 import pytest
 
-from navcore import earth
-from navcore.component import InputError, ParameterError
-from navcore.replay import ImuGnssReplay
-from navcore.sensorlog import read_log
-from orchestrator import build as fmu_build
-from orchestrator import metrics, replay, scenarios
-from orchestrator.results import Results
+from navcore.ins import earth
+from navcore.core.component import InputError, ParameterError
+from navcore.components.replay import ImuGnssReplay
+from navcore.sensors.sensorlog import read_log
+from orchestrator.building import build as fmu_build
+from orchestrator.results import metrics
+from orchestrator.running import replay, scenarios
+from orchestrator.results.run_results import Results
 
 ROOT = fmu_build.ROOT
 AIRCRAFT = ROOT / "models" / "aircraft_500s"
@@ -207,7 +208,7 @@ def test_replay_without_truth_and_without_velocity(tmp_path, capsys):
     log.truth = None
     for k in ("vn", "ve", "vd"):
         del log.gnss[k]
-    from navcore.sensorlog import write_log
+    from navcore.sensors.sensorlog import write_log
 
     write_log(tmp_path / "log", log)
     model = scenarios.load_scenario(GIS_MODEL)

@@ -5,7 +5,7 @@ import re
 import shutil
 from pathlib import Path
 
-from orchestrator import report
+from orchestrator.reporting import report
 
 ROOT = Path(__file__).resolve().parent.parent
 INS_GNSS_FILTERS = {"Kf", "SageHusaFading", "Iakf", "NewtonRobustKf", "Igg3RobustKf", "InsOnly",

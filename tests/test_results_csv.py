@@ -1,6 +1,8 @@
-"""The results CSV's text (orchestrator.results.write_csv_table) read back by readers that are
+"""The results CSV's text (orchestrator.results.run_results.write_csv_table) read back by readers
+that are
 not the writer: Python's csv module + float() (correctly rounded), numpy.loadtxt through
 Results.from_csv; Python's repr (shortest round trip, its own algorithm) for the digit count."""
+
 import csv
 import io
 import subprocess
@@ -9,8 +11,8 @@ import sys
 import numpy as np
 import pytest
 
-from orchestrator import results as results_module
-from orchestrator.results import Results, write_csv_table
+from orchestrator.results import run_results as results_module
+from orchestrator.results.run_results import Results, write_csv_table
 
 SPECIAL = [np.nan, np.inf, -np.inf, -0.0, 0.0, 5e-324, -5e-324, 2.2250738585072014e-308,
            1.7976931348623157e308, -1.7976931348623157e308, 2.0 ** 53 + 2, 2.0 ** 53 - 1,
@@ -88,8 +90,11 @@ def test_header_only_results_write_and_read_an_empty_table(tmp_path):
 
 
 def test_commands_and_workers_do_not_import_polars_until_a_csv_is_written():
-    code = ("import sys, orchestrator.cli, orchestrator.campaign, orchestrator.recorder, "
-            "orchestrator.run_command; print('polars' in sys.modules)")
+    code = (
+        "import sys, orchestrator.cli, orchestrator.campaigns.campaign, "
+        "orchestrator.results.recorder, "
+        "orchestrator.cli.run_command; print('polars' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "False"

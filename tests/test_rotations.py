@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from navcore.rotations import (
+from navcore.ins.rotations import (
     dcm_to_euler,
     dcm_to_rotvec,
     euler_to_dcm,

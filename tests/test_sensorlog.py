@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navcore import sensorlog
-from navcore.log_converters import read_gnss_ins_sim, read_kf_gins, trapezoid_increments
-from navcore.sensorlog import LogError, SensorLog, read_log, write_log
+from navcore.sensors import sensorlog
+from navcore.sensors.log_converters import read_gnss_ins_sim, read_kf_gins, trapezoid_increments
+from navcore.sensors.sensorlog import LogError, SensorLog, read_log, write_log
 
 ROOT = Path(__file__).resolve().parents[1]
 GNSS_INS_SIM = ROOT / "tests" / "data" / "gnss-ins-sim" / "motion_def-3d_mid_100Hz"
@@ -139,7 +139,8 @@ def test_oversized_file_is_refused_before_parsing(tmp_path, monkeypatch):
 # -- rates to increments -------------------------------------------------------------------
 def test_trapezoid_increments_against_the_analytic_integral():
     """w(t) = sin(a t): exact increment (cos(a t0) - cos(a t1)) / a.  The per-interval error
-    of the trapezoid (trapezoid - exact) is dt^3 w''/12 + O(dt^5) (third order: halving dt divides it by 8), and
+    of the trapezoid (trapezoid - exact) is dt^3 w''/12 + O(dt^5) (third order: halving dt divides
+    it by 8), and
     a rate linear in time is integrated exactly."""
     a = 3.0
     errors = []

@@ -5,7 +5,7 @@ import pytest
 
 from conftest import component_xml, connection_xml, ssd_text
 from orchestrator.errors import SspError, WiringError
-from orchestrator.ssp import Connection, load_ssd
+from orchestrator.model.ssp import Connection, load_ssd
 
 SRC = component_xml("src", "fmus/Ramp.fmu",
                     [("y", "output", "Real", "m"), ("n", "output", "Integer"),
@@ -32,7 +32,12 @@ def test_happy_path_inline_and_ssv(write_ssd):
         '</ssv:Parameters></ssv:ParameterSet>')
     model = load_ssd(ssd.parent)  # the folder works as well as the file
     assert model.path == ssd.resolve()
-    assert (model.name, model.base_step, model.start_time, model.stop_time) == ("toy", 0.125, 1.0, 11.0)
+    assert (model.name, model.base_step, model.start_time, model.stop_time) == (
+        "toy",
+        0.125,
+        1.0,
+        11.0,
+    )
     src, dst = model.components
     assert src.name == "src" and src.source == (ssd.parent / "fmus/Ramp.fmu").resolve()
     assert dst.source == (ssd.parent.parent / "Gain.fmu").resolve()
@@ -43,7 +48,10 @@ def test_happy_path_inline_and_ssv(write_ssd):
                               "on": ("Boolean", True), "label": ("String", "abc")}
     assert dst.parameters == {"k": ("Real", -0.4)}
     assert src.step_hint is None and dst.step_hint == 0.5
-    assert model.connections == [Connection("src", "y", "dst", "u"), Connection("src", "n", "dst", "m")]
+    assert model.connections == [
+        Connection("src", "y", "dst", "u"),
+        Connection("src", "n", "dst", "m"),
+    ]
 
 
 def test_replace_source_returns_a_copy(write_ssd, tmp_path):
@@ -75,7 +83,9 @@ def test_malformed_xml_names_line_and_column(write_ssd):
 
 
 def test_wrong_prefix_is_rejected(write_ssd):
-    text = ssd_text(SRC + DST, WIRES).replace("xmlns:ssc=", "xmlns:common=").replace("ssc:", "common:")
+    text = (
+        ssd_text(SRC + DST, WIRES).replace("xmlns:ssc=", "xmlns:common=").replace("ssc:", "common:")
+    )
     _error(write_ssd, text, "literal prefix 'ssc:'")
 
 
@@ -130,7 +140,9 @@ def test_transformation_not_supported(write_ssd):
 
 def test_connection_to_system_not_supported(write_ssd):
     conn = '<ssd:Connection startConnector="y_sys" endElement="dst" endConnector="u"/>'
-    _error(write_ssd, ssd_text(SRC + DST, conn), "connections to the system itself are not supported")
+    _error(
+        write_ssd, ssd_text(SRC + DST, conn), "connections to the system itself are not supported"
+    )
 
 
 @pytest.mark.parametrize("base_step, fragment", [

@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from conftest import assert_same, bits
-from navcore import components, state, state_format
-from navcore.components import REGISTRY
+from navcore.components import registry as components
+from navcore.core import state, state_format
+from navcore.components.registry import REGISTRY
 from navcore.errors import StateError, StateFormatError
-from navcore.state_format import MAGIC
+from navcore.core.state_format import MAGIC
 
 LAT = math.radians(40.0)
 H = 0.01

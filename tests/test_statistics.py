@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from orchestrator import statistics as st
+from orchestrator.campaigns import statistics as st
 from orchestrator.errors import NavfmuError
 
 
@@ -57,7 +57,8 @@ def test_bad_inputs():
 def test_non_finite_runs_left_out_and_counted_the_same_by_report_and_summary():
     """A diverged run (NaN RMS) or a missing number is left out of the interval by
     t_interval itself, so the campaign summary and the report give the same interval."""
-    from orchestrator import campaign_summary, report
+    from orchestrator.campaigns import campaign_summary
+    from orchestrator.reporting import report
 
     values = [1.0, float("nan"), 2.0, 3.0, None, 4.0, float("inf"), 5.0]
     s = st.t_interval(values)

@@ -7,10 +7,10 @@ import pickle
 import numpy as np
 import pytest
 
-from navcore import earth
-from navcore.rotations import euler_to_dcm, rotvec_to_dcm, wrap_angle
-from navcore.strapdown import Strapdown, _gravity, _radii, integrate_position
-from navcore.trajectory import TrajectoryGenerator
+from navcore.ins import earth
+from navcore.ins.rotations import euler_to_dcm, rotvec_to_dcm, wrap_angle
+from navcore.ins.strapdown import Strapdown, _gravity, _radii, integrate_position
+from navcore.ins.trajectory import TrajectoryGenerator
 
 LAT0 = math.radians(40.1)
 LON0 = math.radians(118.6)
@@ -21,7 +21,9 @@ DT = 0.01
 def ned_position_error(sd, lat, lon, h):
     """computed - true position in NED metres."""
     rn, re = earth.radii(lat)
-    return np.array([(sd.lat - lat) * (rn + h), (sd.lon - lon) * (re + h) * math.cos(lat), h - sd.h])
+    return np.array(
+        [(sd.lat - lat) * (rn + h), (sd.lon - lon) * (re + h) * math.cos(lat), h - sd.h]
+    )
 
 
 def test_scalar_earth_helpers_match_earth_module():

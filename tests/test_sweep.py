@@ -1,6 +1,6 @@
-"""The parameter-scale sweep's table (orchestrator.sweep) on hand-made task results: means
+"""The parameter-scale sweep's table (orchestrator.campaigns.sweep) on hand-made task results: means
 over the seeds, ratios to the first filter, phase columns in the scenario's window order."""
-from orchestrator import sweep
+from orchestrator.campaigns import sweep
 
 
 def _point(pos, vel, att, nis=None):

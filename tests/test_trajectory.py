@@ -7,9 +7,9 @@ import pickle
 import numpy as np
 import pytest
 
-from navcore.component import ParameterError
-from navcore.motion_profiles import BUILTIN_PROFILES, builtin_profile, load_profile
-from navcore.trajectory import TrajectoryGenerator
+from navcore.core.component import ParameterError
+from navcore.ins.motion_profiles import BUILTIN_PROFILES, builtin_profile, load_profile
+from navcore.ins.trajectory import TrajectoryGenerator
 
 
 def speed(s):
@@ -94,7 +94,9 @@ def test_transitions_are_smooth():
     dt = 0.01
     for name, until in (("aircraft_500s", 500.0), ("uav_maneuver", 300.0)):
         gen, tab = run(name, dt, until=until)
-        assert np.abs(np.diff(tab["rate"][1:])).max() / dt < 5.0    # rad/s^2 (UAV roll oscillation: ~2.1)
+        assert (
+            np.abs(np.diff(tab["rate"][1:])).max() / dt < 5.0
+        )  # rad/s^2 (UAV roll oscillation: ~2.1)
         assert np.abs(np.diff(tab["accel"][1:])).max() / dt < 20.0  # m/s^3 (UAV turn entry: ~10)
     abrupt = {"start": {"lat_deg": 40.0, "lon_deg": 110.0, "h": 100.0, "speed": 50.0},
               "segments": [{"type": "level", "duration": 1.0},
@@ -140,7 +142,9 @@ def test_roll_pitch_manoeuvres_and_hold_attitude():
     def at(key, time):
         return math.degrees(tab[key][int(round(time / 0.01))])
 
-    assert (at("roll", 10), at("pitch", 10), at("yaw", 10)) == pytest.approx((5, 10, -170), abs=1e-9)
+    assert (at("roll", 10), at("pitch", 10), at("yaw", 10)) == pytest.approx(
+        (5, 10, -170), abs=1e-9
+    )
     # yaw goes the short way from 0 to -170 deg
     assert np.all(np.degrees(tab["yaw"][:1000]) <= 1e-9)
     assert at("roll", 20 + 2.5) == pytest.approx(5.0 + 30.0, abs=1e-9)  # sine peak, window = 1
@@ -173,28 +177,37 @@ def base_profile(*segments):
                          *segments]}
 
 
-@pytest.mark.parametrize("segment, parameter", [
-    ({"type": "loop", "duration": 5.0}, "type"),
-    ({"type": "turn", "heading_change_deg": 30.0}, "duration"),
-    ({"type": "turn", "duration": -5.0, "heading_change_deg": 30.0}, "duration"),
-    ({"type": "turn", "duration": 5.0}, "turn_rate_deg"),
-    ({"type": "turn", "duration": 5.0, "turn_rate_deg": 3, "heading_change_deg": 30}, "turn_rate_deg"),
-    ({"type": "turn", "duration": 5.0, "turn_rate_deg": 3.0, "transition": -1.0}, "transition"),
-    ({"type": "turn", "duration": 5.0, "turn_rate_deg": "fast"}, "turn_rate_deg"),
-    ({"type": "turn", "duration": 5.0, "turnrate_deg": 3.0}, "turnrate_deg"),
-    ({"type": "accelerate", "duration": 5.0}, "accel"),
-    ({"type": "accelerate", "duration": 5.0, "final_speed": -3.0}, "final_speed"),
-    ({"type": "accelerate", "duration": 10.0, "accel": -20.0}, "accel"),
-    ({"type": "climb", "duration": 5.0}, "climb_angle_deg"),
-    ({"type": "climb", "duration": 5.0, "vertical_rate": 80.0}, "vertical_rate"),
-    ({"type": "climb", "duration": 5.0, "climb_angle_deg": 88.0}, "climb_angle_deg"),
-    ({"type": "roll", "duration": 5.0, "amplitude_deg": 10.0}, "period"),
-    ({"type": "roll", "duration": 5.0, "amplitude_deg": 10.0, "period": -2.0}, "period"),
-    ({"type": "pitch", "duration": 5.0, "period": 2.0}, "amplitude_deg"),
-    ({"type": "pitch", "duration": 5.0, "amplitude_deg": 5, "shape": "square"}, "shape"),
-    ({"type": "static", "duration": 5.0}, "type"),
-    ({"type": "hold_attitude", "duration": 5.0, "roll_deg": 0, "pitch_deg": 0, "yaw_deg": 0}, "type"),
-])
+@pytest.mark.parametrize(
+    "segment, parameter",
+    [
+        ({"type": "loop", "duration": 5.0}, "type"),
+        ({"type": "turn", "heading_change_deg": 30.0}, "duration"),
+        ({"type": "turn", "duration": -5.0, "heading_change_deg": 30.0}, "duration"),
+        ({"type": "turn", "duration": 5.0}, "turn_rate_deg"),
+        (
+            {"type": "turn", "duration": 5.0, "turn_rate_deg": 3, "heading_change_deg": 30},
+            "turn_rate_deg",
+        ),
+        ({"type": "turn", "duration": 5.0, "turn_rate_deg": 3.0, "transition": -1.0}, "transition"),
+        ({"type": "turn", "duration": 5.0, "turn_rate_deg": "fast"}, "turn_rate_deg"),
+        ({"type": "turn", "duration": 5.0, "turnrate_deg": 3.0}, "turnrate_deg"),
+        ({"type": "accelerate", "duration": 5.0}, "accel"),
+        ({"type": "accelerate", "duration": 5.0, "final_speed": -3.0}, "final_speed"),
+        ({"type": "accelerate", "duration": 10.0, "accel": -20.0}, "accel"),
+        ({"type": "climb", "duration": 5.0}, "climb_angle_deg"),
+        ({"type": "climb", "duration": 5.0, "vertical_rate": 80.0}, "vertical_rate"),
+        ({"type": "climb", "duration": 5.0, "climb_angle_deg": 88.0}, "climb_angle_deg"),
+        ({"type": "roll", "duration": 5.0, "amplitude_deg": 10.0}, "period"),
+        ({"type": "roll", "duration": 5.0, "amplitude_deg": 10.0, "period": -2.0}, "period"),
+        ({"type": "pitch", "duration": 5.0, "period": 2.0}, "amplitude_deg"),
+        ({"type": "pitch", "duration": 5.0, "amplitude_deg": 5, "shape": "square"}, "shape"),
+        ({"type": "static", "duration": 5.0}, "type"),
+        (
+            {"type": "hold_attitude", "duration": 5.0, "roll_deg": 0, "pitch_deg": 0, "yaw_deg": 0},
+            "type",
+        ),
+    ],
+)
 def test_segment_errors_name_index_type_and_parameter(segment, parameter):
     with pytest.raises(ParameterError) as err:
         TrajectoryGenerator(base_profile(segment), 0.01)

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator import tune as tuner
+from orchestrator.campaigns import tune as tuner
 from orchestrator.errors import NavfmuError
-from orchestrator.ssp import load_ssd
+from orchestrator.model.ssp import load_ssd
 
 MODEL = Path(__file__).resolve().parent.parent / "models" / "ahrs_turntable"
 PARAMS = ["fuzzy_e_z_right", "fuzzy_de_z_right"]
@@ -39,7 +39,7 @@ def test_same_seed_same_parameters_with_one_or_two_workers(serial):
 
 
 def test_ranges_come_from_the_declared_parameter_spec(serial):
-    from navcore.fuzzy import FEET
+    from navcore.filters.fuzzy import FEET
 
     assert serial["ranges"]["fuzzy_e_z_right"] == list(FEET["fuzzy_e_z_right"][1:3])
 

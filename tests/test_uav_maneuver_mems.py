@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navcore import components
-from orchestrator import ssp
+from navcore.components import registry as components
+from orchestrator.model import ssp
 from direct_replay import MODELS, rms, run_filter, simulate_sensors
 from test_ukf_filters import EXTRA, FILTERS, NAMES, SHORT_STOP, rms_row
 
@@ -177,7 +177,7 @@ def test_oracle_ukf_nees_within_20_percent():
     """Consistency where the model is right: IMU errors = Table 1 only, the filter's Q = the
     true noise (random-constant biases): NEES per group within 20 % of its dimension 3, mean
     of seeds 1-3 on 0-1200 s (measured 3.47 / 3.29 / 2.90, docs/uav_maneuver.md)."""
-    from orchestrator import scenarios
+    from orchestrator.running import scenarios
 
     model = scenarios.load_scenario(SCENARIO)
     params = {f"trajectory.{k}": v for k, v in ORACLE_TRAJECTORY.items()}

@@ -13,9 +13,9 @@ import os
 import numpy as np
 import pytest
 
-from navcore import components
-from navcore.component import ParameterError
-from navcore.ctfa import PAPER_T1, PAPER_T2, ctfa_q_scale
+from navcore.components import registry as components
+from navcore.core.component import ParameterError
+from navcore.filters.ctfa import PAPER_T1, PAPER_T2, ctfa_q_scale
 from direct_replay import MODELS, rms, run_filter, simulate_sensors
 
 SCENARIO = MODELS / "uav_maneuver"
@@ -144,7 +144,7 @@ def test_uav_maneuver_monte_carlo(tmp_path):
     index + 1, gnss.seed = 100 + that): Tables 2-4 ordering, pooled RMS at the GNSS fix
     epochs; a thin call of the campaign runner."""
     from campaign_helpers import run_paper_campaign
-    from orchestrator.metric_comparisons import pooled_rms
+    from orchestrator.results.metric_comparisons import pooled_rms
 
     n_runs = int(os.environ.get("NAVFMU_UAV_MC_RUNS", "10"))
     records, _ = run_paper_campaign("uav_maneuver", FILTERS, n_runs, tmp_path,

@@ -1,18 +1,20 @@
-"""The UKF's process model over all sigma points (navcore.ukf_filters.error_dynamics) against a
+"""The UKF's process model over all sigma points (navcore.filters.ukf_filters.error_dynamics)
+against a
 point-by-point reference written independently: scipy rotations for exp([phi x]), numpy
 cross products, textbook earth and transport rates, and the rotation vector's rate taken by
 central differences of exp(eps w_s) exp([phi x]) (so the kinematics' convention is checked,
 not only its algebra).  The UKF on that model against filterpy's UKF."""
+
 from __future__ import annotations
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from navcore import earth
-from navcore.ukf_filters import (NominalInterval, discrete_process_noise, error_dynamics,
+from navcore.ins import earth
+from navcore.filters.ukf_filters import (NominalInterval, discrete_process_noise, error_dynamics,
                                  propagate_points)
-from navcore.unscented import UnscentedKalmanFilter
+from navcore.filters.unscented import UnscentedKalmanFilter
 
 TAU_G, TAU_A = 3600.0, 1800.0
 
@@ -38,7 +40,8 @@ def rotation_vector_rate(phi, w_s, step=1e-5):
 
 
 def reference_derivative(x, nom):
-    """Module docstring of navcore.ukf_filters, one point; radii at the computed latitude."""
+    """Module docstring of navcore.filters.ukf_filters, one point; radii at the computed
+    latitude."""
     dr, dv, phi, dbg, dba = x[0:3], x[3:6], x[6:9], x[9:12], x[12:15]
     rn, re = earth.radii(nom.lat)
     w_in_c, w_cor_c = nav_rates(nom.lat, nom.h, nom.v, rn, re)
@@ -46,7 +49,11 @@ def reference_derivative(x, nom):
     w_in_t, w_cor_t = nav_rates(nom.lat - dr[0] / (rn + nom.h), nom.h + dr[2], v_t, rn, re)
     R = Rotation.from_rotvec(phi).as_matrix()
     w_s = R @ (w_in_c - nom.C @ dbg) - w_in_t
-    ddv = (nom.f - R @ nom.f) + R @ (nom.C @ dba) - (np.cross(w_cor_c, nom.v) - np.cross(w_cor_t, v_t))
+    ddv = (
+        (nom.f - R @ nom.f)
+        + R @ (nom.C @ dba)
+        - (np.cross(w_cor_c, nom.v) - np.cross(w_cor_t, v_t))
+    )
     ddv[2] += 2.0 * earth.gravity(nom.lat, nom.h) / np.sqrt(rn * re) * dr[2]
     return np.concatenate([dv, ddv, rotation_vector_rate(phi, w_s), -dbg / TAU_G, -dba / TAU_A])
 

@@ -4,9 +4,14 @@ import copy
 import numpy as np
 import pytest
 
-from navcore.component import InputError, ParameterError
-from navcore.unscented import (UnscentedKalmanFilter, matrix_sqrt, sigma_points, sigma_weights,
-                               unscented_transform)
+from navcore.core.component import InputError, ParameterError
+from navcore.filters.unscented import (
+    UnscentedKalmanFilter,
+    matrix_sqrt,
+    sigma_points,
+    sigma_weights,
+    unscented_transform,
+)
 
 # (alpha, beta, kappa): the default, and a set with a negative centre weight (lambda < 0)
 PARAMETER_SETS = [(1.0, 2.0, 0.0), (0.5, 2.0, -1.0)]
@@ -100,7 +105,9 @@ def test_matrix_sqrt_fallback_for_singular_and_slightly_indefinite():
     assert used_fallback
     assert np.allclose(L @ L.T, P_singular, atol=1e-12)
     V = np.linalg.qr(rng.normal(size=(4, 4)))[0]
-    P_indefinite = V @ np.diag([1.0, 0.5, 1e-3, -1e-15]) @ V.T    # round-off-sized negative eigenvalue
+    P_indefinite = (
+        V @ np.diag([1.0, 0.5, 1e-3, -1e-15]) @ V.T
+    )  # round-off-sized negative eigenvalue
     L, used_fallback = matrix_sqrt(P_indefinite)
     assert used_fallback and np.isfinite(L).all()
     assert np.allclose(L @ L.T, V @ np.diag([1.0, 0.5, 1e-3, 0.0]) @ V.T, atol=1e-12)
@@ -180,7 +187,9 @@ def test_scale_arguments_equal_scaled_matrices_and_split_update():
     pred = c.predict_measurement(lambda x: H @ x)
     ic = c.correct(z, pred, 0.5 * R)
     for key in ("innovation", "S", "K"):
-        assert np.allclose(ia[key], ib[key], rtol=1e-13) and np.allclose(ic[key], ib[key], rtol=1e-13)
+        assert np.allclose(ia[key], ib[key], rtol=1e-13) and np.allclose(
+            ic[key], ib[key], rtol=1e-13
+        )
     assert np.allclose(a.P, b.P, rtol=1e-13) and np.allclose(c.P, b.P, rtol=1e-13)
 
 

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from navcore import motion_profiles
-from navcore.component import ParameterError
-from orchestrator import ssp, ssp_xml
+from navcore.ins import motion_profiles
+from navcore.core.component import ParameterError
+from orchestrator.model import ssp, ssp_xml
 from orchestrator.errors import SspError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,4 +1,4 @@
-"""Thin pythonfmu shell around a navcore :class:`~navcore.component.Component`.
+"""Thin pythonfmu shell around a navcore :class:`~navcore.core.component.Component`.
 
 Each FMU script in ``fmus/`` is a few lines: a class deriving directly from ``Fmi2Slave``,
 defined in the script itself, whose ``__init__`` calls :func:`setup` with the navcore component
@@ -14,8 +14,8 @@ does the FMI side once for all of them, one concern per module:
 * writes SI units and their UnitDefinitions into the model description (pythonfmu does not;
   :mod:`fmushell.model_description`);
 * saves the full internal state (the registered values and the component's declared state,
-  :mod:`navcore.state`) behind ``canGetAndSetFMUstate`` / ``canSerializeFMUstate``, and
-  serializes it in the checked plain-data format of :mod:`navcore.state_format`: a blob is
+  :mod:`navcore.core.state`) behind ``canGetAndSetFMUstate`` / ``canSerializeFMUstate``, and
+  serializes it in the checked plain-data format of :mod:`navcore.core.state_format`: a blob is
   never code, and one that is refused leaves the instance as it was (:mod:`fmushell.fmu_state`);
 * never lets a Python exception escape an FMI call (but the refusals of the statuses
   paragraph below, where the binary turns them into fmi2Error): a user error (NaN input)
@@ -30,7 +30,7 @@ does the FMI side once for all of them, one concern per module:
   teardown running after the C++ static destructors (:mod:`fmushell.pythonfmu_fixes`).
 
 Hostile or careless host calls (FMI rules checked here and in
-:meth:`navcore.component.Component.advance`):
+:meth:`navcore.core.component.Component.advance`):
 
 * ``doStep`` whose communication point is not where the previous step ended (back or ahead),
   or whose step size is not > 0: refused, nothing changes, a following legal step works;

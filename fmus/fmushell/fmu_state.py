@@ -1,7 +1,7 @@
 """FMU states: the declared data of an instance, taken, restored and serialized, never code.
 
-A state holds the registered values and the component's declared state (:mod:`navcore.state`);
-a blob is the checked plain-data format of :mod:`navcore.state_format`, stamped with the FMU's
+A state holds the registered values and the component's declared state (:mod:`navcore.core.state`);
+a blob is the checked plain-data format of :mod:`navcore.core.state_format`, stamped with the FMU's
 identity (model name and the hash of its Python sources).
 """
 from __future__ import annotations
@@ -11,9 +11,9 @@ from pathlib import Path
 
 from pythonfmu.enums import Fmi2Status
 
-from navcore import state_format
+from navcore.core import state_format
 from navcore.errors import NavcoreError, StateError, StateFormatError
-from navcore.state import capture_value, check_kind
+from navcore.core.state import capture_value, check_kind
 
 from .refusals import FmiCallRefused, refusals_return_error
 

@@ -6,7 +6,7 @@ from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Slave
 
-from navcore.constants import DEG as _DEG, G0 as _G0
+from navcore.ins.constants import DEG as _DEG, G0 as _G0
 
 #: every unit symbol used on our interfaces: (FMI 2.0 BaseUnit exponents, factor to SI).
 #: Datasheet units (only in parameters whose name says so) carry their factor; those with a

@@ -52,10 +52,14 @@ def setup(slave, component_class):
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
     for port in cls.inputs:
-        variability = Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
+        variability = (
+            Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
+        )
         _register(slave, port, Fmi2Causality.input, variability, None)
     for port in cls.outputs:
-        variability = Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
+        variability = (
+            Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
+        )
         _register(slave, port, Fmi2Causality.output, variability, None)
 
 

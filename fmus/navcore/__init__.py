@@ -11,5 +11,6 @@ kinematics), ``imu_errors`` and ``gnss_errors`` (sensor error models), ``error_m
 (``component`` the contract, ``sensor_components``, ``replay``, ``filter_component``,
 ``kf_components``, ``ukf_components``, ``ahrs_components``, registered in ``components``),
 ``errors`` (the one error hierarchy), ``signals`` (the variable contracts), ``timing`` (sample
-grids and the one time tolerance) and ``latency`` (the history that applies a late GNSS fix at its time).
+grids and the one time tolerance) and ``latency`` (the history that applies a late GNSS fix at its
+time).
 """

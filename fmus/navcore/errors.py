@@ -21,7 +21,8 @@ exception is a bug.
         StateError          a state cannot be taken or restored
         StateFormatError    a serialized state is refused
       the master's: SspError, WiringError, SimulationError (orchestrator.errors),
-        TaskError (orchestrator.executor), NativeBuildError (orchestrator.native_library)
+        TaskError (orchestrator.campaigns.executor), NativeBuildError
+        (orchestrator.building.native_library)
 """
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ the paper was received (2013-04-08), and evaluate the International Geomagnetic 
 Field (IGRF-14 through the ``ppigrf`` package) there: total intensity H and inclination I
 of the paper's field model ``[H cos I, 0, H sin I]`` (its yaw is from magnetic north; the
 declination, -5.6 deg here, is not modelled).  Gravity is WGS-84 normal gravity
-(navcore.earth.gravity).  Run ``python models/ahrs_turntable/make_field.py`` to print the
+(navcore.ins.earth.gravity).  Run ``python models/ahrs_turntable/make_field.py`` to print the
 values written in ``trajectory.ssv`` and ``filter.ssv`` (mag_field_T, mag_inclination,
 gravity_mps2); tests/test_ahrs_scenario.py checks that the files hold them.
 """
@@ -32,7 +32,7 @@ def field():
 
 
 def gravity():
-    from navcore.earth import gravity as normal_gravity
+    from navcore.ins.earth import gravity as normal_gravity
 
     return float(normal_gravity(math.radians(LAT_DEG), HEIGHT_M))
 

@@ -1,0 +1,314 @@
+"""The shell every INS/GNSS filter component shares: its parameters, inputs, outputs and timing.
+
+:class:`InsGnssFilter` declares the parameters common to every filter (initial state and
+covariance, the process and measurement noise assumed, the latency bound), the filter inputs
+and outputs of :mod:`navcore.core.signals`, and the stepping rule (IMU time tags, fixes applied at
+their time of validity through :mod:`navcore.filters.latency`).  The filter families
+(:mod:`navcore.components.kf_components`, :mod:`navcore.components.ukf_components`) subclass it with
+their engine and their extra parameters and diagnostics.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..core import signals
+from ..core import state as _state
+from ..core.component import Component, Limits, real, string
+from ..errors import DivergenceError, StepSizeError
+from ..sensors.gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS
+from ..ins.constants import DPH, DPSH, UG
+from ..sensors.imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_LIMITS,
+    GYRO_BIAS_LIMITS)
+from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
+from ..filters.latency import SolutionHistory
+from ..ins.strapdown import Strapdown
+from ..core.timing import same_time, time_tolerance
+
+#: default latency bound of the filters (parameter ``max_fix_age``) [s]: a 1 Hz receiver
+#: under a Jacobi master (libcosim) reaches the filter one receiver period (1 s) after the
+#: fix was taken; the extra half period covers a receiver's own output latency up to 0.5 s
+#: on top (or a 2 Hz receiver with a 1 s delay)
+DEFAULT_MAX_FIX_AGE = 1.5
+
+#: accepted ranges of the filters' parameters: the initial state within the ranges of the
+#: signals (navcore.core.signals); an assumed GNSS sigma positive and at most the receiver model's
+_ANGLE = signals.EULER_ANGLE
+_R_POS = Limits(0.0, POS_SIGMA_LIMITS.high, low_open=True)
+_R_VEL = Limits(0.0, VEL_SIGMA_LIMITS.high, low_open=True)
+_TAU = Limits(0.0, 1e9)
+
+
+def _gauss_markov_parameters(sensor, suffix, unit, limits):
+    """The assumed first-order Gauss-Markov bias of one sensor triad: sigma and time constant."""
+    return (real(f"q_{sensor}_bias_instability_{suffix}", unit,
+                 f"Gauss-Markov {sensor} bias sigma assumed", 0.0, limits),
+            real(f"q_{sensor}_bias_tau_s", "s",
+                 f"Gauss-Markov {sensor} bias correlation time (0 = constant)", 0.0, _TAU))
+
+
+_FILTER_PARAMETERS = (
+    *signals.state_ports("init", "initial"),
+    real("init_roll", "rad", "initial roll", 0.0, _ANGLE),
+    real("init_pitch", "rad", "initial pitch", 0.0, _ANGLE),
+    real("init_yaw", "rad", "initial yaw", 0.0, _ANGLE),
+    real("p0_pos", "m", "initial 1-sigma position error, each axis", 5.0, Limits(0.0, 1e5)),
+    real("p0_vel", "m/s", "initial 1-sigma velocity error, each axis", 0.3, Limits(0.0, 1e3)),
+    real("p0_att_level", "rad", "initial 1-sigma roll/pitch (north/east tilt) error",
+         math.radians(1.0), Limits(0.0, math.pi)),
+    real("p0_att_yaw", "rad", "initial 1-sigma heading error", math.radians(1.0),
+         Limits(0.0, math.pi)),
+    real("p0_gyro_bias_dph", "deg/h", "initial 1-sigma gyro bias", 0.1, GYRO_BIAS_LIMITS),
+    real("p0_accel_bias_ug", "ug", "initial 1-sigma accelerometer bias", 100.0,
+         ACCEL_BIAS_LIMITS),
+    real("q_gyro_arw_dpsh", "deg/sqrt(h)", "gyro angle random walk assumed by the filter", 0.001,
+         GYRO_ARW_LIMITS),
+    real("q_accel_vrw_ugpsHz", "ug/sqrt(Hz)", "accel velocity random walk assumed by the filter",
+         5.0, ACCEL_VRW_LIMITS),
+    *_gauss_markov_parameters("gyro", "dph", "deg/h", GYRO_BIAS_LIMITS),
+    *_gauss_markov_parameters("accel", "ug", "ug", ACCEL_BIAS_LIMITS),
+    real("r_pos_n", "m", "GNSS position 1-sigma assumed, north", 5.0, _R_POS),
+    real("r_pos_e", "m", "GNSS position 1-sigma assumed, east", 5.0, _R_POS),
+    real("r_pos_d", "m", "GNSS position 1-sigma assumed, down", 5.0, _R_POS),
+    real("r_vel_n", "m/s", "GNSS velocity 1-sigma assumed, north", 0.3, _R_VEL),
+    real("r_vel_e", "m/s", "GNSS velocity 1-sigma assumed, east", 0.3, _R_VEL),
+    real("r_vel_d", "m/s", "GNSS velocity 1-sigma assumed, down", 0.3, _R_VEL),
+    string("measurement", "GNSS measurement used: 'position' or 'position_velocity'",
+           "position_velocity"),
+    real("max_fix_age", "s", "latency bound: a fix whose gnss_time is more than this from the "
+         "filter's nav_time is not applied (counted in n_stale_fixes); a later one is applied "
+         "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
+)
+
+_IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
+_GNSS_VALUE_NAMES = ("gnss_time", "gnss_lat", "gnss_lon", "gnss_h", "gnss_vn", "gnss_ve",
+                     "gnss_vd")
+
+_STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
+
+
+class InsGnssFilter(Component):
+    """Common shell of every INS/GNSS filter: same parameters, inputs and outputs.
+
+    Subclasses name their engine (``engine_class``), may add parameters (``extra_parameters``)
+    and diagnostic outputs (``extra_outputs``), and build the engine in :meth:`make_engine`.
+
+    Time of validity, for every engine: a fix is applied at the IMU epoch nearest its
+    ``gnss_time`` -- at once, after waiting (a fix from the future) or by rollback and exact
+    re-propagation from a checkpoint (a late fix; :mod:`navcore.filters.latency`, Groves 2013 sec.
+    3.3) -- within the latency bound ``max_fix_age`` (:data:`DEFAULT_MAX_FIX_AGE`); beyond
+    it, it is counted in ``n_stale_fixes``.  The filter follows the IMU's time tags, not the
+    communication step: each new interval must start where the last one integrated ended.
+    """
+
+    engine_class = KfEngine
+    extra_parameters = ()
+    extra_outputs = ()
+    #: engine attributes written, under the same names, to outputs after every update
+    engine_diagnostics = ()
+    #: the filter applies fixes, so it keeps the history that late ones need
+    applies_fixes = True
+    inputs = signals.FILTER_INPUTS
+    default_experiment = (0.0, 500.0, 0.01)
+    state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
+                    "n_stale", "late_fixes")
+    derived_fields = ("max_fix_age",)
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls.parameters = _FILTER_PARAMETERS + tuple(cls.extra_parameters)
+        cls.outputs = signals.FILTER_OUTPUTS + tuple(cls.extra_outputs)
+
+    # -- configuration -----------------------------------------------------------------
+    def make_config(self):
+        p = self.params
+        self.require("measurement", p["measurement"] in MEASUREMENTS,
+                     f"is not one of {sorted(MEASUREMENTS)}")
+        p0 = np.concatenate([
+            np.full(3, p["p0_pos"]), np.full(3, p["p0_vel"]),
+            [p["p0_att_level"], p["p0_att_level"], p["p0_att_yaw"]],
+            np.full(3, p["p0_gyro_bias_dph"] * DPH), np.full(3, p["p0_accel_bias_ug"] * UG)])
+        r = [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"], p["r_vel_n"], p["r_vel_e"], p["r_vel_d"]]
+        return KfConfig(
+            p0=p0, gyro_arw=p["q_gyro_arw_dpsh"] * DPSH, accel_vrw=p["q_accel_vrw_ugpsHz"] * UG,
+            gyro_bias_sigma=p["q_gyro_bias_instability_dph"] * DPH,
+            gyro_bias_tau=p["q_gyro_bias_tau_s"],
+            accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
+            accel_bias_tau=p["q_accel_bias_tau_s"],
+            r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
+            measurement=p["measurement"])
+
+    def engine_options(self):
+        """Validated keyword arguments of the engine beyond (config, nav); subclasses extend."""
+        return {}
+
+    def make_engine(self, config, nav):
+        return self.engine_class(config, nav, **self.engine_options())
+
+    def fresh_engine(self):
+        """The engine as it starts, built from the parameters (validated first)."""
+        p = self.params
+        config = self.make_config()
+        nav = Strapdown.from_euler(p["init_lat"], p["init_lon"], p["init_h"],
+                                   np.array([p["init_vn"], p["init_ve"], p["init_vd"]]),
+                                   p["init_roll"], p["init_pitch"], p["init_yaw"])
+        return self.make_engine(config, nav)
+
+    # -- life cycle --------------------------------------------------------------------
+    def initialize(self, start_time):
+        p = self.params
+        self.engine = self.fresh_engine()
+        self.nav_time = float(start_time)
+        self.imu_dt = 0.0            # length of the last IMU interval integrated
+        self.last_epoch = 0
+        self.max_fix_age = p["max_fix_age"]
+        self.history = SolutionHistory(self.nav_time, self.engine)
+        self.pending = []            # fixes from the future: (gnss_time, lat, lon, h, v)
+        self.n_stale = 0
+        self.late_fixes = False      # a fix was applied in the past: dense checkpoints
+        self.out = {q.name: q.default() for q in self.outputs}
+        self._write_solution()
+        self.write_diagnostics(None)  # extra outputs start from the engine's initial state
+        return dict(self.out)
+
+    def step(self, t, h, inputs):
+        """Integrate the new IMU interval (if any), then apply the fixes due (module
+        :mod:`navcore.filters.latency`: at the IMU epoch nearest their gnss_time)."""
+        self.check_inputs(inputs, _IMU_INPUT_NAMES)
+        imu_dt = inputs["imu_dt"]
+        imu_time = inputs["imu_time"]
+        out = self.out
+        out["updated"] = False
+        integrated = False
+        # a new IMU interval ends after the one already integrated: mechanize it
+        if imu_time > self.nav_time + 0.5 * imu_dt and imu_dt > 0:
+            begin = imu_time - imu_dt
+            if not same_time(begin, self.nav_time, imu_dt):
+                skipped = round((begin - self.nav_time) / imu_dt)
+                raise StepSizeError(
+                    f"{self.model_name}: input 'imu_time' = {imu_time!r} s with 'imu_dt' = "
+                    f"{imu_dt!r} s starts at {begin!r} s, but the last IMU interval integrated "
+                    f"ended at nav_time = {self.nav_time!r} s ({skipped} IMU intervals "
+                    "skipped or overlapping); step the filter at least as often as the IMU "
+                    "delivers samples")
+            self.imu_dt = imu_dt
+            dtheta = np.array([inputs["imu_dtheta_x"], inputs["imu_dtheta_y"],
+                               inputs["imu_dtheta_z"]])
+            dvel = np.array([inputs["imu_dvel_x"], inputs["imu_dvel_y"], inputs["imu_dvel_z"]])
+            self._integrate((imu_time, dtheta, dvel, imu_dt))
+            integrated = True
+            while self.pending and self.pending[0][0] <= self.nav_time + self._half_interval():
+                self._apply(self.pending.pop(0))
+        epoch = inputs["gnss_epoch"]
+        if epoch != self.last_epoch:
+            self.last_epoch = epoch
+            if inputs["gnss_valid"]:
+                self._receive_fix(inputs)
+        if integrated or out["updated"]:   # otherwise the engine, so the solution, is unchanged
+            self._write_solution()
+        return out
+
+    def _integrate(self, increment):
+        imu_time, dtheta, dvel, imu_dt = increment
+        self.engine.propagate(dtheta, dvel, imu_dt)
+        self.nav_time = imu_time
+        if self.applies_fixes:
+            self.history.record(increment, self.engine, self.max_fix_age + imu_dt,
+                                self.late_fixes)
+
+    def _half_interval(self):
+        """A fix within this of an IMU epoch is applied at that epoch."""
+        return 0.5 * self.imu_dt + time_tolerance(self.imu_dt, self.nav_time)
+
+    def _receive_fix(self, inputs):
+        """A new valid fix: apply it now, later (from the future) or in the past (rollback),
+        or count it as stale when it is outside the latency bound."""
+        self.check_inputs(inputs, _GNSS_VALUE_NAMES)
+        fix = (inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
+               np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]))
+        age = self.nav_time - fix[0]
+        self.out["fix_age"] = age
+        half = self._half_interval()
+        bound = self.max_fix_age + time_tolerance(self.imu_dt, self.nav_time)
+        too_far = abs(age) > bound
+        # (within the bound the history reaches back far enough unless a fix was applied)
+        before_applied = not too_far and fix[0] < self.history.oldest_time() - half
+        if too_far or before_applied:
+            self._stale(fix[0], age, before_applied)
+        elif fix[0] > self.nav_time + half:
+            self.pending.append(fix)
+        elif fix[0] >= self.nav_time - half:
+            self._apply(fix)
+        else:
+            self._apply_in_the_past(fix, half)
+
+    def _stale(self, gnss_time, age, before_applied):
+        self.n_stale += 1
+        self.out["n_stale_fixes"] = self.n_stale
+        if self.n_stale == 1:
+            why = ("is older than the epoch of a fix already applied" if before_applied else
+                   f"is {abs(age):.6g} s {'old' if age > 0 else 'ahead'}, beyond parameter "
+                   f"'max_fix_age' = {self.max_fix_age} s")
+            self.notify(f"{self.model_name}: at nav_time = {self.nav_time:.6g} s the fix taken at "
+                        f"gnss_time = {gnss_time:.6g} s {why}: not applied (counted in "
+                        "n_stale_fixes; later stale fixes are only counted)")
+
+    def _apply_in_the_past(self, fix, half):
+        """Roll back to the checkpoint before the fix's epoch, re-propagate to it, apply the
+        fix, re-propagate to the present (module :mod:`navcore.filters.latency`)."""
+        self.late_fixes = True
+        self.nav_time, tree, replay = self.history.rollback(fix[0] + half)
+        self.engine = self.fresh_engine()
+        _state.restore(self.engine, tree, f"{self.model_name} checkpoint")
+        applied = self.nav_time >= fix[0] - half
+        if applied:
+            self._apply(fix)
+        for increment in replay:
+            self._integrate(increment)
+            if not applied and self.nav_time >= fix[0] - half:
+                self._apply(fix)
+                applied = True
+
+    def _apply(self, fix):
+        """Measurement update with ``fix`` at the current IMU epoch (its gnss_time within
+        half an interval); the history restarts here."""
+        gnss_time, lat, lon, h, v = fix
+        engine = self.engine
+        z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
+        result = engine.update(z)
+        self.history.restart(self.nav_time, engine)
+        out = self.out
+        out["updated"] = True
+        out["nis"] = result.nis
+        out["nis_dof"] = len(z)
+        out["q_scale"] = result.q_scale
+        out["r_scale"] = result.r_scale
+        out["fading_factor"] = result.fading_factor
+        out["outlier"] = result.outlier
+        self.write_diagnostics(result)
+
+    def write_diagnostics(self, result):
+        """The extra outputs, after every update (``result``) and once at initialization
+        (``result`` None): each name in ``engine_diagnostics`` copied from the engine's
+        attribute of that name; subclasses add what needs computing."""
+        for name in self.engine_diagnostics:
+            self.out[name] = getattr(self.engine, name)
+
+    def _write_solution(self):
+        engine = self.engine
+        nav = engine.nav
+        out = self.out
+        out["nav_time"] = self.nav_time
+        out["nav_lat"], out["nav_lon"], out["nav_h"] = nav.lat, nav.lon, nav.h
+        out["nav_vn"], out["nav_ve"], out["nav_vd"] = nav.v_ned.tolist()
+        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = nav.euler()
+        update = out.update
+        update(zip(signals.NAV_BG_NAMES, engine.gyro_bias.tolist()))
+        update(zip(signals.NAV_BA_NAMES, engine.accel_bias.tolist()))
+        update(zip(_STD_NAMES, np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0)).tolist()))
+        if not math.isfinite(sum(out.values())):  # one pass over every output
+            bad = next(k for k, v in out.items() if not math.isfinite(v))
+            raise DivergenceError(f"{self.model_name}: output '{bad}' became non-finite at "
+                                  f"t = {self.nav_time} s (the filter diverged)")
+

@@ -1,0 +1,218 @@
+"""The sensor components: TrajectoryImu (truth and IMU along a motion profile) and GnssReceiver.
+
+Each class is a :class:`~navcore.core.component.Component`: it declares its variables (signal names
+and units from :mod:`navcore.core.signals`) and advances with ``step(t, h, inputs)``.  The error
+models they wrap declare their own parameter tables; :func:`ports_from_table` turns such a
+table into ports.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core import signals
+from ..core.component import Component, Limits, ParameterError, boolean, integer, real, string
+from ..sensors.gnss_errors import GnssErrorModel
+from ..sensors.imu_errors import INTENSITY_REFERENCE_RATE, ImuErrorModel
+from ..sensors.magnetometer import MagnetometerModel
+from ..ins.rotations import _euler_rows
+from ..core.timing import samples_reached, time_tolerance
+from ..ins.trajectory import TrajectoryGenerator
+
+#: accepted seeds (numpy's generators take non-negative integers; FMI Integers are 32 bit)
+SEED_LIMITS = Limits(0, 2**31 - 1)
+
+_UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug",
+                      "ug/sqrt(Hz)": "ug/sqrt(Hz)", "ppm": "ppm", "urad": "urad",
+                      "deg/h/g": "deg/h/g", "s": "s", "m": "m", "m/s": "m/s", "rad/s": "rad/s",
+                      "m/s2": "m/s2", "T": "T", "rad": "rad", "Hz": "Hz", "": ""}
+
+
+def ports_from_table(table):
+    """Ports for a ``{name: (default, unit, description, limits)}`` parameter table of a
+    navcore model (``limits`` None for a string)."""
+    ports = []
+    for name, (default, unit, description, limits) in table.items():
+        if isinstance(default, str):
+            ports.append(string(name, description, default))
+        else:
+            ports.append(real(name, _UNIT_OF_DATASHEET[unit], description, default, limits))
+    return tuple(ports)
+
+
+# ---------------------------------------------------------------------------------------
+class TrajectoryImu(Component):
+    """6-DOF truth from a motion profile and the IMU increments measured along it.
+
+    Samples every ``imu_period`` on its own grid (:mod:`navcore.core.timing`): a communication
+    step covering k epochs computes all k samples and outputs the last (k steps of one
+    period give the same numbers bit for bit); a step reaching no epoch holds the outputs.
+    """
+
+    description = ("Truth trajectory from a motion profile on WGS-84 and the strapdown IMU "
+                   "increments along it, with bias, noise, Gauss-Markov, scale-factor, "
+                   "misalignment and manoeuvre-dependent noise errors; a three-axis "
+                   "magnetometer and a vibration disturbance.")
+    parameters = (
+        string("profile", "built-in motion profile name (static, turntable_240s, "
+               "aircraft_500s, manoeuvre_1h, uav_maneuver) or path of a JSON profile file",
+               "aircraft_500s"),
+        real("imu_period", "s", "IMU sampling interval (samples on this grid; any communication "
+             "step)", 0.01,
+             Limits(0.0, 1.0, low_open=True)),
+        boolean("extend_profile", "allow a run beyond the profile's end (the truth then flies "
+                "on at the final velocity and attitude)", False),
+        integer("seed", "seed of every random error of the IMU and the magnetometer", 1,
+                SEED_LIMITS),
+        *ports_from_table(ImuErrorModel.PARAMETERS),
+        *ports_from_table(MagnetometerModel.PARAMETERS),
+    )
+    inputs = ()
+    outputs = signals.TRUTH + signals.IMU + signals.MAG
+    default_experiment = (0.0, 500.0, 0.01)
+    state_fields = ("generator", "errors", "magnetometer", "n", "out")
+    derived_fields = ("dt", "mag_on", "_no_mag", "start_time")
+
+    def initialize(self, start_time):
+        self.dt = self.params["imu_period"]
+        self.generator = TrajectoryGenerator(self.params["profile"], self.dt)
+        error_params = {k: self.params[k] for k in ImuErrorModel.PARAMETERS}
+        self.errors = ImuErrorModel(error_params, self.params["seed"])
+        self.magnetometer = MagnetometerModel(
+            {k: self.params[k] for k in MagnetometerModel.PARAMETERS}, self.params["seed"])
+        mag = self.magnetometer
+        # the magnetometer/vibration model runs (and draws) only when it is switched on, so a
+        # scenario without it keeps its numbers and its speed
+        self.mag_on = bool(mag.field_ned.any() or mag.vibration_on)
+        self.start_time = float(start_time)
+        self.n = 0
+        truth = self.generator.state()
+        out = self._truth(truth)
+        out.update({p.name: 0.0 for p in signals.IMU + signals.MAG})
+        out["imu_time"] = out["mag_time"] = self.start_time
+        self._no_mag = {p.name: out[p.name] for p in signals.MAG}
+        if self.mag_on:
+            self._write_mag(out, self.start_time, truth)
+        self.out = out
+        return dict(out)
+
+    def check_stop_time(self, stop_time):
+        """Refuse a run past the profile's end unless ``extend_profile``."""
+        end = self.start_time + self.generator.duration
+        if not self.params["extend_profile"] and stop_time > end + time_tolerance(self.dt, end):
+            raise ParameterError(
+                f"{self.model_name}: the run ends at {stop_time:g} s, after the end of "
+                f"profile '{self.params['profile']}' at {end:g} s; stop by {end:g} s or set "
+                "parameter 'extend_profile' = true to fly on at the final velocity")
+
+    def _write_mag(self, out, t, truth):
+        C_bn = np.array(_euler_rows(truth["roll"], truth["pitch"], truth["yaw"]))
+        m = self.magnetometer.measure(t, C_bn)
+        out["mag_time"] = t
+        out["mag_x"], out["mag_y"], out["mag_z"] = (float(v) for v in m)
+
+    def _truth(self, s):
+        return {"truth_time": self.start_time + s["time"], "truth_lat": s["lat"],
+                "truth_lon": s["lon"], "truth_h": s["h"], "truth_vn": s["vn"],
+                "truth_ve": s["ve"], "truth_vd": s["vd"], "truth_roll": s["roll"],
+                "truth_pitch": s["pitch"], "truth_yaw": s["yaw"]}
+
+    def step(self, t, h, inputs):
+        for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):
+            self.out = self._sample()
+        return self.out
+
+    def _sample(self):
+        truth, dtheta, dvel = self.generator.step()
+        self.n += 1
+        t_end = self.start_time + self.n * self.dt
+        intensity = self.generator.last_rate_norm / INTENSITY_REFERENCE_RATE
+        dtheta, dvel = self.errors.apply(t_end, self.dt, dtheta, dvel, intensity)
+        out = self._truth(truth)
+        if self.mag_on:
+            self._write_mag(out, t_end, truth)
+            if self.magnetometer.vibrating(t_end):
+                dvel = dvel + self.magnetometer.accel_disturbance(t_end) * self.dt
+        else:
+            out.update(self._no_mag)
+        out["imu_time"] = t_end
+        out["imu_dt"] = dt = self.dt
+        dth, dv = dtheta.tolist(), dvel.tolist()   # plain floats: the outputs are state
+        update = out.update
+        update(zip(signals.IMU_DTHETA_NAMES, dth))
+        update(zip(signals.IMU_DVEL_NAMES, dv))
+        update(zip(signals.IMU_GYRO_NAMES, [x / dt for x in dth]))
+        update(zip(signals.IMU_ACCEL_NAMES, [x / dt for x in dv]))
+        return out
+
+
+# ---------------------------------------------------------------------------------------
+class GnssReceiver(Component):
+    """Position/velocity fixes from the truth at the receiver's own rate, with its errors.
+
+    Driven by the truth's time tag: a fix is taken when ``truth_time`` reaches the next epoch
+    of its grid (one per step; epochs a coarse step jumps over are skipped), so any
+    communication step works.  ``output_delay`` > 0 publishes each fix at the first
+    communication point at least that long after ``gnss_time`` (which keeps the time the
+    fix was taken): the latency of a real receiver's solution.
+    """
+
+    description = ("GNSS receiver: position and velocity fixes from the truth at its own rate "
+                   "with per-axis noise, noise steps, outlier patches, periodic m-times "
+                   "outliers and outages; 'gnss_epoch' counts fixes.")
+    parameters = (
+        integer("seed", "seed of every random error of the receiver", 2, SEED_LIMITS),
+        real("output_delay", "s", "latency of the receiver's output: a fix is published this "
+             "long after it was taken, with its gnss_time unchanged (0 = at once)", 0.0,
+             Limits(0.0, 3600.0)),
+        *ports_from_table(GnssErrorModel.PARAMETERS),
+    )
+    inputs = signals.TRUTH[:7]
+    outputs = signals.GNSS + signals.GNSS_INJECTED
+    default_experiment = (0.0, 500.0, 1.0)
+    state_fields = ("model", "next_fix", "n_fix", "out", "queue")
+    derived_fields = ("interval", "delay", "start_time")
+
+    def initialize(self, start_time):
+        self.delay = self.params["output_delay"]
+        self.queue = []   # fixes taken, not yet published (output_delay > 0)
+        self.model = GnssErrorModel({k: self.params[k] for k in GnssErrorModel.PARAMETERS},
+                                    self.params["seed"])
+        self.interval = self.params["fix_interval"]
+        self.next_fix = float(start_time) + self.interval
+        self.n_fix = 0
+        self.start_time = float(start_time)
+        self.out = {p.name: p.default() for p in self.outputs}
+        self.out["gnss_time"] = float(start_time)
+        return dict(self.out)
+
+    def step(self, t, h, inputs):
+        self.check_inputs(inputs, ("truth_time", "truth_lat", "truth_lon", "truth_h",
+                                          "truth_vn", "truth_ve", "truth_vd"))
+        t_truth = inputs["truth_time"]
+        if t_truth + time_tolerance(self.interval, t_truth) >= self.next_fix:
+            fix = self._fix(t_truth, inputs)
+            if self.delay == 0.0:
+                self.out = fix
+            else:
+                self.queue.append(fix)
+        if self.queue:
+            now = t + h
+            tol = time_tolerance(self.interval, now)
+            while self.queue and self.queue[0]["gnss_time"] + self.delay <= now + tol:
+                self.out = self.queue.pop(0)
+        return self.out
+
+    def _fix(self, t_truth, inputs):
+        # one fix per due epoch; epochs missed by a coarse step are skipped, not queued
+        k = samples_reached(self.start_time, self.interval, t_truth)
+        self.next_fix = self.start_time + (k + 1) * self.interval
+        fix = self.model.measure(t_truth, inputs["truth_lat"], inputs["truth_lon"],
+                                 inputs["truth_h"],
+                                 np.array([inputs["truth_vn"], inputs["truth_ve"],
+                                           inputs["truth_vd"]]))
+        self.n_fix += 1
+        return {"gnss_time": t_truth, "gnss_lat": fix["lat"], "gnss_lon": fix["lon"],
+                "gnss_h": fix["h"], "gnss_vn": fix["vn"], "gnss_ve": fix["ve"],
+                "gnss_vd": fix["vd"], "gnss_valid": bool(fix["valid"]),
+                "gnss_epoch": self.n_fix, "gnss_outlier": bool(fix["outlier"])}
+

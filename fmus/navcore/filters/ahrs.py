@@ -1,0 +1,301 @@
+"""Attitude (AHRS) unscented filters of paper 003 (Xiao & Lu): MRP state, gravity and
+magnetic-field vector measurements, optional fuzzy adaptation of R.
+
+State (paper 003 eq. 23, whose body is lost in our copy; the MRP attitude of Crassidis &
+Markley 2003, "Unscented filtering for spacecraft attitude estimation", J. Guidance 26(4),
+plus the gyro bias they estimate with it)::
+
+    x = [sigma (3), b_g (3)]      sigma: MRP of C_bn (navcore.ins.mrp), b_g: gyro bias [rad/s]
+
+The gyro bias is estimated because a MEMS gyro's turn-on bias (tens of deg/h) integrates to
+degrees of heading within the paper's 240 s, and because gravity plus the magnetic field make
+the full attitude, hence all three bias components, observable at rest.  The earth rate the
+gyros sense (7.3e-5 rad/s at most) is not modelled: on a table at rest it is a constant body
+rate and ends in the bias estimate.
+
+Time update, over the interval since the previous update with the gyro increments
+``dtheta_k`` accumulated as ``dq = prod_k q(dtheta_k)`` (body frame)::
+
+    q(sigma+) = q(sigma) (x) dq (x) q(-b_g T),    b_g+ = b_g
+
+(first order in ``b_g T``; exact for a constant body rate), evaluated on every sigma point,
+points continued in the MRP set nearest the prior mean (:func:`navcore.ins.mrp.nearest_set`).
+Process noise: the gyro angle random walk ``N_g`` maps through the MRP kinematics
+``d sigma / dt = B omega / 4`` with ``B B^T = (1 + s)^2 I`` (Schaub & Junkins eq. 3.163),
+so ``Q_sigma = N_g^2 T (1 + s)^2 / 16 I``; the bias walks with ``Q_b = N_b^2 T I``.
+
+Measurement (paper 003 eq. 24)::
+
+    z = [f_b, m_b / H] = [C_bn^T (0, 0, -g), C_bn^T (H cos I, 0, H sin I) / H] + v
+
+with ``f_b`` the accelerometer's specific force (at rest: minus gravity) and the magnetometer
+reading scaled by the field intensity ``H`` (so both blocks are of order 1).
+``R = diag(r_a^2 I_3, (r_m / H)^2 I_3)``.  After each step the MRP switches to its shadow
+when ``|sigma| > 1`` and the covariance follows (:func:`navcore.ins.mrp.shadow_jacobian`).
+
+Fuzzy adaptive R (paper 003 eqs. 15-19, 25): see :class:`FuzzyAdaptiveR`.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+import numpy as np
+
+from ..errors import InputError
+from .fuzzy import FuzzyRScale
+from ..ins.mrp import (dcm_to_mrp, mrp_to_dcm_batch, mrp_to_quat, nearest_set, quat_to_mrp, shadow,
+    shadow_jacobian)
+from ..ins.rotations import wrap_angle
+from .unscented import UnscentedKalmanFilter
+
+#: measurement dimension: accelerometer 3 + magnetometer 3
+MEASUREMENT_DIM = 6
+
+
+def triad_attitude(f_b, m_b, inclination):
+    """C_bn from one specific-force and one magnetometer sample at rest (TRIAD with gravity as
+    the first vector: Shuster & Oh 1981, J. Guidance 4(1)); the field model has no
+    declination, so north is magnetic north."""
+    f_b = np.asarray(f_b, dtype=float)
+    m_b = np.asarray(m_b, dtype=float)
+    down = -f_b / np.linalg.norm(f_b)
+    east = np.cross(down, m_b)
+    n_east = np.linalg.norm(east)
+    if not (np.linalg.norm(f_b) > 0 and n_east > 0):
+        raise InputError("AHRS initialization: accelerometer and magnetometer vectors are "
+                         "zero or parallel")
+    east /= n_east
+    north = np.cross(east, down)
+    return np.vstack((north, east, down))     # rows: the NED axes in body coordinates
+
+
+def _qmul(p, q):
+    """Hamilton product of two quaternions given as float tuples (one IMU sample's work:
+    plain floats cost less than numpy for 4 numbers)."""
+    w1, x1, y1, z1 = p
+    w2, x2, y2, z2 = q
+    return (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)
+
+
+def _rotvec_quat(x, y, z):
+    """Quaternion of the rotation vector (x, y, z) as a float tuple."""
+    t = math.sqrt(x * x + y * y + z * z)
+    s = math.sin(0.5 * t) / t if t > 1e-6 else 0.5 - t * t / 48.0
+    return (math.cos(0.5 * t), s * x, s * y, s * z)
+
+
+def quat_euler(q):
+    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (Groves eq. 2.38
+    via eq. 2.34), normalised first."""
+    w, x, y, z = q
+    n = w * w + x * x + y * y + z * z
+    roll = math.atan2(2.0 * (w * x + y * z), n - 2.0 * (x * x + y * y))
+    pitch = math.atan2(2.0 * (w * y - z * x),
+                       math.hypot(2.0 * (w * x + y * z), n - 2.0 * (x * x + y * y)))
+    yaw = math.atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z))
+    return roll, pitch, (math.pi if yaw <= -math.pi else yaw)
+
+
+def _quat_multiply_rows(p, q):
+    """Hamilton products of the rows of ``p`` (N, 4) with the rows of ``q`` (N, 4)."""
+    w1, x1, y1, z1 = p.T
+    w2, x2, y2, z2 = q.T
+    return np.stack((w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+                     w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2), axis=-1)
+
+
+def _bias_quats(b, T):
+    """Quaternions of the rotation vectors ``-b T`` (rows of ``b``, small angles)."""
+    phi = -b * T
+    t = np.sqrt(np.sum(phi * phi, axis=1, keepdims=True))
+    safe = np.where(t > 1e-6, t, 1.0)
+    s = np.where(t > 1e-6, np.sin(0.5 * safe) / safe, 0.5 - t * t / 48.0)   # sin(t/2)/t
+    return np.concatenate((np.cos(0.5 * t), s * phi), axis=1)
+
+
+class UkfAhrsEngine:
+    """The UKF of the module docstring.
+
+    Parameters: ``gravity`` [m/s^2], ``field_intensity`` H [T], ``inclination`` I [rad],
+    ``gyro_arw`` [rad/sqrt(s)], ``gyro_bias_rw`` [rad/s/sqrt(s)], ``r_accel`` [m/s^2],
+    ``r_mag`` [T] (1-sigma per axis), ``p0_att`` [rad], ``p0_gyro_bias`` [rad/s],
+    ``alpha``, ``beta``, ``kappa`` (scaled UT), ``adaptive``: a :class:`FuzzyAdaptiveR` or
+    None.  The filter starts when :meth:`start` gets the initial attitude.
+    """
+
+    state_fields = ("ukf", "r_scale", "adaptive", "started", "dq", "interval", "last_nis",
+                    "shadow_switches")
+    derived_fields = ("gravity", "field_intensity", "field_unit", "inclination", "gyro_arw",
+                      "gyro_bias_rw", "R0", "p0")
+
+    def __init__(self, gravity, field_intensity, inclination, gyro_arw, gyro_bias_rw, r_accel,
+                 r_mag, p0_att, p0_gyro_bias, alpha, beta, kappa,
+                 adaptive: Optional["FuzzyAdaptiveR"] = None):
+        self.gravity = float(gravity)
+        self.field_intensity = float(field_intensity)
+        self.field_unit = np.array([math.cos(inclination), 0.0, math.sin(inclination)])
+        self.inclination = float(inclination)
+        self.gyro_arw = float(gyro_arw)
+        self.gyro_bias_rw = float(gyro_bias_rw)
+        self.R0 = np.diag([r_accel ** 2] * 3 + [(r_mag / field_intensity) ** 2] * 3)
+        self.r_scale = np.ones(2)          # accelerometer, magnetometer block factors
+        self.p0 = np.array([p0_att / 4.0] * 3 + [p0_gyro_bias] * 3) ** 2
+        self.ukf = UnscentedKalmanFilter(6, alpha, beta, kappa)
+        self.adaptive = adaptive
+        self.started = False
+        self.dq = (1.0, 0.0, 0.0, 0.0)
+        self.interval = 0.0
+        self.last_nis = 0.0
+        self.shadow_switches = 0
+
+    # -- life cycle ------------------------------------------------------------------------
+    def start(self, C_bn):
+        self.ukf.x = np.concatenate((dcm_to_mrp(C_bn), np.zeros(3)))
+        self.ukf.P = np.diag(self.p0)
+        self.started = True
+
+    def accumulate(self, dtheta, dt):
+        """Add one gyro increment [rad] over ``dt`` [s] to the pending time update."""
+        self.dq = _qmul(self.dq, _rotvec_quat(*np.asarray(dtheta, dtype=float).tolist()))
+        self.interval += dt
+
+    def _switch_to_shadow(self):
+        sigma = self.ukf.x[:3]
+        if float(sigma @ sigma) <= 1.0:
+            return
+        J = np.eye(6)
+        J[:3, :3] = shadow_jacobian(sigma)
+        self.ukf.x = np.concatenate((shadow(sigma), self.ukf.x[3:]))
+        P = J @ self.ukf.P @ J.T
+        self.ukf.P = 0.5 * (P + P.T)
+        self.shadow_switches += 1
+
+    def _process(self, X, dq, T):
+        q = mrp_to_quat(X[:, :3])
+        q = _quat_multiply_rows(_quat_multiply_rows(q, np.broadcast_to(dq, q.shape)),
+                                _bias_quats(X[:, 3:], T))
+        # continue each point in the set nearest the prior mean (X[0]): the MRP moves
+        # continuously and leaves the unit sphere; _switch_to_shadow then switches the mean
+        # and the covariance together
+        sigma = nearest_set(quat_to_mrp(q), X[0, :3])
+        return np.concatenate((sigma, X[:, 3:]), axis=1)
+
+    def predict(self):
+        """UKF time update over the accumulated interval (nothing if it is empty)."""
+        T = self.interval
+        if T <= 0.0:
+            return
+        s = float(self.ukf.x[:3] @ self.ukf.x[:3])
+        q_att = self.gyro_arw ** 2 * T * (1.0 + s) ** 2 / 16.0
+        Q = np.diag([q_att] * 3 + [self.gyro_bias_rw ** 2 * T] * 3)
+        self.ukf.predict(self._process, Q, np.array(self.dq), T, vectorized=True)
+        self.dq = (1.0, 0.0, 0.0, 0.0)
+        self.interval = 0.0
+        self._switch_to_shadow()
+
+    def _measure(self, X):
+        C = mrp_to_dcm_batch(X[:, :3])                   # C_bn per point
+        f = -self.gravity * C[:, 2, :]                    # C_bn^T (0, 0, -g)
+        m = C.transpose(0, 2, 1) @ self.field_unit         # C_bn^T m_n / H
+        return np.concatenate((f, m), axis=1)
+
+    def update(self, f_b, m_b):
+        """Time update to now, then the measurement update with specific force ``f_b``
+        [m/s^2] and magnetometer ``m_b`` [T]; returns the innovation."""
+        self.predict()
+        z = np.concatenate((np.asarray(f_b, float), np.asarray(m_b, float) / self.field_intensity))
+        prediction = self.ukf.predict_measurement(self._measure, vectorized=True)
+        if self.adaptive is not None:
+            self.r_scale = self.adaptive.step(z - prediction.z_pred, prediction.Pzz,
+                                              self.R0, self.r_scale)
+        R = self.R0 * np.repeat(self.r_scale, 3)[:, None]
+        result = self.ukf.correct(z, prediction, R)
+        self.last_nis = result["nis"]
+        self._switch_to_shadow()
+        return result["innovation"]
+
+    # -- outputs ---------------------------------------------------------------------------
+    def current_quat(self):
+        """Quaternion of the attitude now: the state composed with the pending gyro
+        increments and the bias over them (as the next time update will do)."""
+        x = self.ukf.x.tolist()
+        s = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
+        q = ((1.0 - s) / (1.0 + s), 2.0 * x[0] / (1.0 + s), 2.0 * x[1] / (1.0 + s),
+             2.0 * x[2] / (1.0 + s))
+        if self.interval <= 0.0:
+            return q
+        T = self.interval
+        return _qmul(_qmul(q, self.dq), _rotvec_quat(-x[3] * T, -x[4] * T, -x[5] * T))
+
+    def euler(self):
+        """(roll, pitch, yaw) now (paper 003 eq. 26, via the quaternion)."""
+        return quat_euler(self.current_quat())
+
+    def euler_sigma(self):
+        """1-sigma of roll, pitch, yaw from the sigma points of the MRP block."""
+        X = self.ukf.sigma_points()
+        angles = np.array([quat_euler(q) for q in mrp_to_quat(X[:, :3]).tolist()])
+        dev = wrap_angle(angles - angles[0])
+        mean = self.ukf.Wm @ dev
+        dev = dev - mean
+        return np.sqrt(np.maximum(self.ukf.Wc @ (dev * dev), 0.0))
+
+    @property
+    def gyro_bias(self):
+        return self.ukf.x[3:]
+
+
+class FuzzyAdaptiveR:
+    """Fuzzy adaptation of R, paper 003 eqs. 15-19 and 25.
+
+    At every update ``k`` with innovation ``r_k = z_k - h(x_k|k-1)`` (paper 003 eq. 18):
+
+    * ``C_z = 1/N sum_{i=k-N+1..k} r_i r_i^T`` (paper 003 eq. 17, window ``N``), ``P_z = Pzz
+    + R_(k-1)``
+      (paper 003 eq. 16, the UKF's innovation covariance), ``E_k = C_z - P_z`` (paper 003 eq. 19);
+    * per block b (accelerometer, magnetometer; paper 003 eq. 25): ``e = tr E_k,b / tr P_z,b`` and
+      ``de = e_k - e_(k-1)`` go through :class:`~navcore.filters.fuzzy.FuzzyRScale` to ``F_b``;
+    * ``R_k,b = F_b R_(k-1),b`` (paper 003 eq. 15), the scale kept within
+      ``[r_scale_min, r_scale_max]`` times the nominal R, and used in this update.
+
+    Until ``N`` innovations exist, ``F = 1``.  ``window`` >= 2 (the component's parameter
+    ``fuzzy_window`` declares the range).
+    """
+
+    state_fields = ("residuals", "count", "e", "de")
+    derived_fields = ("inference", "window", "r_scale_min", "r_scale_max")
+
+    def __init__(self, inference: FuzzyRScale, window: int, r_scale_min: float,
+                 r_scale_max: float):
+        self.inference = inference
+        self.window = int(window)
+        self.r_scale_min = float(r_scale_min)
+        self.r_scale_max = float(r_scale_max)
+        self.residuals = np.zeros((self.window, MEASUREMENT_DIM))
+        self.count = 0
+        self.e = np.zeros(2)
+        self.de = np.zeros(2)
+
+    def step(self, innovation, Pzz, R0, r_scale):
+        """New block scales after the innovation ``innovation`` (see the class docstring)."""
+        self.residuals[self.count % self.window] = innovation
+        self.count += 1
+        if self.count < self.window:
+            return r_scale
+        Pz = np.diag(Pzz) + np.diag(R0) * np.repeat(r_scale, 3)
+        Cz = np.mean(self.residuals * self.residuals, axis=0)
+        new = np.array(r_scale, dtype=float)
+        e_new = np.empty(2)
+        for b in range(2):
+            block = slice(3 * b, 3 * b + 3)
+            e_new[b] = (Cz[block].sum() - Pz[block].sum()) / Pz[block].sum()
+        de = e_new - self.e if self.count > self.window else np.zeros(2)
+        self.e, self.de = e_new, de
+        for b in range(2):
+            new[b] = min(max(r_scale[b] * self.inference(e_new[b], de[b]), self.r_scale_min),
+                         self.r_scale_max)
+        return new

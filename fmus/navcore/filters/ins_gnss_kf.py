@@ -1,0 +1,177 @@
+"""Loosely coupled INS/GNSS error-state Kalman filter with closed-loop feedback.
+
+The strapdown mechanization (:mod:`navcore.ins.strapdown`) carries the navigation solution; the
+filter estimates its errors with the 15-state model of :mod:`navcore.ins.error_model` and feeds
+them back after every update (closed loop), so the error state is zero between updates.
+
+Covariance propagation between two measurement updates keeps two parts (one matrix product
+chain per IMU step, the same cost as propagating P)::
+
+    Phi_acc = Phi_k ... Phi_1                 transition since the last update
+    Q_acc   = sum_j Phi_{k..j+1} Qd_j Phi'    process noise accumulated since then
+    P_{k,k-1} = Phi_acc P_{k-1} Phi_acc' + Q_acc         (paper 001, eq. 6)
+
+because the adaptive filters need the two parts separately (the fading factor of paper 001,
+eqs. 10 and 12, scales only the propagated ``P_{k-1}`` part).
+
+The update is the standard one (paper 001, eqs. 4, 5, 7, 8) in Joseph form; subclasses change
+:meth:`KfEngine.update` (adaptive R, fading memory, outlier handling) and keep the rest.
+The measurement is ``z = INS - GNSS`` of position in NED metres and, optionally, velocity.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..ins import earth
+from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
+    transition_matrix)
+from .innovation_stats import nis
+from ..ins.strapdown import Strapdown
+
+#: measurement modes and their dimension
+MEASUREMENTS = {"position": 3, "position_velocity": 6}
+_DIAGONAL = slice(None, None, N_STATES + 1)
+
+
+@dataclass
+class KfConfig:
+    """Filter tuning in SI units (the FMU parameters are converted into this once)."""
+
+    p0: np.ndarray                 # (15,) initial 1-sigma of the error state
+    gyro_arw: float                # rad/sqrt(s)
+    accel_vrw: float               # m/s/sqrt(s)
+    gyro_bias_sigma: float         # rad/s, Gauss-Markov steady state (process noise)
+    gyro_bias_tau: float           # s, 0 = random constant
+    accel_bias_sigma: float        # m/s^2
+    accel_bias_tau: float          # s
+    r_sigma: np.ndarray            # (3,) or (6,) measurement 1-sigma, pos NED [m] (+ vel [m/s])
+    measurement: str = "position_velocity"
+
+
+@dataclass
+class UpdateResult:
+    """What an update did: innovation, its covariance, NIS and the diagnostics."""
+
+    innovation: np.ndarray
+    S: np.ndarray
+    nis: float
+    q_scale: float = 1.0
+    r_scale: float = 1.0
+    fading_factor: float = 1.0
+    outlier: bool = False
+
+
+class KfEngine:
+    """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
+
+    state_fields = ("nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates",
+                    "last")
+    derived_fields = ("config", "q_density", "R0", "m", "H")
+
+    def __init__(self, config: KfConfig, nav: Strapdown):
+        self.config = config
+        self.nav = nav
+        self.P = np.diag(np.asarray(config.p0, dtype=float) ** 2)
+        self.q_density = process_noise_density(
+            config.gyro_arw, config.accel_vrw, config.gyro_bias_sigma, config.gyro_bias_tau,
+            config.accel_bias_sigma, config.accel_bias_tau)
+        self.R0 = np.diag(np.asarray(config.r_sigma, dtype=float) ** 2)
+        self.m = MEASUREMENTS[config.measurement]
+        self.H = np.zeros((self.m, N_STATES))
+        self.H[:, :self.m] = np.eye(self.m)
+        self.gyro_bias = np.zeros(3)
+        self.accel_bias = np.zeros(3)
+        self.phi_acc = np.eye(N_STATES)
+        self.q_acc = np.zeros((N_STATES, N_STATES))
+        self.n_updates = 0
+        self.last = None  # UpdateResult of the latest update
+
+    # -- time update -------------------------------------------------------------------
+    def propagate(self, dtheta, dvel, dt):
+        """Mechanize one IMU interval with bias-compensated increments and propagate P."""
+        dtheta_c = dtheta - self.gyro_bias * dt
+        dvel_c = dvel - self.accel_bias * dt
+        nav = self.nav
+        C_prev = nav.C_bn
+        nav.update(dtheta_c, dvel_c, dt)
+        f_ned = C_prev @ (dvel_c / dt)
+        cfg = self.config
+        phi = transition_matrix(nav.lat, nav.h, nav.v_ned, nav.C_bn, f_ned, dt,
+                                cfg.gyro_bias_tau, cfg.accel_bias_tau)
+        self.phi_acc = phi @ self.phi_acc
+        q_acc = phi @ self.q_acc @ phi.T
+        q_acc.ravel()[_DIAGONAL] += self.q_density * dt   # a view: q_acc is C-contiguous
+        self.q_acc = q_acc
+
+    def predicted_parts(self):
+        """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}."""
+        return self.phi_acc @ self.P @ self.phi_acc.T, self.q_acc
+
+    def close_prediction(self, P_pred):
+        """Adopt ``P_pred`` as the covariance and restart the accumulators."""
+        self.P = 0.5 * (P_pred + P_pred.T)
+        self.phi_acc = np.eye(N_STATES)
+        self.q_acc = np.zeros((N_STATES, N_STATES))
+
+    def covariance_diagonal(self):
+        """Diagonal of the current covariance, cheaply (one product per call)."""
+        a = self.phi_acc
+        return np.einsum("ij,ij->i", a @ self.P, a) + np.diagonal(self.q_acc)
+
+    def covariance(self):
+        """Current covariance of the error state (P_{k,k-1} between updates)."""
+        p_prop, q_acc = self.predicted_parts()
+        return p_prop + q_acc
+
+    def predicted_innovation(self, R=None):
+        """(P_{k,k-1}, S): the unfaded prediction (paper 001 eq. 6) and the innovation covariance
+        ``S = H P_{k,k-1} H' + R`` (``R`` defaults to the fixed R0).  H selects the first m
+        states, so H P H' is the leading m x m block."""
+        P_pred = self.covariance()
+        return P_pred, P_pred[:self.m, :self.m] + (self.R0 if R is None else R)
+
+    # -- measurement -------------------------------------------------------------------
+    def measurement(self, fix_lat, fix_lon, fix_h, fix_v_ned, age):
+        """z = INS - GNSS in NED metres (and m/s); the INS position is taken back to the fix
+        time ``age`` seconds ago with its velocity (first order)."""
+        nav = self.nav
+        rn, re = earth.radii(nav.lat)
+        v = nav.v_ned
+        z = np.empty(self.m)
+        z[0] = (nav.lat - fix_lat) * (rn + nav.h) - v[0] * age
+        z[1] = (nav.lon - fix_lon) * (re + nav.h) * np.cos(nav.lat) - v[1] * age
+        z[2] = -(nav.h - fix_h) - v[2] * age
+        if self.m == 6:
+            z[3:6] = v - fix_v_ned
+        return z
+
+    def kalman_update(self, P_pred, z, R):
+        """Standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form). Returns (dx, P, v, S, K)."""
+        H = self.H
+        m = self.m
+        v = z  # the predicted error state is zero in closed loop: v = z - H x_pred = z
+        PHt = P_pred[:, :m]
+        S = PHt[:m, :] + R
+        K = np.linalg.solve(S, PHt.T).T
+        IKH = np.eye(N_STATES) - K @ H
+        P = IKH @ P_pred @ IKH.T + K @ R @ K.T
+        return K @ v, 0.5 * (P + P.T), v, S, K
+
+    def update(self, z):
+        """Baseline update with the fixed R; returns an :class:`UpdateResult`."""
+        p_prop, q_acc = self.predicted_parts()
+        P_pred = p_prop + q_acc
+        dx, P, v, S, _ = self.kalman_update(P_pred, z, self.R0)
+        self.apply(dx, P)
+        return UpdateResult(v, S, nis(v, S))
+
+    def apply(self, dx, P):
+        """Closed-loop feedback of the estimated errors and reset of the accumulators."""
+        self.nav.correct(dx[POS], dx[VEL], dx[ATT])
+        self.gyro_bias = self.gyro_bias + dx[BG]
+        self.accel_bias = self.accel_bias + dx[BA]
+        self.close_prediction(P)
+        self.n_updates += 1
+

@@ -1,0 +1,108 @@
+"""Modified Rodrigues parameters (MRP): conversions and the shadow set.
+
+Definitions (Shuster 1993, "A survey of attitude representations", J. Astronautical Sciences
+41(4), sec. 8.4; Schaub & Junkins, *Analytical Mechanics of Space Systems*, sec. 3.7), with the
+quaternion convention of :mod:`navcore.ins.rotations` (scalar first, ``quat_to_dcm(q) = C_bn``)::
+
+    sigma = q_v / (1 + q_0)                        |sigma| = tan(theta / 4)
+    q_0 = (1 - s) / (1 + s),  q_v = 2 sigma / (1 + s),   s = sigma^T sigma
+
+``sigma`` and its *shadow* ``sigma_S = -sigma / s`` (the MRP of ``-q``) describe the same
+attitude; ``|sigma| <= 1`` for rotations up to 180 deg, so switching to the shadow whenever
+``|sigma| > 1`` keeps the parameters bounded and away from the singularity at 360 deg.  A
+covariance follows the switch through the Jacobian (Karlgaard & Schaub 2009, "Nonsingular
+attitude filtering using modified Rodrigues parameters", J. Astronautical Sciences 57(4),
+eq. 20)::
+
+    d sigma_S / d sigma = (2 sigma sigma^T - s I) / s^2
+
+Paper 003 (Xiao & Lu) uses the MRP as the attitude state (paper 003 eq. 23) and turns it into Euler
+angles for display (paper 003 eq. 26, whose body is lost in our copy): here MRP -> quaternion ->
+C_bn -> ZYX Euler angles, the same map in closed form.
+
+Every function takes a 3-vector or an ``(N, 3)`` array of MRPs (``(N, 4)`` quaternions).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .rotations import dcm_to_euler, euler_to_dcm, quat_from_dcm, quat_to_dcm
+
+
+def mrp_to_quat(sigma):
+    """Unit quaternion(s) ``[w, x, y, z]`` of MRP ``sigma`` (``w >= 0`` when ``|sigma| <= 1``)."""
+    sigma = np.asarray(sigma, dtype=float)
+    s = np.sum(sigma * sigma, axis=-1, keepdims=True)
+    return np.concatenate(((1.0 - s) / (1.0 + s), 2.0 * sigma / (1.0 + s)), axis=-1)
+
+
+def quat_to_mrp(q):
+    """MRP of quaternion(s) ``q``, in the set with ``|sigma| <= 1`` (``q`` and ``-q`` give
+    the same result)."""
+    q = np.asarray(q, dtype=float)
+    q = np.where(q[..., :1] < 0.0, -q, q)
+    return q[..., 1:] / (1.0 + q[..., :1])
+
+
+def shadow(sigma):
+    """The shadow MRP ``-sigma / |sigma|^2`` (same attitude); ``sigma`` must be non-zero."""
+    sigma = np.asarray(sigma, dtype=float)
+    return -sigma / np.sum(sigma * sigma, axis=-1, keepdims=True)
+
+
+def shadow_jacobian(sigma):
+    """``d shadow(sigma) / d sigma`` for one MRP (3 x 3), see the module docstring."""
+    sigma = np.asarray(sigma, dtype=float)
+    s = float(sigma @ sigma)
+    return (2.0 * np.outer(sigma, sigma) - s * np.eye(3)) / (s * s)
+
+
+def nearest_set(sigma, reference):
+    """Each MRP of ``sigma`` (``(N, 3)``) or its shadow, whichever lies nearer ``reference``
+    (a 3-vector): the points of one unscented transform must be in the same set to be
+    averaged."""
+    sigma = np.asarray(sigma, dtype=float)
+    s = np.sum(sigma * sigma, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        other = np.where(s > 0.0, -sigma / s, sigma)
+    d_own = np.sum((sigma - reference) ** 2, axis=-1, keepdims=True)
+    d_other = np.sum((other - reference) ** 2, axis=-1, keepdims=True)
+    return np.where(d_other < d_own, other, sigma)
+
+
+def mrp_to_dcm(sigma):
+    """``C_bn`` of one MRP."""
+    return quat_to_dcm(mrp_to_quat(sigma))
+
+
+def dcm_to_mrp(C):
+    """MRP (``|sigma| <= 1``) of a body-to-NED DCM."""
+    return quat_to_mrp(quat_from_dcm(C))
+
+
+def mrp_to_euler(sigma):
+    """ZYX Euler angles ``(roll, pitch, yaw)`` of one MRP (paper 003 eq. 26)."""
+    return dcm_to_euler(mrp_to_dcm(sigma))
+
+
+def euler_to_mrp(roll, pitch, yaw):
+    """MRP (``|sigma| <= 1``) of ZYX Euler angles."""
+    return dcm_to_mrp(euler_to_dcm(roll, pitch, yaw))
+
+
+def mrp_to_dcm_batch(sigma):
+    """``C_bn`` of every row of ``sigma`` (``(N, 3)``): shape ``(N, 3, 3)``, from the
+    quaternion (Groves eq. 2.34, scalar first)."""
+    q = mrp_to_quat(sigma)
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    C = np.empty((q.shape[0], 3, 3))
+    C[:, 0, 0] = w * w + x * x - y * y - z * z
+    C[:, 0, 1] = 2.0 * (x * y - w * z)
+    C[:, 0, 2] = 2.0 * (x * z + w * y)
+    C[:, 1, 0] = 2.0 * (x * y + w * z)
+    C[:, 1, 1] = w * w - x * x + y * y - z * z
+    C[:, 1, 2] = 2.0 * (y * z - w * x)
+    C[:, 2, 0] = 2.0 * (x * z - w * y)
+    C[:, 2, 1] = 2.0 * (y * z + w * x)
+    C[:, 2, 2] = w * w - x * x - y * y + z * z
+    return C

@@ -1,0 +1,374 @@
+"""The sensor-log format: recorded IMU increments, GNSS fixes and optional truth, as files.
+
+A sensor log is a folder with three CSV files (``truth.csv`` optional).  The first line of
+each file holds the column titles ``name [unit]`` (``name`` alone for a flag); every further
+line holds one sample, values separated by commas, written with 17 significant digits
+(``%.17g``, so a float64 survives the round trip exactly).  Columns may come in any order;
+every title must be one of the file's columns below, with exactly that unit.
+
+``imu.csv`` (required; one line per IMU interval, body frame forward-right-down)
+    ``time [s]`` end of the interval, ``dt [s]`` its length (the interval is
+    ``[time - dt, time]``), ``dtheta_x/y/z [rad]`` angle increments (integral of the
+    inertial angular rate over the interval), ``dvel_x/y/z [m/s]`` velocity increments
+    (integral of the specific force).
+``gnss.csv`` (required; one line per fix, including fixes flagged invalid)
+    ``time [s]`` time the fix was taken, ``lat [rad]``, ``lon [rad]``, ``h [m]`` (above the
+    WGS-84 ellipsoid), ``valid`` (1 usable, 0 during an outage); optional, all three or
+    none: ``vn/ve/vd [m/s]`` NED velocity; optional: ``std_n/e/d [m]`` the receiver's own
+    1-sigma of the position (kept, not used by the filters), ``outlier`` (1 where an outlier
+    was injected, for evaluation only).
+``truth.csv`` (optional; reference trajectory for the metrics)
+    ``time [s]``, ``lat [rad]``, ``lon [rad]``, ``h [m]``, ``vn/ve/vd [m/s]``,
+    ``roll/pitch/yaw [rad]`` (ZYX Euler angles).
+
+Rules a log must satisfy (:func:`read_log` checks them and names file and line):
+
+* each file at most :data:`MAX_FILE_BYTES`; every line has one value per title; every value
+  is a finite decimal number (no NaN, no inf); flags are 0 or 1;
+* times strictly increasing in every file (an equal time is "duplicated", a smaller one
+  "non-monotonic");
+* IMU: ``dt > 0``, every ``dt`` equal to the first within :data:`RATE_TOLERANCE` (relative:
+  a filter integrates one interval per step of one length), and the intervals tile time:
+  the gap ``time[k] - dt[k] - time[k-1]`` between an interval and the previous one at most
+  :data:`IMU_GAP_TOLERANCE` times ``dt`` in magnitude (a hole would lose motion);
+* GNSS: at least one valid fix; ``|lat| < pi/2``;
+* truth: consecutive samples at most :data:`TRUTH_MAX_GAP` apart (the metrics interpolate
+  the truth linearly between samples).
+
+The file contents are parsed as numbers, never evaluated.  :func:`write_log` checks the same
+rules before writing anything and writes the folder atomically (see its docstring).
+"""
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+
+from ..errors import LogError
+
+#: largest accepted log file [bytes] (about 10 h of 200 Hz IMU data)
+MAX_FILE_BYTES = 1 << 30
+#: relative tolerance on the IMU interval length (every dt vs the first)
+RATE_TOLERANCE = 1e-6
+#: largest gap or overlap between consecutive IMU intervals, as a fraction of dt
+IMU_GAP_TOLERANCE = 1e-6
+#: largest spacing of truth samples [s]
+TRUTH_MAX_GAP = 1.0
+
+IMU_FILE, GNSS_FILE, TRUTH_FILE = "imu.csv", "gnss.csv", "truth.csv"
+LOG_FILES = (IMU_FILE, GNSS_FILE, TRUTH_FILE)
+
+_AXES = ("x", "y", "z")
+_NED = ("n", "e", "d")
+#: file -> ordered {column: unit}; flags have the unit "" and are written without brackets
+IMU_COLUMNS = {"time": "s", "dt": "s", **{f"dtheta_{a}": "rad" for a in _AXES},
+               **{f"dvel_{a}": "m/s" for a in _AXES}}
+GNSS_COLUMNS = {"time": "s", "lat": "rad", "lon": "rad", "h": "m",
+                **{f"v{a}": "m/s" for a in _NED}, "valid": "",
+                **{f"std_{a}": "m" for a in _NED}, "outlier": ""}
+TRUTH_COLUMNS = {"time": "s", "lat": "rad", "lon": "rad", "h": "m",
+                 **{f"v{a}": "m/s" for a in _NED}, "roll": "rad", "pitch": "rad", "yaw": "rad"}
+COLUMNS = {IMU_FILE: IMU_COLUMNS, GNSS_FILE: GNSS_COLUMNS, TRUTH_FILE: TRUTH_COLUMNS}
+#: columns a file may leave out, as groups that come all together or not at all
+OPTIONAL_GROUPS = {IMU_FILE: (), TRUTH_FILE: (),
+                   GNSS_FILE: (("vn", "ve", "vd"), ("std_n", "std_e", "std_d"), ("outlier",))}
+FLAGS = ("valid", "outlier")
+
+
+@dataclass
+class SensorLog:
+    """The columns of a log as float64 arrays: ``imu``, ``gnss``, ``truth`` (None without a
+    truth file) map column names (module docstring) to arrays of equal length."""
+
+    imu: Dict[str, np.ndarray]
+    gnss: Dict[str, np.ndarray]
+    truth: Optional[Dict[str, np.ndarray]] = None
+
+    @property
+    def imu_period(self) -> float:
+        return float(self.imu["dt"][0])
+
+    @property
+    def start_time(self) -> float:
+        """Start of the first IMU interval [s]."""
+        return float(self.imu["time"][0] - self.imu["dt"][0])
+
+    @property
+    def stop_time(self) -> float:
+        """End of the last IMU interval [s]."""
+        return float(self.imu["time"][-1])
+
+    @property
+    def has_gnss_velocity(self) -> bool:
+        return "vn" in self.gnss
+
+
+def header_title(name: str, unit: str) -> str:
+    return f"{name} [{unit}]" if unit else name
+
+
+def _parse_title(path, title: str, columns) -> Tuple[str, str]:
+    title = title.strip()
+    name, unit = title, ""
+    if title.endswith("]") and " [" in title:
+        name, unit = title[:-1].split(" [", 1)
+    if name not in columns:
+        raise LogError(f"{path}, line 1: unknown column '{title}' (columns of this file: "
+                       + ", ".join(header_title(n, u) for n, u in columns.items()) + ")")
+    if unit != columns[name]:
+        raise LogError(f"{path}, line 1: column '{name}' has the unit header "
+                       f"'{title}', expected '{header_title(name, columns[name])}'")
+    return name, unit
+
+
+def read_lines(path) -> list:
+    """The lines of a text file, refusing files over :data:`MAX_FILE_BYTES`."""
+    path = Path(path)
+    if not path.is_file():
+        raise LogError(f"{path}: file not found")
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise LogError(f"{path}: {size} bytes, more than the limit of {MAX_FILE_BYTES}")
+    try:
+        with open(path, encoding="utf-8", newline="") as f:
+            return f.read().splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise LogError(f"{path}: cannot be read: {exc}") from None
+
+
+def parse_numbers(path, number, fields, names) -> list:
+    """``fields`` (text) of line ``number`` as finite floats; errors name the column."""
+    row = []
+    for name, text in zip(names, fields):
+        try:
+            value = float(text)
+        except ValueError:
+            raise LogError(f"{path}, line {number}: column '{name}': '{text.strip()}' is not a "
+                           "number") from None
+        if not math.isfinite(value):
+            raise LogError(f"{path}, line {number}: column '{name}' is {value} (values must "
+                           "be finite)")
+        row.append(value)
+    return row
+
+
+def _read_table(path: Path) -> Dict[str, np.ndarray]:
+    """Titles checked against the file's columns, values as arrays; errors name the line."""
+    columns = COLUMNS[path.name]
+    lines = read_lines(path)
+    if not lines or not lines[0].strip():
+        raise LogError(f"{path}, line 1: no column titles")
+    titles = [_parse_title(path, t, columns)[0] for t in lines[0].split(",")]
+    for i, t in enumerate(titles):
+        if t in titles[:i]:
+            raise LogError(f"{path}, line 1: column '{t}' appears twice")
+    _check_columns(path, set(titles))
+    table, numbers = parse_rows(path, lines, titles)
+    data = {t: np.ascontiguousarray(table[:, j]) for j, t in enumerate(titles)}
+    data["_line"] = numbers
+    return data
+
+
+def parse_rows(path, lines, titles):
+    """The comma-separated rows after the title line ``lines[0]`` as an (n, len(titles))
+    array, and the line number of each row (blank lines skipped)."""
+    rows, numbers = [], []
+    for number, line in enumerate(lines[1:], start=2):
+        if not line.strip():
+            continue
+        fields = line.split(",")
+        if len(fields) != len(titles):
+            raise LogError(f"{path}, line {number}: {len(fields)} values, but {len(titles)} "
+                           "column titles")
+        rows.append(parse_numbers(path, number, fields, titles))
+        numbers.append(number)
+    if not rows:
+        raise LogError(f"{path}: no samples after the title line")
+    return np.array(rows, dtype=np.float64), np.array(numbers)
+
+
+def _check_columns(path, present) -> None:
+    name = Path(path).name
+    optional = {c for group in OPTIONAL_GROUPS[name] for c in group}
+    for column in COLUMNS[name]:
+        if column not in optional and column not in present:
+            raise LogError(f"{path}, line 1: missing column "
+                           f"'{header_title(column, COLUMNS[name][column])}'")
+    for group in OPTIONAL_GROUPS[name]:
+        have = [c for c in group if c in present]
+        if have and len(have) != len(group):
+            raise LogError(f"{path}, line 1: columns {', '.join(group)} come together; "
+                           f"missing '{[c for c in group if c not in present][0]}'")
+
+
+def _line(data, k) -> int:
+    lines = data.get("_line")
+    return int(lines[k]) if lines is not None else k + 2
+
+
+def _check_times(path, data) -> None:
+    t = data["time"]
+    step = np.diff(t)
+    bad = np.flatnonzero(step <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        what = "duplicated" if step[k - 1] == 0 else "non-monotonic"
+        raise LogError(f"{path}, line {_line(data, k)}: {what} time {float(t[k])!r} s (line "
+                       f"{_line(data, k - 1)} has {float(t[k - 1])!r} s; times must increase)")
+
+
+def check_imu(path, imu) -> None:
+    _check_times(path, imu)
+    dt = imu["dt"]
+    bad = np.flatnonzero(~(dt > 0))
+    if bad.size:
+        k = int(bad[0])
+        raise LogError(f"{path}, line {_line(imu, k)}: dt = {float(dt[k])!r} s must be > 0")
+    bad = np.flatnonzero(np.abs(dt - dt[0]) > RATE_TOLERANCE * dt[0])
+    if bad.size:
+        k = int(bad[0])
+        raise LogError(f"{path}, line {_line(imu, k)}: dt = {float(dt[k])!r} s differs from the "
+                       f"first interval's {float(dt[0])!r} s (the IMU rate must be constant within "
+                       f"{RATE_TOLERANCE:g} relative)")
+    t = imu["time"]
+    gap = t[1:] - dt[1:] - t[:-1]
+    bad = np.flatnonzero(np.abs(gap) > IMU_GAP_TOLERANCE * dt[1:])
+    if bad.size:
+        k = int(bad[0]) + 1
+        kind = "gap" if gap[k - 1] > 0 else "overlap"
+        raise LogError(f"{path}, line {_line(imu, k)}: {kind} of {abs(gap[k - 1]):.6g} s "
+                       f"between the interval ending at {float(t[k - 1])!r} s (line "
+                       f"{_line(imu, k - 1)}) and this one, more than the bound "
+                       f"{IMU_GAP_TOLERANCE:g} dt (the intervals must tile time)")
+
+
+def check_gnss(path, gnss) -> None:
+    _check_times(path, gnss)
+    for flag in FLAGS:
+        if flag in gnss:
+            bad = np.flatnonzero((gnss[flag] != 0) & (gnss[flag] != 1))
+            if bad.size:
+                k = int(bad[0])
+                raise LogError(f"{path}, line {_line(gnss, k)}: column '{flag}' is "
+                               f"{float(gnss[flag][k])!r}, must be 0 or 1")
+    bad = np.flatnonzero(~(np.abs(gnss["lat"]) < 0.5 * math.pi))
+    if bad.size:
+        k = int(bad[0])
+        raise LogError(f"{path}, line {_line(gnss, k)}: lat = {float(gnss['lat'][k])!r} rad is not "
+                       "a latitude (|lat| < pi/2; the unit is rad)")
+    if not (gnss["valid"] == 1).any():
+        raise LogError(f"{path}: no valid fix (every line has valid = 0)")
+
+
+def check_truth(path, truth) -> None:
+    _check_times(path, truth)
+    step = np.diff(truth["time"])
+    bad = np.flatnonzero(step > TRUTH_MAX_GAP)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise LogError(f"{path}, line {_line(truth, k)}: gap of {step[k - 1]:.6g} s after "
+                       f"line {_line(truth, k - 1)}, more than the bound {TRUTH_MAX_GAP:g} s "
+                       "between truth samples")
+
+
+_CHECKS = {IMU_FILE: check_imu, GNSS_FILE: check_gnss, TRUTH_FILE: check_truth}
+
+
+def read_log(folder) -> SensorLog:
+    """Read and check the log in ``folder`` (module docstring); :class:`LogError` otherwise."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise LogError(f"sensor log folder not found: {folder}")
+    tables = {}
+    for name in LOG_FILES:
+        path = folder / name
+        if name == TRUTH_FILE and not path.exists():
+            tables[name] = None
+            continue
+        data = _read_table(path)
+        _CHECKS[name](path, data)
+        data.pop("_line")
+        tables[name] = data
+    return SensorLog(tables[IMU_FILE], tables[GNSS_FILE], tables[TRUTH_FILE])
+
+
+def check_log(log: SensorLog, where="sensor log", sources=None) -> None:
+    """The rules of :func:`read_log` on arrays.  Errors name ``sources[file]`` (the file the
+    data came from) or ``where/file``, and the line given by an optional ``"_line"`` array
+    of the table (else the line the row will have in the written file); ``"_line"`` arrays
+    are removed afterwards."""
+    sources = sources or {}
+    for name, data in ((IMU_FILE, log.imu), (GNSS_FILE, log.gnss), (TRUTH_FILE, log.truth)):
+        if data is None:
+            continue
+        path = sources.get(name, f"{where}/{name}")
+        columns = [c for c in data if c != "_line"]
+        _check_columns(f"{where}/{name}", set(columns))
+        for column in columns:
+            if column not in COLUMNS[name]:
+                raise LogError(f"{path}: unknown column '{column}'")
+        n = {len(data[c]) for c in columns}
+        if len(n) != 1 or 0 in n:
+            raise LogError(f"{path}: columns of different or zero length {sorted(n)}")
+        for column in columns:
+            values = np.asarray(data[column], dtype=float)
+            bad = np.flatnonzero(~np.isfinite(values))
+            if bad.size:
+                raise LogError(f"{path}, line {_line(data, int(bad[0]))}: column '{column}' "
+                               f"is {values[bad[0]]} (values must be finite)")
+        _CHECKS[name](path, data)
+        data.pop("_line", None)
+
+
+def _write_table(path: Path, data) -> None:
+    columns = [c for c in COLUMNS[path.name] if c in data]
+    table = np.column_stack([np.asarray(data[c], dtype=np.float64) for c in columns])
+    with open(path, "w", encoding="utf-8", newline="") as f:
+        f.write(",".join(header_title(c, COLUMNS[path.name][c]) for c in columns) + "\n")
+        np.savetxt(f, table, fmt="%.17g", delimiter=",")
+
+
+def write_log(folder, log: SensorLog) -> Path:
+    """Check ``log`` (:func:`check_log`), then write it to ``folder`` without ever leaving a
+    half-written log: the files are written into a fresh folder next to ``folder`` and moved
+    in place only when all are complete (a ``truth.csv`` left from an earlier log in
+    ``folder`` is removed when ``log`` has no truth).  Returns ``folder``."""
+    folder = Path(folder)
+    check_log(log, where=str(folder))
+    parent = folder.parent if str(folder.parent) else Path(".")
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise LogError(f"cannot write the sensor log {folder}: {exc}") from None
+    if folder.exists() and not folder.is_dir():
+        raise LogError(f"cannot write the sensor log {folder}: it exists and is not a folder")
+    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
+    try:
+        tables = {IMU_FILE: log.imu, GNSS_FILE: log.gnss, TRUTH_FILE: log.truth}
+        for name, data in tables.items():
+            if data is not None:
+                _write_table(tmp / name, data)
+        if not folder.exists():
+            os.chmod(tmp, 0o777 & ~_umask())
+            os.replace(tmp, folder)
+            return folder
+        for name, data in tables.items():
+            if data is not None:
+                os.replace(tmp / name, folder / name)
+            elif (folder / name).exists():
+                os.unlink(folder / name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return folder
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

@@ -1,0 +1,388 @@
+"""Monte Carlo campaigns: N seeds x the filters of a scenario, resumable, one file per run.
+
+A campaign runs scenario ``S`` once per (filter, run index ``i``), ``i = 0 .. N-1``, on an
+:class:`~orchestrator.campaigns.executor.Executor` (serial, process pool or Dask).  Run ``i`` of
+every filter uses the same seeds, so the filters see the same truth, IMU and GNSS noise and their
+per-run numbers are paired (:mod:`orchestrator.campaigns.statistics`).
+
+Seeds.  Every component with an Integer parameter ``seed`` (the random sources) gets, in
+run ``i`` of a campaign with seed ``s``: ``seed = s + i + offset``, where ``offset`` is
+the component's entry of ``seed_offsets`` or, by default, ``1000 * j`` for the ``j``-th
+random component in declaration order (distinct streams for up to 1000 runs).  With
+``seed_offsets={"trajectory": 0, "gnss": 0}`` and ``s = 1``, run ``i`` is the
+``seed = i + 1`` of both sources (the loop of the earlier slow tests of paper 001/004).
+
+Files in the campaign folder (every file written atomically):
+
+* ``campaign.json`` -- the manifest: the campaign's identity (scenario and the hash of its
+  .ssd/.ssv/paper.json files, filters, campaign seed and seed rule, backend, stop time,
+  window, samples, overrides, series format, hash of the code that decides the numbers,
+  :data:`NUMERIC_CODE`) and the largest run count asked.
+  Starting a campaign in a folder whose manifest has another identity is an error; the same
+  identity resumes (a larger ``--runs`` adds runs).
+* ``runs/<filter>/run-<iiii>.json`` -- one run: its seeds, the git commit it ran on, metrics
+  (:func:`~orchestrator.results.metrics.filter_metrics`, accumulated while the run streams), wall
+  time. The worker writes it as soon as the run ends (when it sees the folder; otherwise the driver
+  does), so a killed campaign loses only the runs in flight; a restart runs only the
+  missing files.
+* ``series/<filter>/run-<iiii>.parquet`` (or ``.csv``) -- the time series, only when asked.
+* ``summary.json`` -- the statistics of :func:`summarize` over runs ``0 .. N-1``.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+from ..building import build as fmu_build
+from ..results import metrics as nav_metrics
+from ..results import recorder
+from ..errors import NavfmuError
+from .executor import Executor, Task
+from ..results.jsonsafe import jsonable
+from ..results.run_results import atomic_write
+
+MANIFEST = "campaign.json"
+FORMAT = "navfmu-campaign-1"
+SERIES_FORMATS = ("parquet", "csv")
+#: default distance between the seeds of two random components of one run
+SEED_STRIDE = 1000
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """What a campaign runs (the command's options)."""
+
+    scenario: str
+    filters: Tuple[str, ...]
+    runs: int
+    seed: int = 1
+    backend: str = "direct"
+    stop_time: Optional[float] = None
+    window: Optional[Tuple[float, float]] = None
+    samples: str = "all"
+    seed_offsets: Tuple[Tuple[str, int], ...] = ()
+    parameters: Tuple[Tuple[str, Any], ...] = ()
+    series: Optional[str] = None
+
+    def __post_init__(self):
+        if isinstance(self.runs, bool) or not isinstance(self.runs, int) or self.runs < 1:
+            raise NavfmuError(f"--runs: expected a whole number >= 1, got {self.runs!r}")
+        if not self.filters:
+            raise NavfmuError("--filters: give at least one filter")
+        if len(set(self.filters)) != len(self.filters):
+            raise NavfmuError(f"--filters: a filter is listed twice: {', '.join(self.filters)}")
+        if self.backend not in ("direct", "fmu"):
+            raise NavfmuError(f"--backend: expected direct or fmu, got {self.backend!r}")
+        if self.series is not None and self.series not in SERIES_FORMATS:
+            raise NavfmuError(f"--series: expected one of {', '.join(SERIES_FORMATS)}, got "
+                              f"{self.series!r}")
+        if self.samples not in nav_metrics.SAMPLES:
+            raise NavfmuError(f"--samples: expected one of {', '.join(nav_metrics.SAMPLES)}, "
+                              f"got {self.samples!r}")
+
+
+def _scenario_files(model) -> List[Path]:
+    folder = Path(model.path).parent
+    return sorted(p for p in folder.iterdir()
+                  if p.suffix in (".ssd", ".ssv") or p.name == "paper.json")
+
+
+def scenario_hash(model) -> str:
+    """sha256 of the scenario folder's .ssd, .ssv and paper.json files (names and bytes)."""
+    h = hashlib.sha256()
+    for p in _scenario_files(model):
+        h.update(p.name.encode() + b"\0" + p.read_bytes())
+    return h.hexdigest()
+
+
+#: the files whose code decides a run's numbers (a change in any refuses a resume)
+NUMERIC_CODE = ("fmus/*.py", "fmus/navcore/**/*.py", "orchestrator/cosim/backends.py",
+                "orchestrator/cosim/fmu_instance.py", "orchestrator/cosim/direct_instance.py",
+                "orchestrator/cosim/component_description.py", "orchestrator/cosim/exchange.py",
+                "orchestrator/cosim/master.py", "orchestrator/results/metrics.py",
+                "orchestrator/results/recorder.py", "orchestrator/model/ssp.py",
+                "orchestrator/model/ssp_xml.py", "orchestrator/campaigns/campaign.py",
+                "orchestrator/results/run_results.py")
+
+
+def code_hash() -> str:
+    """sha256 over the names and bytes of the :data:`NUMERIC_CODE` files."""
+    root = fmu_build.ROOT
+    h = hashlib.sha256()
+    for pattern in NUMERIC_CODE:
+        for p in sorted(root.glob(pattern)):
+            h.update(p.relative_to(root).as_posix().encode() + b"\0" + p.read_bytes())
+    return h.hexdigest()
+
+
+def code_commit() -> str:
+    """The git commit of the code (``+dirty`` when fmus/, orchestrator/ or models/ have
+    uncommitted changes); ``unknown`` outside a git checkout."""
+    root = fmu_build.ROOT
+    try:
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], check=True,
+                              capture_output=True, text=True, timeout=30).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain",
+                                "--untracked-files=no", "--", "fmus", "orchestrator", "models"],
+                               check=True, capture_output=True, text=True, timeout=30).stdout
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return head + ("+dirty" if dirty.strip() else "")
+
+
+def random_components(model, backend: str) -> List[str]:
+    """Components with an Integer parameter ``seed``, in declaration order."""
+    from ..cosim.master import Simulation
+    from ..running.scenarios import registry
+
+    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None)
+    return [d.spec.name for d in sim.components
+            if (v := d.variables.get("seed")) is not None and v.type == "Integer"
+            and v.causality == "parameter"]
+
+
+def seed_offsets(spec: CampaignSpec, components: List[str]) -> Dict[str, int]:
+    """Offset of every random component (see the module docstring)."""
+    given = dict(spec.seed_offsets)
+    unknown = sorted(set(given) - set(components))
+    if unknown:
+        raise NavfmuError(f"--seed-offset: no random component {', '.join(unknown)} (random "
+                          f"components: {', '.join(components) or 'none'})")
+    return {c: int(given.get(c, SEED_STRIDE * j)) for j, c in enumerate(components)}
+
+
+def parse_seed_offsets(items) -> Tuple[Tuple[str, int], ...]:
+    """``["gnss=100", ...]`` (``--seed-offset``) as ``(("gnss", 100), ...)``."""
+    offsets = []
+    for item in items:
+        comp, sep, value = item.partition("=")
+        try:
+            offsets.append((comp, int(value)))
+        except ValueError:
+            sep = ""
+        if not sep or not comp:
+            raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
+    return tuple(offsets)
+
+
+def run_seeds(spec: CampaignSpec, offsets: Dict[str, int], index: int) -> Dict[str, int]:
+    return {c: spec.seed + index + off for c, off in offsets.items()}
+
+
+# ----------------------------------------------------------------------------------------
+# one run (executed by a worker)
+# ----------------------------------------------------------------------------------------
+def run_path(out: Path, filter_name: str, index: int) -> Path:
+    return Path(out) / "runs" / filter_name / f"run-{index:04d}.json"
+
+
+def series_path(out: Path, filter_name: str, index: int, fmt: str) -> Path:
+    return Path(out) / "series" / filter_name / f"run-{index:04d}.{fmt}"
+
+
+def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
+    """Run one (filter, index) of a campaign; write its run file when the folder is visible
+    here; return the record.  ``job`` is plain data (picklable for any executor)."""
+    from ..cosim.master import Simulation
+    from ..running.scenarios import FILTER_COMPONENT, load_scenario, registry, swap_filter
+
+    t0 = time.perf_counter()
+    model = swap_filter(load_scenario(job["ssd"]), job["filter"])
+    parameters = dict(job["parameters"])
+    parameters.update({f"{c}.seed": s for c, s in job["seeds"].items()})
+    sim = Simulation(model, backend=job["backend"],
+                     registry=registry() if job["backend"] == "direct" else None,
+                     parameters=parameters)
+    overlap = max(sim.decimation.values()) + 1
+    metrics_sink = recorder.MetricsSink(window=job["window"], samples=job["samples"],
+                                        overlap=overlap)
+    out = Path(job["out"])
+    visible = out.is_dir()
+    series_sink = None
+    if job["series"] and visible:
+        path = series_path(out, job["filter"], job["index"], job["series"])
+        path.parent.mkdir(parents=True, exist_ok=True)
+        series_sink = (recorder.ParquetSink(path) if job["series"] == "parquet"
+                       else recorder.CsvSink(path))
+    header = sim.run(stop_time=job["stop_time"], sink=recorder.Tee([metrics_sink, series_sink]))
+    record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
+              "metrics": metrics_sink.metrics.get(FILTER_COMPONENT, {}),
+              "stop_time": header.metadata["stop_time"], "wall_time_s": time.perf_counter() - t0,
+              "pid": os.getpid(), "commit": job.get("commit", "")}
+    if visible:
+        write_run(out, record)
+    return record
+
+
+def write_run(out: Path, record: Dict[str, Any]) -> Path:
+    path = run_path(out, record["filter"], record["index"])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), indent=1)))
+
+
+def read_run(out: Path, filter_name: str, index: int) -> Optional[Dict[str, Any]]:
+    """The record of a finished run, or None (missing; an unreadable file counts as missing
+    and is run again)."""
+    path = run_path(out, filter_name, index)
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return None
+    if record.get("filter") != filter_name or record.get("index") != index:
+        return None
+    return record
+
+
+# ----------------------------------------------------------------------------------------
+# the campaign (driver)
+# ----------------------------------------------------------------------------------------
+@dataclass
+class Campaign:
+    """A campaign in folder ``out``: :meth:`prepare` checks and writes the manifest,
+    :meth:`run` runs the missing runs, :meth:`records` reads them all."""
+
+    spec: CampaignSpec
+    out: Path
+    log: Callable[[str], None] = print
+    model: Any = field(default=None, init=False)
+    offsets: Dict[str, int] = field(default_factory=dict, init=False)
+    identity: Dict[str, Any] = field(default_factory=dict, init=False)
+    commit: str = field(default="", init=False)
+
+    def prepare(self) -> None:
+        from ..running.scenarios import ensure_fmus, load_scenario, swap_filter
+
+        spec = self.spec
+        self.model = load_scenario(spec.scenario)
+        models = [swap_filter(self.model, f) for f in spec.filters]   # unknown filter: error
+        if spec.backend == "fmu":      # build once here, never in the workers
+            for m in models:
+                ensure_fmus(m, log=self.log)
+        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend))
+        self.identity = {
+            "scenario": self.model.name, "ssd": str(Path(self.model.path).resolve()),
+            "scenario_sha256": scenario_hash(self.model), "filters": list(spec.filters),
+            "seed": spec.seed, "seed_offsets": self.offsets, "backend": spec.backend,
+            "stop_time": spec.stop_time, "window": list(spec.window) if spec.window else None,
+            "samples": spec.samples, "parameters": [list(p) for p in spec.parameters],
+            "series": spec.series, "code_sha256": code_hash()}
+        self.commit = code_commit()
+        self.out.mkdir(parents=True, exist_ok=True)
+        self._check_manifest()
+
+    def _check_manifest(self) -> None:
+        path = self.out / MANIFEST
+        runs = self.spec.runs
+        if path.is_file():
+            try:
+                old = json.loads(path.read_text(encoding="utf-8"))
+            except (OSError, json.JSONDecodeError) as exc:
+                raise NavfmuError(f"{path}: unreadable campaign manifest: {exc}") from None
+            mine = jsonable(self.identity)
+            theirs = old.get("identity", {})
+            differ = [k for k in mine if k != "ssd" and theirs.get(k) != mine[k]]
+            if old.get("format") != FORMAT or differ:
+                what = "; ".join(f"{k}: {theirs.get(k)!r} there, {mine[k]!r} here"
+                                 for k in differ) or f"format {old.get('format')!r}"
+                raise NavfmuError(f"{self.out}: holds another campaign ({what}); resume it "
+                                  "with its own options or choose another --out")
+            runs = max(runs, int(old.get("runs", 0)))
+        atomic_write(path, lambda f: f.write(json.dumps(
+            {"format": FORMAT, "identity": jsonable(self.identity), "runs": runs}, indent=2)))
+
+    def job(self, filter_name: str, index: int) -> Dict[str, Any]:
+        s = self.spec
+        return {"ssd": str(Path(self.model.path).resolve()), "filter": filter_name,
+                "index": index, "seeds": run_seeds(s, self.offsets, index),
+                "parameters": list(s.parameters), "backend": s.backend,
+                "stop_time": s.stop_time, "window": s.window, "samples": s.samples,
+                "series": s.series, "out": str(self.out.resolve()), "commit": self.commit}
+
+    def missing(self) -> List[Tuple[str, int]]:
+        return [(f, i) for i in range(self.spec.runs) for f in self.spec.filters
+                if read_run(self.out, f, i) is None]
+
+    def run(self, executor: Executor, progress=None) -> Dict[str, int]:
+        """Run the missing runs; returns counts ``done_before`` and ``ran``."""
+        _remove_stale_temporaries(self.out)
+        todo = self.missing()
+        total = self.spec.runs * len(self.spec.filters)
+        tasks = [Task(key=key, func=run_one, args=(self.job(*key),)) for key in todo]
+        ran = 0
+        for (f, i), record in executor.run(tasks, progress=progress):
+            if read_run(self.out, f, i) is None:       # a worker that cannot see the folder
+                write_run(self.out, record)
+            ran += 1
+        return {"done_before": total - len(todo), "ran": ran, "total": total}
+
+    def records(self) -> Dict[str, List[Dict[str, Any]]]:
+        """filter -> the records of runs 0 .. N-1 (all must exist)."""
+        out = {}
+        for f in self.spec.filters:
+            rows = [read_run(self.out, f, i) for i in range(self.spec.runs)]
+            lost = [i for i, r in enumerate(rows) if r is None]
+            if lost:
+                raise NavfmuError(f"{self.out}: runs {lost} of {f} are missing")
+            out[f] = rows
+        return out
+
+
+def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[str] = None,
+                 local_cluster: bool = False, progress=None, log=print) -> Dict[str, Any]:
+    """Prepare, run the missing runs, summarize (written to ``summary.json``); returns the
+    summary with ``counts`` (runs done before, run now, total)."""
+    from .campaign_summary import summarize
+    from ..running.scenarios import paper_reference
+
+    campaign = Campaign(spec, Path(out), log=log)
+    campaign.prepare()
+    with Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster) as ex:
+        counts = campaign.run(ex, progress=progress)
+    records = campaign.records()
+    summary = summarize(records, paper_reference(campaign.model),
+                        {**provenance(campaign, records), "mode": ex.mode})
+    atomic_write(campaign.out / "summary.json",
+                 lambda f: f.write(json.dumps(jsonable(summary), indent=1)))
+    summary["counts"] = counts
+    return summary
+
+
+def provenance(campaign: Campaign, records: Dict[str, List[Dict[str, Any]]]) -> Dict[str, Any]:
+    """How the numbers of ``records`` were made: the campaign's identity, runs, the commits
+    the runs ran on, the seed ranges."""
+    spec = campaign.spec
+    first = run_seeds(spec, campaign.offsets, 0)
+    last = run_seeds(spec, campaign.offsets, spec.runs - 1)
+    commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
+    return {**campaign.identity, "runs": spec.runs, "commit": ", ".join(commits),
+            "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
+            or "no random component"}
+
+
+def _remove_stale_temporaries(out: Path) -> None:
+    """Temporary files of runs killed while writing (never a result: names start with '.')."""
+    for folder in ("runs", "series"):
+        for p in (Path(out) / folder).glob("*/.run-*.tmp"):
+            try:
+                p.unlink()
+            except FileNotFoundError:
+                pass
+
+
+__all__ = [
+    "CampaignSpec",
+    "Campaign",
+    "run_campaign",
+    "run_one",
+    "run_path",
+    "read_run",
+    "scenario_hash",
+    "code_commit",
+    "MANIFEST",
+]

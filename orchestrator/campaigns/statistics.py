@@ -1,0 +1,102 @@
+"""Statistics over Monte Carlo runs: means with confidence intervals, paired differences,
+and the orderings of filters a campaign supports.
+
+Definitions (one each; the per-run numbers come from :mod:`orchestrator.results.metrics`):
+
+* :func:`t_interval`: the mean of ``n`` per-run values and its two-sided ``level``
+  confidence interval from Student's t with ``n - 1`` degrees of freedom,
+  ``mean +- t_{(1+level)/2, n-1} s / sqrt(n)`` (``s``: sample standard deviation).  It treats
+  the runs as independent draws (each run has its own seeds), not the samples inside a run.
+  A run whose value is not finite (a diverged filter's NaN RMS, a missing number) is left
+  out and counted in ``dropped``: ``n`` is the number of runs the interval is over.
+* :func:`paired_difference`: the t-interval of the per-run differences ``a_i - b_i`` of two
+  filters run on the same seeds (paired: the truth, IMU and GNSS noise of run ``i`` are the
+  same for both, so the noise they share cancels in the difference).
+* :func:`supported_orderings`: for every pair of filters, ``A < B`` is supported when the
+  paired interval of ``A - B`` lies entirely below 0; ``A ~ B`` when it contains 0.
+"""
+from __future__ import annotations
+
+import math
+from itertools import combinations
+from typing import Dict, List, Mapping, Sequence
+
+import numpy as np
+from scipy import stats
+
+from ..errors import NavfmuError
+
+#: confidence level of every interval the campaign prints
+LEVEL = 0.95
+#: how intervals are made, for reports
+METHOD = "two-sided Student t interval over the runs (n - 1 dof)"
+PAIRED_METHOD = "paired t interval of the per-run differences (same seeds)"
+
+
+def t_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float]:
+    """Mean of the finite ``values`` with its t confidence interval: dict ``mean``, ``low``,
+    ``high``, ``half_width``, ``sd``, ``n`` (finite values used) and ``dropped`` (values left
+    out as not finite, None included); the interval is nan for fewer than two values, the
+    mean too for none."""
+    x = np.array([math.nan if v is None else v for v in values], dtype=float)
+    if x.ndim != 1 or x.size == 0:
+        raise NavfmuError("t_interval: needs a non-empty list of per-run values")
+    finite = x[np.isfinite(x)]
+    n, dropped = int(finite.size), int(x.size - finite.size)
+    mean = float(finite.mean()) if n else math.nan
+    if n < 2:
+        return {"mean": mean, "low": math.nan, "high": math.nan, "half_width": math.nan,
+                "sd": math.nan, "n": n, "dropped": dropped}
+    sd = float(finite.std(ddof=1))
+    half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * sd / math.sqrt(n)
+    return {"mean": mean, "low": mean - half, "high": mean + half, "half_width": half,
+            "sd": sd, "n": n, "dropped": dropped}
+
+
+def paired_difference(a: Sequence[float], b: Sequence[float],
+                      level: float = LEVEL) -> Dict[str, float]:
+    """:func:`t_interval` of ``a_i - b_i`` (same runs, same order)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape:
+        raise NavfmuError(f"paired_difference: {a.size} and {b.size} runs; pairs need the "
+                          "same runs for both filters")
+    return t_interval(a - b, level)
+
+
+def verdict(interval: Mapping[str, float]) -> str:
+    """``<`` if the interval of a difference lies below 0, ``>`` above, ``~`` otherwise."""
+    if interval["high"] < 0.0:
+        return "<"
+    if interval["low"] > 0.0:
+        return ">"
+    return "~"
+
+
+def supported_orderings(per_run: Mapping[str, Sequence[float]],
+                        level: float = LEVEL) -> Dict[str, object]:
+    """Pairwise verdicts of the filters of ``per_run`` (filter -> per-run values of one
+    axis): ``pairs`` (list of dicts a, b, difference interval, verdict) and ``chain``, the
+    filters by increasing mean joined by the verdict of each neighbouring pair
+    (e.g. ``Iakf < SageHusaFading < Kf``)."""
+    names = list(per_run)
+    pairs = []
+    for a, b in combinations(names, 2):
+        d = paired_difference(per_run[a], per_run[b], level)
+        pairs.append({"a": a, "b": b, "difference": d, "verdict": verdict(d)})
+    order = sorted(names, key=lambda f: float(np.mean(per_run[f])))
+    chain = order[:1]
+    for lo, hi in zip(order, order[1:]):
+        d = paired_difference(per_run[lo], per_run[hi], level)
+        chain += ["<" if verdict(d) == "<" else "~", hi]
+    return {"pairs": pairs, "chain": " ".join(chain)}
+
+
+def ordering_holds(per_run: Mapping[str, Sequence[float]], ordering: List[str],
+                   level: float = LEVEL) -> bool:
+    """True if every ``ordering[i] < ordering[j]`` (i < j) is supported."""
+    return all(verdict(paired_difference(per_run[a], per_run[b], level)) == "<"
+               for a, b in combinations(ordering, 2))
+
+
+__all__ = ["t_interval", "paired_difference", "verdict", "supported_orderings",
+           "ordering_holds", "LEVEL", "METHOD", "PAIRED_METHOD"]

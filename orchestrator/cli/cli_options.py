@@ -1,0 +1,58 @@
+"""The command line's option values read into what the facade functions take: a metric
+window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import NavfmuError
+
+#: where a command writes when no --out is given (a folder per scenario below it)
+DEFAULT_OUT = Path("navfmu-results")
+
+
+def filter_names(text):
+    """``A,B,C`` -> names; at least one, none twice."""
+    names = [f.strip() for f in text.split(",") if f.strip()]
+    if not names:
+        raise NavfmuError("--filters: give at least one filter")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise NavfmuError(f"--filters: {', '.join(twice)} listed more than once ({text})")
+    return names
+
+
+def parse_window(text):
+    """``t0:t1`` [s] -> ``(t0, t1)`` with ``t1 > t0``; empty -> None (the whole run)."""
+    if not text:
+        return None
+    try:
+        t0, t1 = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise NavfmuError(f"--window: expected 't0:t1' in seconds, got {text!r}") from None
+    if not t1 > t0:
+        raise NavfmuError(f"--window: t1 must be greater than t0, got {text!r}")
+    return t0, t1
+
+
+def parse_sets(items):
+    """``Component.variable=value`` items -> ``{"Component.variable": value}``, the value an
+    int, float or bool where it reads as one, else the text."""
+    values = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or "." not in key:
+            raise NavfmuError(f"--set: expected Component.variable=value, got {item!r}")
+        for conv in (int, float):
+            try:
+                value = conv(value)
+                break
+            except ValueError:
+                continue
+        else:
+            if value.lower() in ("true", "false"):
+                value = value.lower() == "true"
+        values[key] = value
+    return values
+
+
+__all__ = ["DEFAULT_OUT", "filter_names", "parse_window", "parse_sets"]

@@ -1,0 +1,417 @@
+"""The ``navfmu`` command line: build, validate, env, run, compare, bench, convert,
+montecarlo, report, tune.
+
+User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
+first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
+with status 2; no traceback.  ``--debug`` shows tracebacks of internal errors and the log of
+a failed component.  Ctrl-C ends every command with ``navfmu: interrupted`` and status 130
+(:mod:`orchestrator.cosim.interrupts`).
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..cosim import interrupts
+from .cli_options import DEFAULT_OUT, filter_names, parse_sets, parse_window
+from ..errors import NavfmuError, SimulationError
+from ..cosim.exchange import ALGORITHMS
+from .progress import progress_bars
+
+
+class _Group(click.Group):
+    """Lists each command with its whole first sentence (click's default cuts it with
+    "..." at the terminal width)."""
+
+    def format_commands(self, ctx, formatter):
+        rows = []
+        for name in self.list_commands(ctx):
+            cmd = self.get_command(ctx, name)
+            if cmd is not None and not cmd.hidden:
+                rows.append((name, cmd.get_short_help_str(limit=10_000)))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
+@click.group(cls=_Group)
+@click.option("--debug", is_flag=True, help="Show tracebacks of internal errors.")
+@click.pass_context
+def cli(ctx, debug):
+    """navfmu: INS/GNSS co-simulation with adaptive Kalman filter FMUs."""
+    ctx.obj = {"debug": debug}
+
+
+@cli.command()
+@click.argument("names", nargs=-1)
+@click.option("--force", is_flag=True, help="Rebuild even if up to date.")
+def build(names, force):
+    """Build the FMUs (all, or NAMES) into fmus/dist/ when missing or stale."""
+    from ..building import build as fmu_build
+
+    built = fmu_build.build(list(names) or None, force=force)
+    for p in built:
+        click.echo(f"built {p}")
+    if not built:
+        click.echo(f"FMUs in {fmu_build.DIST} are up to date")
+
+
+@cli.command()
+@click.argument("fmus", nargs=-1, type=click.Path())
+def validate(fmus):
+    """Validate FMUs with fmpy (default: every FMU in fmus/dist, built first)."""
+    from ..building.validation import validate_fmus
+
+    validate_fmus(fmus, echo=click.echo)
+
+
+@cli.command("env")
+@click.option("--format", "fmt", type=click.Choice(["sh", "json"]), default="sh",
+              show_default=True, help="Shell 'export' lines or a JSON object.")
+def env_(fmt):
+    """Print the environment a native (non-Python) FMI host needs to load the FMUs."""
+    from ..building import hostenv
+
+    click.echo(hostenv.render(hostenv.host_environment(), fmt))
+
+
+def _common_run_options(f):
+    f = click.option("--out", "out", type=click.Path(file_okay=False),
+                     help="Output folder (default: navfmu-results/<scenario>).")(f)
+    f = click.option("--stop", "stop", type=float, help="Stop time [s] (default: the SSD's).")(f)
+    f = click.option("--backend", type=click.Choice(["fmu", "direct"]), default="fmu",
+                     show_default=True, help="Run the FMUs, or the navcore objects directly.")(f)
+    f = click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")(f)
+    f = click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
+                     help="Override a parameter (repeatable).")(f)
+    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz", "parquet"]),
+                     default="csv", show_default=True,
+                     help="Result file format; parquet streams the rows to disk while the run "
+                     "goes (memory flat in the flight length).")(f)
+    f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
+    f = click.option("--replay", "replay", type=click.Path(),
+                     help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
+                     "receiver) by ImuGnssReplay playing this sensor-log folder.")(f)
+    f = click.option("--algorithm", type=click.Choice(ALGORITHMS), default=ALGORITHMS[0],
+                     show_default=True, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("algorithm", v),
+                     help="Exchange: Gauss-Seidel order, or Jacobi (libcosim's).")(f)
+    return f
+
+
+def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
+             replay=None, log_sensors=None):
+    from .run_command import run_scenarios
+
+    run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
+                  echo=click.echo,
+                  algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
+                  replay=replay, log_sensors=log_sensors)
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--filter", "filter_", help="Swap the 'filter' component: an FMU name (Kf, "
+              "SageHusaFading, ...) or the path of an .fmu file.")
+@click.option("--log-sensors", "log_sensors", type=click.Path(file_okay=False),
+              help="Also write the run's IMU, GNSS and truth signals as a sensor log to this "
+              "folder (replay it with --replay).")
+@_common_run_options
+def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, no_plots,
+        replay):
+    """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
+    _execute(scenario, [filter_], out, stop, backend, window, sets, fmt, no_plots,
+             title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors)
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
+@_common_run_options
+def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, replay):
+    """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
+    names = filter_names(filters)
+    _execute(scenario, names, out, stop, backend, window, sets, fmt, no_plots,
+             title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
+
+
+@cli.group()
+def convert():
+    """Convert other tools' sensor data into a navfmu sensor log (imu.csv, gnss.csv,
+    truth.csv), replayable with --replay."""
+
+
+@convert.command("gnss-ins-sim")
+@click.argument("src_dir", type=click.Path())
+@click.argument("dst", type=click.Path(file_okay=False))
+@click.option("--run", "run_index", type=int, default=0, show_default=True,
+              help="Which simulation run (the R of gyro-R.csv).")
+def convert_gnss_ins_sim(src_dir, dst, run_index):
+    """A gnss-ins-sim output folder SRC_DIR (rates at the sample instants; increments by the
+    trapezoid rule) into the sensor-log folder DST."""
+    from . import convert as conv
+
+    click.echo(conv.describe(conv.convert_gnss_ins_sim(src_dir, dst, run=run_index), dst))
+
+
+@convert.command("kf-gins")
+@click.argument("imu_file", type=click.Path())
+@click.argument("gnss_file", type=click.Path())
+@click.argument("rest", nargs=-1, type=click.Path())
+def convert_kf_gins(imu_file, gnss_file, rest):
+    """KF-GINS IMU_FILE and GNSS_FILE text (and optionally a .nav TRUTH_FILE) into the
+    sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
+    from . import convert as conv
+
+    if len(rest) not in (1, 2):
+        raise NavfmuError("convert kf-gins: expected IMU_FILE GNSS_FILE [TRUTH_FILE] DST")
+    truth, dst = (rest[0], rest[1]) if len(rest) == 2 else (None, rest[0])
+    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst), dst))
+
+
+@cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "
+             "--filters, several filters against each other), in one process.")
+@click.argument("scenario", type=click.Path(), required=False)
+@click.option("--stop", type=float, default=100.0, show_default=True,
+              help="Simulated time of each run [s].")
+@click.option("--repeat", type=int, default=3, show_default=True,
+              help="Alternate the runs this many times and keep each one's fastest.")
+@click.option("--filters", help="Comma-separated filter FMUs (e.g. Ukf,CtfaUkf,ImmUkf): time "
+              "each one swapped into the scenario, through the FMUs, instead of comparing the "
+              "FMU and direct paths.")
+@click.option("--libcosim", "against_libcosim", is_flag=True, help="Time our master (Jacobi) "
+              "against libcosim on the same SSP and base step instead.")
+@click.option("--executors", is_flag=True, help="Time a small campaign (--runs runs of the "
+              "filters, default Kf) serially, on --workers pool processes and on a Dask "
+              "LocalCluster: speed-up and Dask's per-run overhead.")
+@click.option("--runs", type=int, default=8, show_default=True, help="Runs per filter "
+              "(--executors).")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Worker processes (--executors).")
+@click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
+def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, workers, as_json):
+    """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
+    time ratio and the per-step cost of each component.  With --filters: run it through the
+    FMUs once per filter instead and print each filter's time per cycle and the ratios to the
+    first filter (next to the paper's, from paper.json).  SCENARIO defaults to navfmu's own
+    models/aircraft_500s."""
+    from .bench import bench_command
+
+    click.echo(bench_command(scenario, stop=stop, repeat=repeat, filters=filters,
+                             against_libcosim=against_libcosim, executors=executors, runs=runs,
+                             workers=workers, as_json=as_json,
+                             log=lambda m: click.echo(m, err=True)))
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--runs", type=int, required=True, help="Number of seeds (runs per filter).")
+@click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Local worker processes (1: in this process).")
+@click.option("--out", "out", type=click.Path(file_okay=False),
+              help="Campaign folder (default: navfmu-results/<scenario>-montecarlo).")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.option("--seed", type=int, default=1, show_default=True,
+              help="Campaign seed: run i uses seed + i (+ each random component's offset).")
+@click.option("--seed-offset", "seed_offsets", multiple=True, metavar="COMP=K",
+              help="Seed offset of a random component (default 1000 x its position).")
+@click.option("--backend", type=click.Choice(["direct", "fmu"]), default="direct",
+              show_default=True, help="navcore objects directly (same numbers), or the FMUs.")
+@click.option("--stop", type=float, help="Stop time [s] (default: the SSD's).")
+@click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")
+@click.option("--samples", type=click.Choice(["all", "fixes"]), default="all",
+              show_default=True, help="Metric samples: every row, or the GNSS fix epochs.")
+@click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
+              help="Override a parameter (repeatable).")
+@click.option("--series", type=click.Choice(["parquet", "csv"]),
+              help="Also keep every run's time series in this format.")
+def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
+               seed_offsets, backend, stop, window, samples, sets, series):
+    """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
+    command again to finish a killed campaign)."""
+    from ..campaigns import campaign, campaign_summary
+    from ..running import scenarios
+
+    names = tuple(f.strip() for f in filters.split(",") if f.strip())
+    spec = campaign.CampaignSpec(
+        scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
+        stop_time=stop, window=parse_window(window), samples=samples,
+        seed_offsets=campaign.parse_seed_offsets(seed_offsets),
+        parameters=tuple(parse_sets(sets).items()), series=series)
+    model_name = scenarios.load_scenario(scenario).name
+    out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
+    with progress_bars() as progress_bar:
+        summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
+                                        local_cluster=local_cluster,
+                                        progress=progress_bar("runs", unit="run"),
+                                        log=lambda m: click.echo(m, err=True))
+    counts = summary["counts"]
+    click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
+               f"{counts['total']} in all; results in {out}/")
+    click.echo(campaign_summary.format_summary(summary))
+
+
+@cli.command()
+@click.option("--out", "out", type=click.Path(file_okay=False), default="navfmu-report",
+              show_default=True, help="Report folder (report.md, figures/, campaigns/).")
+@click.option("--runs", type=int, default=None,
+              help="Runs per filter and scenario (default 3; more: narrower intervals).")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.option("--stop", type=float, help="Stop time of every run [s] (default: each SSD's; "
+              "shorter for a quick look, the papers' tables need the full runs).")
+@click.option("--only-finished", is_flag=True, help="Run nothing: report the runs the "
+              "campaigns in --out have finished (the first runs every filter has).")
+def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
+    """Campaigns of every scenario of models/ with every filter that fits it, and one
+    Markdown report: the papers' tables with our numbers and intervals, figures,
+    NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
+    from ..reporting import report as report_module
+
+    with progress_bars() as progress_bar:
+        path = report_module.build_report(
+            out, runs=runs or report_module.DEFAULT_RUNS, workers=workers,
+            scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
+            progress_factory=lambda name: progress_bar(name, unit="run"),
+            log=lambda m: click.echo(m, err=True), only_finished=only_finished)
+    click.echo(f"wrote {path}")
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path())
+@click.option("--component", default="filter", show_default=True,
+              help="Component whose parameters are tuned.")
+@click.option("--params", "params", required=True, help="Comma-separated parameter names.")
+@click.option("--range", "ranges", multiple=True, metavar="NAME=LO:HI",
+              help="Search range of a parameter (default: its declared min/max; repeatable).")
+@click.option("--generations", type=int, default=5, show_default=True,
+              help="Generations (paper 003: 500).")
+@click.option("--population", type=int, default=10, show_default=True,
+              help="Individuals per generation (paper 003: 100).")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Local processes evaluating candidates.")
+@click.option("--scheduler", help="Dask scheduler address tcp://HOST:PORT (instead of a "
+              "local pool).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the GA.")
+@click.option("--train-seeds", default="", help="Comma-separated values given to every "
+              "component's 'seed' parameter; the cost is the mean over them (default: the "
+              "model's own seeds).")
+@click.option("--backend", type=click.Choice(["fmu", "direct"]), default="direct",
+              show_default=True, help="Evaluate through the FMUs or the navcore objects "
+              "(same numbers).")
+@click.option("--stop", type=float, help="Stop time of each run [s] (default: the SSD's).")
+@click.option("--window", help="Fitness window t0:t1 [s] (default: the whole run).")
+@click.option("--out", type=click.Path(file_okay=False),
+              help="Output folder (default: navfmu-results/<scenario>/tune).")
+@click.option("--ssv", type=click.Path(dir_okay=False),
+              help="Write the tuned parameter set here (default: OUT/<component>_tuned.ssv).")
+def tune(scenario, component, params, ranges, generations, population, workers, scheduler,
+         seed, train_seeds, backend, stop, window, out, ssv):
+    """Tune numeric parameters of a component of SCENARIO with paper 003's genetic
+    algorithm; each cost evaluation is a co-simulation (attitude RMS, eq. 20)."""
+    from ..campaigns import tune as tuner
+
+    names = [p.strip() for p in params.split(",") if p.strip()]
+    try:
+        seeds = [int(s) for s in train_seeds.split(",") if s.strip()]
+    except ValueError:
+        raise NavfmuError(f"--train-seeds: expected comma-separated integers, got "
+                          f"{train_seeds!r}") from None
+    with progress_bars() as progress_bar:
+        summary = tuner.run_tune(
+            scenario,
+            component,
+            names,
+            generations=generations,
+            population=population,
+            workers=workers,
+            seed=seed,
+            ranges=tuner.parse_ranges(ranges),
+            train_seeds=seeds,
+            backend=backend,
+            stop_time=stop,
+            window=parse_window(window),
+            scheduler=scheduler,
+            progress=progress_bar("tune", unit="individual"),
+            log=lambda m: click.echo(m, err=True),
+        )
+    out = Path(out) if out else DEFAULT_OUT / summary["model"] / "tune"
+    written = tuner.write_tune_outputs(summary, out, ssv)
+    click.echo(f"best cost {summary['best_cost']:.5f} deg after {summary['evaluations']} "
+               f"evaluations; tuned values:")
+    for k, v in summary["best_values"].items():
+        click.echo(f"  {component}.{k} = {v!r}")
+    click.echo(f"wrote {', '.join(str(p) for p in written)}")
+    click.echo(f"bind it with: <ssd:ParameterBinding source=\"{written[0].name}\"/> (in place "
+               f"of the component's bindings: it holds them too)")
+
+
+def _write_system(scenario, out, module_name):
+    """Build the model's stale FMUs, then write it with ``orchestrator.packaging.<module_name>``."""
+    import importlib
+
+    from ..running import scenarios
+
+    scenarios.ensure_fmus(scenarios.load_scenario(scenario), log=lambda m: click.echo(m, err=True))
+    writer = importlib.import_module(f"..packaging.{module_name}", __package__)
+    click.echo(f"wrote {getattr(writer, module_name)(scenario, out)}")
+
+
+def _system_command(name, what, doc):
+    """``navfmu <name> SCENARIO --out FILE``: write the model as ``what``."""
+    def command(scenario, out):
+        _write_system(scenario, out, name)
+
+    command.__doc__ = doc
+    command = click.option("--out", required=True, type=click.Path(dir_okay=False),
+                           help=f"The {what} to write.")(command)
+    return cli.command(name=name)(click.argument("scenario", type=click.Path())(command))
+
+
+package = _system_command("package", "SSP archive (.ssp)",
+                          "Write SCENARIO as one self-contained SSP archive (FMUs under "
+                          "resources/).")
+export = _system_command("export", "FMU (.fmu)",
+                         "Write SCENARIO as one co-simulation FMU (fmpy's container, Jacobi at "
+                         "the base step).")
+
+
+def main(argv=None):
+    debug = "--debug" in (argv if argv is not None else sys.argv[1:])
+    try:
+        with interrupts.deferred():
+            cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
+    except NavfmuError as exc:
+        click.echo(f"navfmu: error: {exc}", err=True)
+        if debug and isinstance(exc, SimulationError) and exc.log:
+            click.echo("component log:\n  " + "\n  ".join(exc.log), err=True)
+        sys.exit(2)
+    except (click.exceptions.Abort, KeyboardInterrupt):
+        click.echo("navfmu: interrupted", err=True)
+        sys.exit(130)
+    except click.exceptions.Exit as exc:  # --help
+        sys.exit(exc.exit_code)
+    except click.UsageError as exc:
+        hint = (f"\n  (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else "")
+        click.echo(f"navfmu: error: {exc.format_message()}{hint}", err=True)
+        sys.exit(2)
+    except click.ClickException as exc:
+        click.echo(f"navfmu: error: {exc.format_message()}", err=True)
+        sys.exit(exc.exit_code)
+    except Exception as exc:  # a bug: say so in one line unless --debug
+        if debug:
+            raise
+        click.echo(f"navfmu: internal error: {exc!r} (run with --debug for the traceback)",
+                   err=True)
+        sys.exit(3)
+    sys.exit(0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,46 @@
+"""``navfmu convert``: other tools' sensor data to the navfmu sensor-log format.
+
+Thin layer over the readers of :mod:`navcore.sensors.log_converters` (which state the formats and
+the rate-to-increment rule) and :func:`navcore.sensors.sensorlog.write_log` (which checks the log
+and writes it atomically: a conversion that fails leaves nothing behind).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+from navcore.sensors.log_converters import read_gnss_ins_sim, read_kf_gins
+from navcore.sensors.sensorlog import LogError, SensorLog, write_log
+
+from ..errors import NavfmuError
+
+
+def _write(log: SensorLog, destination) -> SensorLog:
+    write_log(destination, log)
+    return log
+
+
+def convert_gnss_ins_sim(source_dir, destination, run: int = 0) -> SensorLog:
+    """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
+    try:
+        return _write(read_gnss_ins_sim(source_dir, run=run), destination)
+    except LogError as exc:
+        raise NavfmuError(str(exc)) from None
+
+
+def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination) -> SensorLog:
+    """Convert KF-GINS IMU and GNSS text files (and a ``.nav`` reference) into a sensor log."""
+    try:
+        return _write(read_kf_gins(imu_file, gnss_file, truth_file), destination)
+    except LogError as exc:
+        raise NavfmuError(str(exc)) from None
+
+
+def describe(log: SensorLog, destination) -> str:
+    """One line saying what was written."""
+    n_valid = int(log.gnss["valid"].sum())
+    return (f"wrote {destination}/: {len(log.imu['time'])} IMU intervals of "
+            f"{log.imu_period:g} s over [{log.start_time:.9g}, {log.stop_time:.9g}] s, "
+            f"{len(log.gnss['time'])} GNSS lines ({n_valid} valid)"
+            + (f", {len(log.truth['time'])} truth samples" if log.truth is not None
+               else ", no truth"))

@@ -1,0 +1,99 @@
+"""``navfmu run`` and ``compare``: simulate the scenario once per filter, print the RMS table
+with the paper's rows, the per-filter consistency line and the paper comparison, and write
+the output folder."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable, Optional, Sequence
+
+from ..results import outputs
+from ..running import prechecks, scenarios
+from .cli_options import DEFAULT_OUT, parse_sets, parse_window
+from ..running.comparison import paper_comparison, report_table
+from ..running.comparison_text import format_comparison
+from ..errors import NavfmuError
+from .progress import progress_bars
+from ..running.run_outputs import write_outputs
+
+
+def _consistency_line(run, m) -> str:
+    extra = []
+    if "nis" in m:
+        extra.append(f"mean NIS {m['nis']['mean']:.2f} (dof {m['nis']['dof']}, 95 % band "
+                     f"{m['nis']['band95'][0]:.2f}-{m['nis']['band95'][1]:.2f})")
+    if "nees" in m:
+        extra.append("NEES pos/vel/att " + "/".join(f"{m['nees'][g]:.2f}" for g in
+                                                    ("position", "velocity", "attitude")))
+    if "time_per_step_ms" in m:
+        extra.append(f"{m['time_per_step_ms'] * 1e3:.0f} us per filter step")
+    return f"  {run.label}: " + "; ".join(extra)
+
+
+def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
+                  log_sensors, algorithm, echo):
+    stream_dir = None
+    if fmt == "parquet":
+        if log_sensors:
+            raise NavfmuError("--log-sensors needs the run's rows in memory: use --format csv "
+                              "or npz with it")
+        stream_dir = outputs.stream_folder(out)
+    runs = []
+    with progress_bars() as progress_bar:
+        for f in filters:
+            stream_to = None
+            if stream_dir is not None:
+                stream_to = stream_dir / ("results.parquet" if len(filters) == 1 else
+                                          f"results_{scenarios.filter_label(model, f)}.parquet")
+            runs.append(scenarios.simulate_scenario(
+                model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
+                window=window, progress=progress_bar(f or "scenario"), algorithm=algorithm,
+                log=lambda m: echo(m, err=True), replay=replay, stream_to=stream_to))
+    return runs
+
+
+def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
+                  fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
+                  replay=None, log_sensors=None) -> None:
+    """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
+    the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
+    ``navfmu-results/<model>``), each run with its progress bar."""
+    model = scenarios.load_scenario(scenario)
+    window = parse_window(window)
+    parameters = parse_sets(sets)
+    prechecks.check_stop_time(stop, model.start_time)
+    out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
+    runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
+                         log_sensors, algorithm, echo)
+    if log_sensors:
+        from ..running.replay import write_sensor_log
+
+        echo(f"sensor log written to {write_sensor_log(runs[0].results, log_sensors)}/")
+    if not runs[0].metrics:
+        echo(f"\n{model.name}: no truth in the run (a sensor log without truth.csv): no "
+             "metrics")
+        written = write_outputs(runs, out, fmt=fmt, plots_on=False, title=title)
+        echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
+        return
+    reference = scenarios.paper_reference(model)
+    echo(f"\n{model.name}: RMS errors over "
+         f"{runs[0].metrics and next(iter(runs[0].metrics.values()))['window_s']} s")
+    echo(report_table(runs, reference))
+    for run in runs:
+        for m in run.metrics.values():
+            echo(_consistency_line(run, m))
+    names = [f for f in filters if f]
+    if len(names) < 2:  # a single run: suggest timing the paper's filters against each other
+        names = list((reference or {}).get("time_per_cycle_ms") or {}) or names
+    comparison = paper_comparison(runs, reference)
+    text = format_comparison(
+        comparison,
+        bench_command=(f"`navfmu bench {scenario} --filters {','.join(names)}`" if names else ""),
+        show_missing=len(filters) > 1)
+    if text:
+        echo(text)
+    written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
+                            reference=reference, comparison=comparison)
+    echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
+
+
+__all__ = ["run_scenarios"]

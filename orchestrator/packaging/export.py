@@ -1,0 +1,149 @@
+"""``navfmu export``: a whole system model as one co-simulation FMU (fmpy's container FMU).
+
+The exported FMU holds every component's FMU under ``resources/`` and fmpy's native container
+(``fmpy.container_fmu``), which steps them itself.  Its rules (fmpy's ``container-fmu``
+sources, ``doFixedStep``/``exitInitializationMode``):
+
+* one fixed internal step ``h`` = the model's base step; a host step must be an integer
+  multiple of ``h``;
+* every internal step, every component steps over ``[t, t + h]`` (declaration order), then
+  every connection is transferred: a Jacobi exchange, each component one step late on its
+  sources (rule 3J of :mod:`orchestrator.cosim.master` without decimation);
+* the connections are transferred once before initialization mode is left (not after it).
+
+The container has no decimation: a component's ``osp:StepSizeHint`` cannot be honoured, so
+the export steps every component at the base step.  That is legal for our components whose
+period is not tied to the step (the GNSS receiver fixes at its own ``fix_interval`` from
+``truth_time`` whatever the step); a component that only accepts its own period (the IMU, the
+filters) must have the base step as its period, which is what our models do.  So the export
+reproduces our master's ``--algorithm jacobi`` run of the model *with the hints removed*
+(:func:`without_step_hints`).
+
+Container variables: every output of every component as ``component.variable`` (unit kept),
+and every parameter the system structure binds as a fixed parameter of that name whose start
+is the bound value (so the FMU runs the scenario as it is, and a host may change it).
+"""
+from __future__ import annotations
+
+import dataclasses
+import shutil
+import tempfile
+import uuid
+from pathlib import Path
+from typing import Dict, List
+
+from ..errors import NavfmuError
+from ..model.ssp import SystemModel
+from ..model.ssp_archive import load_model
+
+_FMI_TYPES = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean", "String": "String"}
+#: the container's own type names for a connection (its configuration reader knows no FMI 2
+#: names, and fmpy's writer passes a connection's type through unconverted)
+_CONTAINER_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}
+
+
+def _as_connector(variable):
+    import attrs
+
+    return attrs.evolve(variable, type=_CONTAINER_TYPES[variable.type])
+
+
+def without_step_hints(model: SystemModel) -> SystemModel:
+    """``model`` with every component stepping at the base step (the exported FMU's rule)."""
+    return dataclasses.replace(
+        model, components=[dataclasses.replace(c, step_hint=None) for c in model.components])
+
+
+def _start_text(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+def _configuration(model: SystemModel):
+    from fmpy import read_model_description
+    from fmpy.container_fmu.config import Component, Configuration, Connection
+    from fmpy.model_description import (CoSimulation, DefaultExperiment, ModelDescription,
+                                        ModelVariable, Unknown)
+
+    components, variables, units = {}, {}, {}
+    for spec in model.components:
+        if not Path(spec.source).is_file():
+            raise NavfmuError(f"component '{spec.name}': FMU file not found: {spec.source}")
+        md = read_model_description(str(spec.source))
+        if md.fmiVersion != "2.0":
+            raise NavfmuError(f"component '{spec.name}': {spec.source} is FMI {md.fmiVersion}; "
+                              "the export holds FMI 2.0 components only")
+        components[spec.name] = Component(name=spec.name, filename=Path(spec.source),
+                                          modelDescription=md)
+        variables[spec.name] = {v.name: v for v in md.modelVariables}
+        for u in md.unitDefinitions:
+            units.setdefault(u.name, u)
+    container_vars: List = [ModelVariable(name="time", type="Real", causality="independent",
+                                          variability="continuous")]
+    mappings: Dict = {}
+    for spec in model.components:
+        comp, own = components[spec.name], variables[spec.name]
+        for pname, (_, value) in spec.parameters.items():
+            v = own[pname]
+            cv = ModelVariable(name=f"{spec.name}.{pname}", type=_FMI_TYPES[v.type],
+                               causality="parameter", variability="fixed", initial="exact",
+                               start=_start_text(value), unit=v.unit, description=v.description)
+            container_vars.append(cv)
+            mappings[cv] = [(comp, v)]
+        for v in own.values():
+            if v.causality != "output" or v.type not in _FMI_TYPES or v.type == "String":
+                continue
+            cv = ModelVariable(name=f"{spec.name}.{v.name}", type=v.type, causality="output",
+                               variability=v.variability, initial="calculated", unit=v.unit,
+                               description=v.description)
+            container_vars.append(cv)
+            mappings[cv] = [(comp, v)]
+    connections = [Connection(components[c.start_component],
+                              [_as_connector(variables[c.start_component][c.start_connector])],
+                              components[c.end_component],
+                              [_as_connector(variables[c.end_component][c.end_connector])])
+                   for c in model.connections]
+    outputs = [Unknown(index=i, variable=v) for i, v in enumerate(container_vars, start=1)
+               if v.causality == "output"]
+    md = ModelDescription(
+        fmiVersion="2.0", modelName=model.name, instantiationToken="{%s}" % uuid.uuid4(),
+        description=f"system model {model.name} as one FMU (fmpy container, Jacobi exchange "
+                    f"at the base step {model.base_step} s)",
+        generationTool="navfmu export",
+        unitDefinitions=list(units.values()),
+        defaultExperiment=DefaultExperiment(startTime=str(model.start_time),
+                                            stopTime=str(model.stop_time),
+                                            stepSize=str(model.base_step)),
+        coSimulation=CoSimulation(modelIdentifier="container_fmu",
+                                  fixedInternalStepSize=model.base_step),
+        modelVariables=container_vars, outputs=outputs, initialUnknowns=list(outputs))
+    return Configuration(parallelDoStep=False, modelDescription=md,
+                         components=list(components.values()), connections=connections,
+                         variableMappings=mappings)
+
+
+def export(model_dir, out) -> Path:
+    """Write the system ``model_dir`` (folder, .ssd or .ssp) as the FMU ``out``; returns it."""
+    from fmpy.container_fmu.cli import create_container_fmu
+
+    model = load_model(model_dir)
+    out = Path(out)
+    if out.suffix.lower() != ".fmu":
+        raise NavfmuError(f"--out {out}: an FMU needs the extension .fmu")
+    if not out.parent.is_dir():
+        raise NavfmuError(f"cannot write {out}: the folder {out.parent} does not exist")
+    config = _configuration(model)
+    work = Path(tempfile.mkdtemp(prefix="navfmu-export-"))
+    tmp = (out.parent / f".{out.name}.tmp").resolve()
+    try:
+        (work / "unzipped").mkdir()
+        create_container_fmu(config, work / "unzipped", tmp)
+        tmp.replace(out)
+    finally:
+        tmp.unlink(missing_ok=True)
+        shutil.rmtree(work, ignore_errors=True)
+    return out
+
+
+__all__ = ["export", "without_step_hints"]

@@ -1,0 +1,106 @@
+"""``navfmu package``: a model folder as one self-contained SSP archive (``.ssp``).
+
+The archive is a zip with, at its root, ``SystemStructure.ssd`` (the model's, comments kept)
+and every other file of the model folder at its relative path (``.ssv`` parameter files,
+``paper.json``, data such as the replay's sensor ``log/``; hidden files left out), and every
+component's FMU under ``resources/<file name>``; each Component's ``source`` is
+rewritten to ``resources/<file name>`` (two different FMUs with the same file name get
+``_2``, ``_3``... suffixes), and every Component carries ``type``.  libcosim and our
+:func:`orchestrator.model.ssp.load_model` read it unchanged.  The archive is written to a
+temporary name and renamed.
+"""
+from __future__ import annotations
+
+import re
+import zipfile
+from pathlib import Path
+from typing import Dict
+
+from ..errors import NavfmuError
+from ..results.run_results import atomic_write
+from ..model.ssp import FMU_TYPE
+from ..model.ssp_archive import load_model
+
+RESOURCES = "resources"
+
+
+def _resource_names(model) -> Dict[str, str]:
+    """component name -> archive path of its FMU (one entry per distinct FMU file)."""
+    by_file: Dict[Path, str] = {}
+    taken = set()
+    names = {}
+    for c in model.components:
+        src = Path(c.source).resolve()
+        if not src.is_file():
+            raise NavfmuError(f"component '{c.name}': FMU file not found: {src} (navfmu build?)")
+        if src not in by_file:
+            stem, n = src.stem, 1
+            candidate = f"{RESOURCES}/{src.name}"
+            while candidate in taken:
+                n += 1
+                candidate = f"{RESOURCES}/{stem}_{n}{src.suffix}"
+            taken.add(candidate)
+            by_file[src] = candidate
+        names[c.name] = by_file[src]
+    return names
+
+
+def _rewrite_ssd(text: str, sources: Dict[str, str]) -> str:
+    """Set ``source`` (and ``type``) of every ``<ssd:Component>`` start tag."""
+    def fix(match):
+        tag = match.group(0)
+        name = re.search(r'\bname="([^"]*)"', tag).group(1)
+        tag = re.sub(r'\bsource="[^"]*"', f'source="{sources[name]}"', tag)
+        if not re.search(r'\btype="', tag):
+            tag = tag.replace("<ssd:Component", f'<ssd:Component type="{FMU_TYPE}"', 1)
+        return tag
+
+    return re.sub(r"<ssd:Component\b[^>]*>", fix, text)
+
+
+def _folder_files(ssd: Path):
+    """(archive name, path) of every file of the model folder but the .ssd; refuses a
+    parameter binding to a file outside the folder (it would not be in the archive)."""
+    folder = ssd.parent.resolve()
+    text = ssd.read_text(encoding="utf-8")
+    for source in re.findall(r'<ssd:ParameterBinding\b[^>]*\bsource="([^"]*)"', text):
+        if folder not in (folder / source).resolve().parents:
+            raise NavfmuError(f"{ssd}: parameter file '{source}' lies outside the model folder; "
+                              f"move it next to the .ssd to package the model")
+    for path in sorted(folder.rglob("*")):
+        rel = path.relative_to(folder)
+        if path.is_file() and path != ssd and not any(p.startswith(".") for p in rel.parts):
+            if rel.parts[0] == RESOURCES:
+                raise NavfmuError(f"{folder}: the folder has a '{RESOURCES}' entry, where the "
+                                  f"archive puts the FMUs")
+            yield rel.as_posix(), path
+
+
+def package(model_dir, out) -> Path:
+    """Write ``model_dir`` (a model folder or its .ssd) as the archive ``out``; returns it."""
+    model = load_model(model_dir)
+    if model.archive is not None:
+        raise NavfmuError(f"{model_dir} is already an SSP archive")
+    out = Path(out)
+    if out.suffix.lower() != ".ssp":
+        raise NavfmuError(f"--out {out}: an SSP archive needs the extension .ssp")
+    sources = _resource_names(model)
+    ssd = model.path
+    ssd_text = _rewrite_ssd(ssd.read_text(encoding="utf-8"), sources)
+    files = list(_folder_files(ssd))
+    fmus = {arc: Path(c.source).resolve() for c in model.components
+            for arc in [sources[c.name]]}
+
+    def write(f):
+        with zipfile.ZipFile(f, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+            zf.writestr("SystemStructure.ssd", ssd_text)
+            for arcname, path in files:
+                zf.write(path, arcname)
+            for arcname, path in fmus.items():
+                zf.write(path, arcname)
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return atomic_write(out, write, binary=True)
+
+
+__all__ = ["package"]

@@ -1,0 +1,73 @@
+"""What can be checked before a run starts: its stop time and the memory it will need.
+
+The master preallocates the recording (one float64 per recorded variable and row), and the
+result files and metrics need copies of it; a run whose recording cannot fit is refused up
+front with the numbers, instead of a MemoryError after instantiating the FMUs.  Whether the
+stop time lies within what a component can simulate (the end of a motion profile) is the
+component's own check at initialization (the experiment's stop time reaches it through
+fmi2SetupExperiment), before any step.
+"""
+from __future__ import annotations
+
+import math
+import os
+from typing import Optional
+
+from ..errors import NavfmuError
+
+#: bytes of memory needed per recorded value: the recording itself, the table the result
+#: file is written from, and the metrics' working copies
+BYTES_PER_RECORDED_VALUE = 3 * 8
+
+
+def check_stop_time(stop_time: Optional[float], start_time: float) -> None:
+    """A given ``--stop`` must be a finite number after the start time."""
+    if stop_time is None:
+        return
+    if not math.isfinite(stop_time):
+        raise NavfmuError(f"--stop: the stop time must be a finite number of seconds, got "
+                          f"{stop_time}")
+    if not stop_time > start_time:
+        raise NavfmuError(f"--stop: the stop time {stop_time:g} s must be after the start "
+                          f"time {start_time:g} s")
+
+
+def available_memory() -> Optional[int]:
+    """Bytes of memory available to a new allocation (Linux MemAvailable; None if unknown)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_memory(n_rows: int, n_columns: int, available: Optional[int] = None) -> None:
+    """Refuse a recording of ``n_rows`` x ``n_columns`` values that would not fit into the
+    available memory (``available`` bytes; default: :func:`available_memory`)."""
+    needed = n_rows * n_columns * BYTES_PER_RECORDED_VALUE
+    available = available_memory() if available is None else available
+    if available is not None and needed > available:
+        raise NavfmuError(
+            f"--stop: the run would record {n_rows} rows x {n_columns} variables and need about "
+            f"{needed / 1e9:.3g} GB of memory, more than the {available / 1e9:.3g} GB "
+            "available; shorten the run (--stop)")
+
+
+def check_simulation(sim, stop_time: Optional[float]) -> None:
+    """Both checks for a :class:`~orchestrator.cosim.master.Simulation` about to run to
+    ``stop_time`` (None: the model's)."""
+    start = sim.model.start_time
+    check_stop_time(stop_time, start)
+    stop = sim.model.stop_time if stop_time is None else float(stop_time)
+    n_steps = sim._n_steps(start, stop)
+    n_rows = n_steps // sim.record_every + 1
+    check_memory(n_rows, sum(len(v) for v in sim.recorded.values()))
+
+
+__all__ = ["check_stop_time", "check_memory", "check_simulation", "available_memory"]

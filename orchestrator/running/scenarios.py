@@ -1,0 +1,155 @@
+"""The scenario facade: load a scenario, swap its filter, run it and compute its metrics.
+
+A *scenario* is a folder of ``models/`` with a ``SystemStructure.ssd`` (and optional
+``paper.json`` with the paper's reference numbers).  Filters are found in the results by the
+signal contract: every recorded component with a ``nav_time`` output is a filter, the one with
+``truth_time`` is the truth source.  What is made of runs lives beside it: the paper
+comparison (:mod:`orchestrator.running.comparison`, :mod:`orchestrator.running.comparison_text`),
+the output files (:mod:`orchestrator.running.run_outputs`) and the benchmarks
+(:mod:`orchestrator.cli.bench`).
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, Optional
+
+from ..building import build as fmu_build
+from ..building.build import ensure_fmus
+from ..results import metrics as nav_metrics
+from . import prechecks
+from ..results import recorder
+from ..results import windows as paper_windows
+from ..errors import NavfmuError
+from ..cosim.master import Simulation
+from ..results.run_results import Results
+from ..model.ssp import SystemModel
+from ..model.ssp_archive import load_model
+
+#: name of the component a ``--filter`` swap replaces
+FILTER_COMPONENT = "filter"
+
+
+def registry():
+    """Model name -> navcore component class, for the direct backend."""
+    from navcore.components.registry import REGISTRY
+
+    return REGISTRY
+
+
+def resolve_filter(name_or_path: str) -> Path:
+    """``Kf`` -> ``fmus/dist/Kf.fmu``; a path to an ``.fmu`` is taken as it is."""
+    p = Path(name_or_path)
+    if p.suffix == ".fmu" or "/" in name_or_path:
+        if not p.is_file():
+            raise NavfmuError(f"--filter: FMU file not found: {p}")
+        return p.resolve()
+    if not (fmu_build.FMU_SOURCES / f"{name_or_path}.py").is_file():
+        known = ", ".join(s.stem for s in fmu_build.slave_scripts())
+        raise NavfmuError(f"--filter: unknown filter '{name_or_path}' (known FMUs: {known}; or "
+                          "give the path of an .fmu file)")
+    return fmu_build.fmu_path(name_or_path)
+
+
+def swap_filter(model: SystemModel, filter: str) -> SystemModel:
+    """``model`` with its ``filter`` component's FMU replaced (see :func:`resolve_filter`)."""
+    if FILTER_COMPONENT not in [c.name for c in model.components]:
+        raise NavfmuError(f"{model.path}: no component named '{FILTER_COMPONENT}' to swap")
+    return model.replace_source(FILTER_COMPONENT, resolve_filter(filter))
+
+
+def load_scenario(path) -> SystemModel:
+    from .replay import resolve_log_parameters
+
+    return resolve_log_parameters(load_model(Path(path)))
+
+
+def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
+    ref = Path(model.path).parent / "paper.json"
+    if not ref.is_file():
+        return None
+    try:
+        return json.loads(ref.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
+
+
+def has_truth(results: Results) -> bool:
+    return any(results.has(c, "truth_time") for c in results.components)
+
+
+@dataclass
+class Run:
+    """One co-simulation and its metrics."""
+
+    label: str
+    model: SystemModel
+    results: Results
+    metrics: Dict[str, Dict[str, Any]] = field(default_factory=dict)
+    #: the Parquet file the run was streamed to (then ``results`` has no rows)
+    series_file: Optional[Path] = None
+    #: of a streamed run: paper.json window name -> filter component -> metrics
+    window_metrics: Dict[str, Dict[str, Dict[str, Any]]] = field(default_factory=dict)
+
+
+def filter_label(model: SystemModel, filter: Optional[str] = None) -> str:
+    """The name a run of ``model`` (with ``filter`` swapped in) is reported under: the
+    filter FMU's name, or the model's name when it has no ``filter`` component."""
+    if FILTER_COMPONENT not in [c.name for c in model.components]:
+        return model.name
+    return Path(resolve_filter(filter) if filter
+                else model.component(FILTER_COMPONENT).source).stem
+
+
+def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend: str = "fmu",
+                      stop_time: Optional[float] = None, parameters=None, window=None,
+                      progress=None, build=True, log=print, replay=None,
+                      algorithm="gauss-seidel", stream_to=None) -> Run:
+    """Run one scenario (optionally with the filter component swapped, and with its sensor
+    components replaced by a replay of the sensor log in folder ``replay``, see
+    :func:`orchestrator.running.replay.replay_model`) and compute metrics (not without a truth).
+
+    ``stream_to``: a ``.parquet`` path; the rows then go to that file and to the metrics in
+    chunks (memory flat in the flight length) instead of staying in ``results``."""
+    label = filter_label(model, filter)
+    if filter:
+        model = swap_filter(model, filter)
+    record = None
+    if replay is not None:
+        from . import replay as log_replay
+
+        model, notes = log_replay.replay_model(model, replay, stop_time=stop_time)
+        stop_time = None
+        parameters = {**log_replay.parameter_overrides(model, notes), **(parameters or {})}
+        record = log_replay.recorded_signals(model, notes)
+    if backend == "fmu" and build:
+        ensure_fmus(model, log=log)
+    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
+                     parameters=parameters, record=record, algorithm=algorithm)
+    prechecks.check_simulation(sim, stop_time)
+    if stream_to is not None:
+        return _streamed_run(label, model, sim, stop_time, progress, window, stream_to)
+    results = sim.run(stop_time=stop_time, progress=progress)
+    run = Run(label, model, results)
+    if not has_truth(results):
+        return run
+    for f in nav_metrics.filters_of(results):
+        run.metrics[f] = nav_metrics.filter_metrics(results, f, window=window)
+    return run
+
+
+def _streamed_run(label, model, sim, stop_time, progress, window, stream_to) -> Run:
+    """Run ``sim`` streaming its rows to the Parquet file ``stream_to`` and to the metrics of
+    ``window`` and of every paper window the run reaches (a shorter run leaves the others out)."""
+    overlap = max(sim.decimation.values()) + 1
+    sink = recorder.MetricsSink(window=window, overlap=overlap)
+    end = model.stop_time if stop_time is None else stop_time
+    windowed = {name: recorder.MetricsSink(window=(float(w["t0"]), float(w["t1"])),
+                                           overlap=overlap)
+                for name, w in paper_windows.paper_windows(paper_reference(model)).items()
+                if end is None or float(w["t0"]) < end}
+    header = sim.run(stop_time=stop_time, progress=progress, sink=recorder.Tee(
+        [sink, *windowed.values(), recorder.ParquetSink(stream_to)]))
+    return Run(label, model, header, dict(sink.metrics), Path(stream_to),
+               {name: dict(s.metrics) for name, s in windowed.items()})
