@@ -207,3 +207,25 @@ def test_bad_campaign_options_one_error_line(capsys, tmp_path, args, words):
     assert err.count("navfmu: error:") == 1 and "Traceback" not in err
     assert all(w in err for w in words), err
     assert not out.exists()
+
+
+def test_a_resume_after_a_code_change_is_refused(tmp_path, monkeypatch):
+    """The manifest's code hash: the same campaign with other numerical code is another
+    campaign (its runs would not be comparable)."""
+    from orchestrator.campaigns import campaign as campaign_module
+
+    run_campaign(_spec(runs=1, filters=("Kf",)), tmp_path, log=print)
+    monkeypatch.setattr(campaign_module, "code_hash", lambda: "0" * 64)
+    with pytest.raises(NavfmuError, match=r"holds another campaign \(code_sha256: '[0-9a-f]{64}' "
+                                          r"there, '0{64}' here\)"):
+        run_campaign(_spec(runs=1, filters=("Kf",)), tmp_path, log=print)
+
+
+def test_the_code_hash_covers_every_navcore_module():
+    """Every module of navcore (in every wing) and every FMU script is in the hash."""
+    from orchestrator.building.build import ROOT
+    from orchestrator.campaigns.campaign import NUMERIC_CODE
+
+    hashed = {p for pattern in NUMERIC_CODE for p in ROOT.glob(pattern)}
+    navcore = set((ROOT / "fmus" / "navcore").rglob("*.py")) | set((ROOT / "fmus").glob("*.py"))
+    assert navcore - hashed == set()

@@ -97,3 +97,67 @@ def test_any_values_within_the_declared_ranges_are_valid():
                       else rng.uniform(lo, hi)) for k, (_, lo, hi, _) in specs.items()}
         f = FuzzyRScale(values)
         assert 0.3 <= f(rng.normal(), rng.normal()) <= 4.0
+
+
+# every cell of the rule table: inputs at the sets' vertices fire exactly one rule, fully, so the
+# output is the centroid of one output set in ln F, by hand (LD and LI end at their own
+# vertex: right triangles, centroid 1/3 of the way from the vertex to the other end)
+_LN = {"LD": (2 * -LN15 - LN12) / 3, "D": (-LN15 - LN12 + 0.0) / 3, "K": 0.0,
+       "I": (0.0 + LN12 + LN15) / 3, "LI": (LN12 + 2 * LN15) / 3}
+_TABLE = {("N", "N"): "LD", ("N", "Z"): "D", ("N", "P"): "K",
+          ("Z", "N"): "D", ("Z", "Z"): "K", ("Z", "P"): "I",
+          ("P", "N"): "K", ("P", "Z"): "I", ("P", "P"): "LI"}
+_E_AT = {"N": -0.5, "Z": 0.0, "P": 1.0}
+_DE_AT = {"N": -0.5, "Z": 0.0, "P": 0.5}
+
+
+@pytest.mark.parametrize("cell", sorted(_TABLE), ids=lambda c: f"e_{c[0]}-de_{c[1]}")
+def test_every_rule_cell_by_hand(cell):
+    e_set, de_set = cell
+    got = FuzzyRScale()(_E_AT[e_set], _DE_AT[de_set])
+    assert math.log(got) == pytest.approx(_LN[_TABLE[cell]], abs=2e-3)
+
+
+def _mamdani_by_hand(e, de, t_norm):
+    """The paper's inference written out independently on a fine grid, with the given t-norm
+    (AND), max aggregation and the centroid in ln F."""
+    u = np.linspace(-LN15, LN15, 600_001)
+
+    def tri(x, a, b, c):
+        rise = np.ones_like(x) if a == b else (x - a) / (b - a)
+        fall = np.ones_like(x) if b == c else (c - x) / (c - b)
+        return np.clip(np.minimum(rise, fall), 0.0, 1.0)
+
+    out = {"LD": tri(u, -LN15, -LN15, -LN12), "D": tri(u, -LN15, -LN12, 0.0),
+           "K": tri(u, -LN12, 0.0, LN12), "I": tri(u, 0.0, LN12, LN15),
+           "LI": tri(u, LN12, LN15, LN15)}
+    mu_e = dict(zip("NZP", memberships(e, (-0.5, 0.0, 1.0), (0.0, -0.5, 1.0, 0.0))))
+    mu_de = dict(zip("NZP", memberships(de, (-0.5, 0.0, 0.5), (0.0, -0.5, 0.5, 0.0))))
+    aggregate = np.zeros_like(u)
+    for (a, b), name in _TABLE.items():
+        aggregate = np.maximum(aggregate, np.minimum(out[name], t_norm(mu_e[a], mu_de[b])))
+    return math.exp(_centroid(aggregate, u))
+
+
+def test_the_and_of_the_rules_is_the_minimum():
+    """e = -0.1 (N 0.2, Z 0.8), de = 0.45 (Z 0.1, P 0.9): four rules fire with different
+    strengths, where min and product differ by 3 %; ours is the paper's min."""
+    by_min = _mamdani_by_hand(-0.1, 0.45, min)
+    by_product = _mamdani_by_hand(-0.1, 0.45, lambda a, b: a * b)
+    assert abs(by_min - by_product) > 0.02 * by_min   # the case tells the two t-norms apart
+    assert FuzzyRScale()(-0.1, 0.45) == pytest.approx(by_min, rel=1e-3)
+
+
+def test_de_is_the_growth_of_the_mismatch():
+    """A mismatch that grows between two updates gives de > 0 (and the larger factor of the
+    (P, P) cell); one that shrinks gives de < 0."""
+    R0 = np.eye(6) * 1e-4
+    adapt = FuzzyAdaptiveR(FuzzyRScale(), window=2, r_scale_min=1e-3, r_scale_max=1e4)
+    scale = np.ones(2)
+    for v in (0.01, 0.02, 0.04):                        # innovations growing, Pzz = 0
+        scale = adapt.step(np.full(6, v), np.zeros((6, 6)), R0, scale)
+    assert adapt.de[0] > 0 and adapt.e[0] > 0
+    grown = adapt.de[0]
+    for v in (0.02, 0.01):
+        adapt.step(np.full(6, v), np.zeros((6, 6)), R0, np.ones(2))
+    assert adapt.de[0] < 0 < grown

@@ -92,3 +92,16 @@ def test_bad_settings():
         GeneticAlgorithm(2, population=1)
     with pytest.raises(NavfmuError, match="generations"):
         GeneticAlgorithm(2, generations=0)
+
+
+def test_an_initial_row_is_evaluated_and_kept_when_nothing_beats_it():
+    """Elitism with a seeded first population: a cost that only the given initial row reaches
+    (a spike no random row hits) is the result, with that row's genes."""
+    start = np.array([0.123, 0.877])
+
+    def spike(rows):
+        return [1.0 if np.array_equal(r, start) else 2.0 for r in rows]
+
+    res = GeneticAlgorithm(2, population=6, generations=5, seed=2).run(spike, initial=[start])
+    assert res.best_cost == 1.0 and np.array_equal(res.best_genes, start)
+    assert res.best_so_far == [1.0] * 5

@@ -211,3 +211,32 @@ def test_bank_rejects_bad_parameters():
         ImmBank(filters, np.eye(3))
     with pytest.raises(ParameterError, match="mu0"):
         ImmBank(filters, STICKY, mu0=np.array([0.5, 0.6]))
+
+
+def test_combination_against_the_textbook_by_hand():
+    """Bar-Shalom, Li & Kirubarajan (2001) eqs. 11.6.6-20/21: x = sum mu_j x_j and
+    P = sum mu_j (P_j + (x_j - x)(x_j - x)^T), worked by hand for two models:
+    x = 0.3 [1, 2] + 0.7 [3, -1] = [2.4, -0.1]; the mean of the P_j is [[1.3, 0.15], [0.15, 2.4]];
+    the spread of the means 0.3 d1 d1^T + 0.7 d2 d2^T with d1 = [-1.4, 2.1], d2 = [0.6, -0.9]
+    is [[0.84, -1.26], [-1.26, 1.89]]."""
+    x, P = imm_combine(np.array([0.3, 0.7]), [np.array([1.0, 2.0]), np.array([3.0, -1.0])],
+                       [np.array([[2.0, 0.5], [0.5, 1.0]]), np.array([[1.0, 0.0], [0.0, 3.0]])])
+    np.testing.assert_allclose(x, [2.4, -0.1], atol=1e-15)
+    np.testing.assert_allclose(P, [[2.14, -1.11], [-1.11, 4.29]], atol=1e-14)
+
+
+def test_the_bank_reports_the_spread_of_its_models():
+    """After an update in which the two models disagree, the bank's covariance exceeds the
+    probability-weighted mean of the models' covariances by exactly the spread of their means
+    (a combined P without that term would be overconfident)."""
+    bank = ImmBank([LinearKalmanFilter(np.zeros(2), 10.0 * np.eye(2)) for _ in range(2)],
+                   STICKY, np.array([0.5, 0.5]))
+    for z in (np.array([0.0]), np.array([5.0]), np.array([12.0])):
+        bank.predict(lambda flt, j: flt.predict(F, QS[j]))
+        bank.update(lambda flt, j: flt.update(z, H, R))
+    xs = [f.x for f in bank.filters]
+    assert np.abs(xs[0] - xs[1]).max() > 0.5            # the models really disagree
+    mean_P = sum(m * f.P for m, f in zip(bank.mu, bank.filters))
+    spread = sum(m * np.outer(x - bank.x, x - bank.x) for m, x in zip(bank.mu, xs))
+    np.testing.assert_allclose(bank.P - mean_P, spread, rtol=1e-10, atol=1e-12)
+    assert np.all(np.linalg.eigvalsh(spread) >= -1e-12) and np.trace(spread) > 1e-3

@@ -50,3 +50,4 @@ def test_no_phases_and_bad_windows():
         phases.phase_windows({"phases": {"windows": [{"label": "a", "t0": 5, "t1": 5}]}})
     with pytest.raises(NavfmuError, match="windows"):
         phases.phase_windows({"phases": {"windows": "0-600"}})
+

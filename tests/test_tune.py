@@ -75,3 +75,23 @@ def test_cli_error_is_one_line():
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines()[-1].startswith("navfmu: error:")
     assert "fuzzy_nope" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_the_tuned_values_are_never_worse_than_the_current_ones(monkeypatch):
+    """The first population holds the model's current values: with a cost that is lowest
+    exactly there (1, and 2 everywhere else: no other candidate can find it), the tune returns
+    the current values and their cost."""
+    import numpy as np
+
+    model = tuner.load_scenario(MODEL)
+    _, _, _, current = tuner.resolve_parameters(model, "filter", PARAMS, {}, "direct")
+
+    def spike(spec, values):
+        at = np.array([values[n] for n in PARAMS])
+        return 1.0 if np.allclose(at, current, rtol=1e-12, atol=0.0) else 2.0
+
+    monkeypatch.setattr(tuner, "evaluate", spike)
+    res = tuner.run_tune(MODEL, "filter", PARAMS, generations=3, population=4, workers=1,
+                         seed=3, stop_time=6.0, backend="direct", log=lambda m: None)
+    assert res["best_cost"] == 1.0
+    np.testing.assert_allclose([res["best_values"][n] for n in PARAMS], current, rtol=1e-12)

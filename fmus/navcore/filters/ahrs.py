@@ -254,11 +254,11 @@ class FuzzyAdaptiveR:
 
     At every update ``k`` with innovation ``r_k = z_k - h(x_k|k-1)`` (paper 003 eq. 18):
 
-    * ``C_z = 1/N sum_{i=k-N+1..k} r_i r_i^T`` (paper 003 eq. 17, window ``N``), ``P_z = Pzz
-    + R_(k-1)``
-      (paper 003 eq. 16, the UKF's innovation covariance), ``E_k = C_z - P_z`` (paper 003 eq. 19);
-    * per block b (accelerometer, magnetometer; paper 003 eq. 25): ``e = tr E_k,b / tr P_z,b`` and
-      ``de = e_k - e_(k-1)`` go through :class:`~navcore.filters.fuzzy.FuzzyRScale` to ``F_b``;
+    * ``C_z = 1/N sum_{i=k-N+1..k} r_i r_i^T`` (paper 003 eq. 17, window ``N``),
+      ``P_z = Pzz + R_(k-1)`` (paper 003 eq. 16, the UKF's innovation covariance),
+      ``E_k = C_z - P_z`` (paper 003 eq. 19);
+    * per block b (accelerometer, magnetometer; paper 003 eq. 25): ``e = tr E_k,b / tr P_z,b``
+      and ``de = e_k - e_(k-1)`` go through :class:`~navcore.filters.fuzzy.FuzzyRScale` to ``F_b``;
     * ``R_k,b = F_b R_(k-1),b`` (paper 003 eq. 15), the scale kept within
       ``[r_scale_min, r_scale_max]`` times the nominal R, and used in this update.
 
