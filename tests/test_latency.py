@@ -302,3 +302,53 @@ def _drive_from(f, k0, fixes, n=40):
         rows.append(tuple(out[c] for c in ("updated", "nav_lat", "nav_vn", "std_pn", "nis",
                                            "n_stale_fixes")))
     return rows
+
+
+# -- fixes between IMU epochs ----------------------------------------------------------------
+VN = 50.0      # m/s north: a fix 0.4 IMU periods off the grid is 0.2 m away along the track
+
+
+def _unaided_lat(n):
+    """nav_lat at the end of each of n IMU periods of an unaided run (the truth of the runs
+    below: a perfect IMU), and a linear interpolation of it between epochs."""
+    f = _kf(init_vn=VN)
+    lats = np.array([r[1] for r in _drive(f, n, {})])
+    ends = (np.arange(n) + 1) * H
+    return lambda t: float(np.interp(t, ends, lats))
+
+
+@pytest.mark.parametrize("offset,nearest", [(0.4, 12), (-0.4, 12), (0.6, 13)])
+def test_a_fix_between_epochs_counts_at_its_time(offset, nearest):
+    """A fix taken ``offset`` IMU periods off the grid, reporting where the vehicle was then,
+    gives the state of a fix taken on the nearest epoch there (the INS carried to gnss_time by
+    its velocity: paper-independent kinematics); the same fix read as if taken on the epoch
+    (the carry dropped, or its sign flipped) is 0.2 m off."""
+    lat_at = _unaided_lat(40)
+    dn = 3.0 / 6.37e6
+    t_fix = (nearest + 1 + offset) * H - H * round(offset)
+    t_epoch = (nearest + 1) * H
+    step = nearest - 1          # the step at which both fixes are already visible
+    on_grid = _drive(_kf(init_vn=VN), 30, {step: {**_fix(1, t_epoch),
+                                                  "gnss_lat": lat_at(t_epoch) + dn,
+                                                  "gnss_vn": VN}})
+    off_grid = _drive(_kf(init_vn=VN), 30, {step: {**_fix(1, t_fix),
+                                                   "gnss_lat": lat_at(t_fix) + dn,
+                                                   "gnss_vn": VN}})
+    uncarried = _drive(_kf(init_vn=VN), 30, {step: {**_fix(1, t_epoch),
+                                                    "gnss_lat": lat_at(t_fix) + dn,
+                                                    "gnss_vn": VN}})
+    assert [r[0] for r in off_grid].index(True) == [r[0] for r in on_grid].index(True) == nearest
+    metres = 6.37e6
+    gap = max(abs(a[1] - b[1]) for a, b in zip(off_grid, on_grid)) * metres
+    wrong = max(abs(a[1] - b[1]) for a, b in zip(uncarried, on_grid)) * metres
+    assert gap < 2e-3
+    assert wrong > 30 * gap and wrong > 0.02
+
+
+def test_a_fix_far_in_the_future_is_stale_not_queued():
+    """A fix time-tagged more than max_fix_age ahead of the filter (a broken time tag) is
+    counted stale at once and never applied, however long the run goes on."""
+    f = _kf(max_fix_age=0.5)
+    rows = _drive(f, 300, {5: _fix(1, 2.0)})        # 1.94 s ahead of the filter at step 5
+    assert not any(r[0] for r in rows)
+    assert rows[5][3] == 1 and rows[-1][3] == 1
