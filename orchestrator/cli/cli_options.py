@@ -10,6 +10,16 @@ from ..errors import NavfmuError
 DEFAULT_OUT = Path("navfmu-results")
 
 
+def nonempty_path(ctx, param, value):
+    """click callback: a path option or argument given as empty text is refused (it would
+    otherwise read as "not given" and write to the default place)."""
+    if value is not None and not str(value).strip():
+        import click
+
+        raise click.BadParameter("empty path; give a file or folder name", ctx, param)
+    return value
+
+
 def filter_names(text):
     """``A,B,C`` -> names; at least one, none twice."""
     names = [f.strip() for f in text.split(",") if f.strip()]
@@ -55,4 +65,4 @@ def parse_sets(items):
     return values
 
 
-__all__ = ["DEFAULT_OUT", "filter_names", "parse_window", "parse_sets"]
+__all__ = ["DEFAULT_OUT", "nonempty_path", "filter_names", "parse_window", "parse_sets"]

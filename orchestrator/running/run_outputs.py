@@ -47,7 +47,7 @@ class _Written(list):
     def add(self, path):
         if path:
             self.append(path)
-        interrupts.check()
+        interrupts.safe_point("writing")
 
 
 def _write_files(runs, out: Path, fmt, plots_on, title, reference, comparison) -> List[Path]:
