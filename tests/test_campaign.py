@@ -181,7 +181,7 @@ def test_killed_worker_then_killed_driver_then_restart_completes(tmp_path):
     done = subprocess.run(COMMAND + ["--out", str(out)], env=_env(), capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    assert (f"{TOTAL - len(second)} runs now, {len(second)} done before, {TOTAL} in all"
+    assert (f"= {TOTAL} filter runs: {TOTAL - len(second)} now, {len(second)} done before"
             in done.stdout)
     final = _files(out)
     assert len(final) == TOTAL

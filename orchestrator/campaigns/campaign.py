@@ -138,12 +138,14 @@ def code_commit() -> str:
     return head + ("+dirty" if dirty.strip() else "")
 
 
-def random_components(model, backend: str) -> List[str]:
-    """Components with an Integer parameter ``seed``, in declaration order."""
+def random_components(model, backend: str, parameters=None) -> List[str]:
+    """Components with an Integer parameter ``seed``, in declaration order (``parameters``:
+    the overrides, checked against the components here)."""
     from ..cosim.master import Simulation
     from ..running.scenarios import registry
 
-    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None)
+    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
+                     parameters=dict(parameters or {}))
     return [d.spec.name for d in sim.components
             if (v := d.variables.get("seed")) is not None and v.type == "Integer"
             and v.causality == "parameter"]
@@ -171,6 +173,18 @@ def parse_seed_offsets(items) -> Tuple[Tuple[str, int], ...]:
         if not sep or not comp:
             raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
     return tuple(offsets)
+
+
+def _check_seed_range(spec: CampaignSpec, offsets: Dict[str, int], runs: int) -> None:
+    """Every run's seeds must fit an FMI Integer (checked before the campaign starts)."""
+    from .backends import FMI_INTEGER_MAX, FMI_INTEGER_MIN
+
+    for index in (0, runs - 1):
+        for comp, value in run_seeds(spec, offsets, index).items():
+            if not FMI_INTEGER_MIN <= value <= FMI_INTEGER_MAX:
+                raise NavfmuError(
+                    f"--seed {spec.seed}: run {index} would give {comp}.seed = {value}, which "
+                    f"does not fit an FMI Integer ({FMI_INTEGER_MIN} .. {FMI_INTEGER_MAX})")
 
 
 def run_seeds(spec: CampaignSpec, offsets: Dict[str, int], index: int) -> Dict[str, int]:
@@ -276,7 +290,8 @@ class Campaign:
         if spec.backend == "fmu":      # build once here, never in the workers
             for m in models:
                 ensure_fmus(m, log=self.log)
-        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend))
+        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend,
+                                                            spec.parameters))
         self.identity = {
             "scenario": self.model.name, "ssd": str(Path(self.model.path).resolve()),
             "scenario_sha256": scenario_hash(self.model), "filters": list(spec.filters),
@@ -286,6 +301,7 @@ class Campaign:
             "series": spec.series, "code_sha256": code_hash()}
         self.commit = code_commit()
         self.runs = self._check_manifest()
+        _check_seed_range(spec, self.offsets, self.runs)
 
     def _check_manifest(self) -> int:
         """The run count of the campaign: the larger of ``--runs`` and the manifest's (a

@@ -33,6 +33,7 @@ so far are kept by the caller (a campaign's run files), so the campaign resumes.
 """
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import time
 import warnings
@@ -47,7 +48,7 @@ from ..errors import NavfmuError
 POLL_S = 0.2
 #: how long Dask workers may take to start, a scheduler to answer, a cluster to close [s]
 STARTUP_TIMEOUT_S = 120.0
-CONNECT_TIMEOUT_S = 30.0
+CONNECT_TIMEOUT_S = 10.0
 CLOSE_TIMEOUT_S = 10.0
 
 #: progress callback: (tasks done, tasks in the batch)
@@ -103,8 +104,6 @@ def _next_finished(finished):
 
 
 def _quiet_dask_logs() -> None:
-    import logging
-
     for name in ("distributed", "tornado"):
         logging.getLogger(name).setLevel(logging.CRITICAL)
 
@@ -203,7 +202,7 @@ class Executor:
         from dask.distributed import LocalCluster
 
         self._cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
-                                     dashboard_address=None)
+                                     dashboard_address=None, silence_logs=logging.CRITICAL)
         before = {p.pid for p in multiprocessing.active_children()}
         with interrupts.ignored():
             self._cluster.scale(self.workers)

@@ -255,8 +255,9 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
                                         progress=progress_bar("runs", unit="run"),
                                         log=lambda m: click.echo(m, err=True))
     counts = summary["counts"]
-    click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
-               f"{counts['total']} in all; results in {out}/")
+    click.echo(f"{summary['runs']} runs x {len(names)} filters = {counts['total']} filter "
+               f"runs: {counts['ran']} now, {counts['done_before']} done before; results in "
+               f"{out}/")
     click.echo(campaign_summary.format_summary(summary))
 
 

@@ -244,7 +244,7 @@ def _provenance(plan) -> str:
 
 def _per_run(plan, f, fn) -> Optional[Dict[str, float]]:
     values = [fn(r["metrics"]) for r in plan["records"][f] if r["metrics"]]
-    interval = st.t_interval(values) if values else None
+    interval = st.positive_interval(values) if values else None
     return interval if interval and interval["n"] else None
 
 
