@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from ..building import build as fmu_build
+from ..cosim import interrupts
 from ..results import metrics as nav_metrics
 from ..results import recorder
 from ..errors import NavfmuError
@@ -177,7 +178,7 @@ def parse_seed_offsets(items) -> Tuple[Tuple[str, int], ...]:
 
 def _check_seed_range(spec: CampaignSpec, offsets: Dict[str, int], runs: int) -> None:
     """Every run's seeds must fit an FMI Integer (checked before the campaign starts)."""
-    from .backends import FMI_INTEGER_MAX, FMI_INTEGER_MIN
+    from ..cosim.backends import FMI_INTEGER_MAX, FMI_INTEGER_MIN
 
     for index in (0, runs - 1):
         for comp, value in run_seeds(spec, offsets, index).items():
@@ -355,6 +356,7 @@ class Campaign:
     def run(self, executor: Executor, progress=None) -> Dict[str, int]:
         """Run the missing runs; returns counts ``done_before`` and ``ran``."""
         _remove_stale_temporaries(self.out)
+        interrupts.safe_point("campaign-started")
         todo = self.missing()
         total = self.runs * len(self.spec.filters)
         tasks = [Task(key=key, func=run_one, args=(self.job(*key),)) for key in todo]

@@ -2,6 +2,7 @@
 window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..errors import NavfmuError
@@ -39,6 +40,9 @@ def parse_window(text):
         t0, t1 = (float(x) for x in text.split(":"))
     except ValueError:
         raise NavfmuError(f"--window: expected 't0:t1' in seconds, got {text!r}") from None
+    if not (math.isfinite(t0) and math.isfinite(t1)):
+        raise NavfmuError(f"--window: t0 and t1 must be finite numbers of seconds, got "
+                          f"{text!r}")
     if not t1 > t0:
         raise NavfmuError(f"--window: t1 must be greater than t0, got {text!r}")
     return t0, t1
