@@ -17,12 +17,12 @@ import warnings
 import psutil
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator.campaign import MANIFEST
+from orchestrator.building import build as fmu_build
+from orchestrator.campaigns.campaign import MANIFEST
 from orchestrator.errors import NavfmuWarning
-from orchestrator.interrupts import SIGNAL_AT_ENV
-from orchestrator.outputs import MARKER
-from orchestrator.user_warnings import in_cli_voice
+from orchestrator.cosim.interrupts import SIGNAL_AT_ENV
+from orchestrator.results.outputs import MARKER
+from orchestrator.cli.user_warnings import in_cli_voice
 
 ROOT = fmu_build.ROOT
 MODEL = ROOT / "models" / "aircraft_500s"
@@ -281,7 +281,7 @@ def test_sigterm_while_writing_keeps_the_previous_folder(navfmu_cli, tmp_path):
 def test_stale_staging_folder_of_a_killed_run_removed_by_the_next(navfmu_cli, tmp_path):
     import socket
 
-    from orchestrator.outputs import _OWNER
+    from orchestrator.results.outputs import _OWNER
 
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                           capture_output=True, text=True).stdout.strip()

@@ -61,7 +61,8 @@ def summarize(records: Mapping[str, Sequence[Mapping[str, Any]]],
     for key, group, axis, label, unit in recorded_axes(records):
         values = {f: per_run_values(records[f], group, axis) for f in filters}
         entry = {"label": label, "unit": unit,
-                 "filters": {f: {**st.positive_interval(v), "pooled_rms": metric_comparisons.pooled_rms(v),
+                 "filters": {f: {**st.positive_interval(v),
+                                 "pooled_rms": metric_comparisons.pooled_rms(v),
                                  "paper": paper.get(f, {}).get(key)}
                              for f, v in values.items()}}
         if len(filters) > 1:

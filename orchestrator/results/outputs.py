@@ -195,4 +195,5 @@ def move_into(path, stage: Path) -> Path:
     return dest
 
 
-__all__ = ["MARKER", "check_target", "check_writable", "remove_stale", "staged", "stream_folder", "move_into"]
+__all__ = ["MARKER", "check_target", "check_writable", "remove_stale", "staged",
+           "stream_folder", "move_into"]
