@@ -371,3 +371,18 @@ def test_interrupt_before_the_first_run_takes_the_manifest_back(tmp_path):
     assert done.returncode == 130, done.stderr
     assert done.stderr.strip().splitlines()[-1] == "navfmu: interrupted"
     assert not out.exists()
+
+
+def test_writing_the_outputs_reports_its_progress(tmp_path):
+    """The output-writing phase (seconds for a long CSV) tells the progress bar of each
+    part: the results file, metrics.json, the plots."""
+    from orchestrator.running import scenarios
+    from orchestrator.running.run_outputs import write_outputs
+
+    run = scenarios.simulate_scenario(scenarios.load_scenario(MODEL), backend="direct",
+                                      stop_time=1.0)
+    calls = []
+    written = write_outputs([run], tmp_path / "o", plots_on=True,
+                            progress=lambda done, total: calls.append((done, total)))
+    assert calls == [(0, 3), (1, 3), (2, 3), (3, 3)]
+    assert {p.name for p in written} >= {"results.csv", "metrics.json", "errors.png"}

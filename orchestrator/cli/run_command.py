@@ -108,8 +108,10 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         show_missing=len(filters) > 1)
     if text:
         echo(text)
-    written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
-                            reference=reference, comparison=comparison)
+    with progress_bars() as progress_bar:   # a long CSV takes seconds: show the writing
+        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
+                                reference=reference, comparison=comparison,
+                                progress=progress_bar("writing", unit="part"))
     echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
 
 

@@ -105,6 +105,9 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
         raise NavfmuError(f"--runs: expected a whole number >= 1, got {runs!r}")
     Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)  # checks them
     check_stop_time(stop_time, 0.0)
+    if only_finished and not list((out / "campaigns").glob(f"*/{camp.MANIFEST}")):
+        raise NavfmuError(f"--only-finished: {out / 'campaigns'} holds no campaign to report "
+                          "(run the report without --only-finished first)")
     with warnings.catch_warnings():
         # every filter is swapped into every scenario here: skipped parameters are expected
         warnings.simplefilter("ignore", SkippedParametersWarning)
