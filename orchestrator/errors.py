@@ -40,7 +40,7 @@ class SimulationError(NavfmuError):
 class NavfmuWarning(UserWarning):
     """Something the user should know and can act on, though the command goes on (e.g. a
     scenario parameter the swapped-in filter does not have).  The command line prints each
-    as one ``navfmu: warning: ...`` line (:mod:`orchestrator.user_warnings`)."""
+    as one ``navfmu: warning: ...`` line (:mod:`orchestrator.cli.user_warnings`)."""
 
 
 class SkippedParametersWarning(NavfmuWarning):

@@ -26,10 +26,11 @@ installed is a :class:`~orchestrator.errors.NavfmuError`.
 A task that raises stops the whole batch: the remaining tasks are cancelled and
 :class:`TaskError` names the failed task's key, chained to the original exception (a user
 error inside, :class:`~orchestrator.errors.NavfmuError`, keeps its message).  Ctrl-C or
-SIGTERM (deferred, :mod:`orchestrator.interrupts`) is looked for every :data:`POLL_S` while
-the driver waits: it cancels what has not started and shuts the workers (and a LocalCluster)
-down before :class:`~orchestrator.interrupts.Interrupted` propagates; the results yielded
-so far are kept by the caller (a campaign's run files), so the campaign resumes.
+SIGTERM (deferred, :mod:`orchestrator.cosim.interrupts`) is looked for every
+:data:`POLL_S` while the driver waits: it cancels what has not started and shuts the
+workers (and a LocalCluster) down before
+:class:`~orchestrator.cosim.interrupts.Interrupted` propagates; the results yielded so far
+are kept by the caller (a campaign's run files), so the campaign resumes.
 """
 from __future__ import annotations
 
