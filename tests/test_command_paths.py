@@ -386,3 +386,24 @@ def test_writing_the_outputs_reports_its_progress(tmp_path):
                             progress=lambda done, total: calls.append((done, total)))
     assert calls == [(0, 3), (1, 3), (2, 3), (3, 3)]
     assert {p.name for p in written} >= {"results.csv", "metrics.json", "errors.png"}
+
+
+@pytest.mark.slow
+def test_pool_campaign_sigterm_ends_it_without_finishing_the_runs_in_flight(tmp_path):
+    """SIGTERM to the driver of a process-pool campaign of long runs: ended within 10 s (the
+    pool's workers are terminated, not waited for), the finished runs kept."""
+    out = tmp_path / "mc"
+    proc = subprocess.Popen([sys.executable, "-m", "orchestrator.cli", "montecarlo",
+                             str(MODEL), "--runs", "6", "--filters", "Kf", "--stop", "300",
+                             "--workers", "2", "--out", str(out)], env=_env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 300
+    while not list(out.glob("runs/*/run-*.json")):
+        assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
+        time.sleep(0.05)
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert time.monotonic() - t0 < 10
+    assert proc.returncode == 143 and err.strip() == "navfmu: terminated", err
+    assert 1 <= len(list(out.glob("runs/*/run-*.json"))) < 6
