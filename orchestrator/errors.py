@@ -37,4 +37,16 @@ class SimulationError(NavfmuError):
         self.log = tuple(log)
 
 
-__all__ = ["NavfmuError", "SspError", "WiringError", "SimulationError"]
+class NavfmuWarning(UserWarning):
+    """Something the user should know and can act on, though the command goes on (e.g. a
+    scenario parameter the swapped-in filter does not have).  The command line prints each
+    as one ``navfmu: warning: ...`` line (:mod:`orchestrator.cli.user_warnings`)."""
+
+
+class SkippedParametersWarning(NavfmuWarning):
+    """The system structure sets parameters a swapped-in component does not have (skipped);
+    commands that swap every filter into every scenario on their own (``report``) expect it."""
+
+
+__all__ = ["NavfmuError", "SspError", "WiringError", "SimulationError", "NavfmuWarning",
+           "SkippedParametersWarning"]

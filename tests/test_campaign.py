@@ -181,7 +181,7 @@ def test_killed_worker_then_killed_driver_then_restart_completes(tmp_path):
     done = subprocess.run(COMMAND + ["--out", str(out)], env=_env(), capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    assert (f"{TOTAL - len(second)} runs now, {len(second)} done before, {TOTAL} in all"
+    assert (f"= {TOTAL} filter runs: {TOTAL - len(second)} now, {len(second)} done before"
             in done.stdout)
     final = _files(out)
     assert len(final) == TOTAL
@@ -191,7 +191,7 @@ def test_killed_worker_then_killed_driver_then_restart_completes(tmp_path):
 
 @pytest.mark.parametrize("args, words", [
     (["--runs", "0", "--filters", "Kf"], ["--runs", "got 0"]),
-    (["--runs", "2", "--filters", "Kf,Nope"], ["--filter", "Nope"]),
+    (["--runs", "2", "--filters", "Kf,Nope"], ["unknown filter 'Nope'", "Iakf"]),
     (["--runs", "2", "--filters", "Kf,Kf"], ["listed twice"]),
     (["--runs", "2", "--filters", "Kf", "--seed-offset", "gnss"], ["--seed-offset", "'gnss'"]),
     (["--runs", "2", "--filters", "Kf", "--seed-offset", "radar=3"], ["radar", "trajectory"]),

@@ -238,9 +238,10 @@ def test_compare_cli_prints_the_report(capsys, tmp_path):
               "--backend", "direct", "--stop", "16", "--no-plots", "--out", str(out_dir)])
     out, err = capsys.readouterr()
     assert exc.value.code == 0, err
-    assert "paper: robust Kalman filter" not in out
-    assert re.search(r"position 3-D RMS: Kf \d+\.\d+ m, NewtonRobustKf \d+\.\d+ m: ours "
-                     r"-?\d+\.\d % lower, paper 76\.0 %", out), out
+    # 16 s of a 500 s scenario: the paper's rows and improvements do not compare (the
+    # formatted improvement line is checked above on a comparison of its own)
+    assert "paper: robust Kalman filter" not in out and "paper 76.0 %" not in out
+    assert "the paper's numbers are left out: the run stops at 16 s" in out
     assert "NewtonRobustKf: detected 2/2 injected epochs (100.0 %)" in out
     assert (out_dir / "report.json").is_file()
 

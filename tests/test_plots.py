@@ -96,9 +96,42 @@ def test_several_filters_get_sliding_rms_on_a_log_scale(figures, tmp_path):
     ax = figures[0].axes[0]
     assert ax.get_yscale() == "log" and ax.get_title() == "position error E: RMS over 10 s"
     labels = ax.get_legend_handles_labels()[1]
-    assert labels == ["Kf", "Kf 1 sigma (own)", "InsOnly", "InsOnly 1 sigma (own)"]
+    assert labels == ["Kf", "InsOnly", "Kf: 1 sigma (own)", "InsOnly: 1 sigma (own)"]
     kf_line = ax.get_lines()[0].get_ydata()
     assert kf_line == pytest.approx(np.full(kf_line.shape, 0.5))
+
+
+def test_several_filters_legend_off_the_panels_and_equal_sigmas_drawn_once(figures, tmp_path):
+    """Three filters claiming the same sigma: one dashed line named after all three (not
+    three on top of each other); the legend is the figure's, below the panels, not inside
+    one; equal error curves stay visible as nested lines (the first drawn widest)."""
+    entries = [_entry(n, 0.5 * np.ones(N), 1.0) for n in ("Kf", "SageHusaFading", "Iakf")]
+    plots.plot_errors(entries, tmp_path / "e.png")
+    fig = figures[0]
+    ax = fig.axes[0]
+    assert ax.get_legend() is None and len(fig.legends) == 1
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == [
+        "Kf", "SageHusaFading", "Iakf", "Kf, SageHusaFading, Iakf: 1 sigma (own)"]
+    legend_top = fig.legends[0].get_window_extent().y1
+    assert all(a.get_window_extent().y0 > legend_top for a in fig.axes)
+    widths = [line.get_linewidth() for line in ax.get_lines()[:3]]
+    assert widths == sorted(widths, reverse=True) and widths[0] > widths[-1]
+
+
+def test_fitness_ticks_are_whole_generations_and_nis_bands_labelled(figures, tmp_path):
+    summary = {"best_so_far": [3.0, 2.0, 1.5], "generation_mean": [4.0, 3.0, 2.0],
+               "model": "m", "parameters": ["a"], "component": "filter", "population": 4}
+    plots.plot_fitness(summary, tmp_path / "f.png")
+    ax = figures[0].axes[0]
+    ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
+    assert ticks and all(float(t).is_integer() for t in ticks)
+    nis = np.full(N, 2.0)
+    entry = _entry("Kf", np.zeros(N), 1.0, extra={"nis": nis, "updated": np.ones(N),
+                                                   "nis_dof": np.full(N, 3.0),
+                                                   "nav_time": T})
+    plots.plot_nis([entry], tmp_path / "n.png")
+    labels = figures[1].axes[0].get_legend_handles_labels()[1]
+    assert labels == ["Kf", "chi2(3) 97.5 %", "chi2(3) 2.5 %"]
 
 
 def test_adaptive_plot_only_when_something_adapts(figures, tmp_path):

@@ -71,4 +71,45 @@ def test_non_finite_runs_left_out_and_counted_the_same_by_report_and_summary():
     east = campaign_summary.summarize(records)["axes"]["pos_e"]["filters"]["Kf"]
     plan = {"records": records}
     from_report = report._per_run(plan, "Kf", lambda m: m["position_rms_m"]["e"])
-    assert from_report == {k: east[k] for k in from_report} == {**s, "dropped": 2}
+    positive = st.positive_interval(values)
+    assert from_report == {k: east[k] for k in from_report} == {**positive, "dropped": 2}
+    assert positive["mean"] == s["mean"] and positive["n"] == s["n"]
+
+
+@pytest.mark.parametrize("sigma, n", [(0.3, 3), (0.8, 5), (0.5, 10)])
+def test_positive_interval_covers_a_log_normal_mean_and_stays_positive(sigma, n):
+    """Over 4000 samples of n log-normal values (true mean exp(sigma^2 / 2)) Cox's 95 %
+    interval covers the true mean in 95 +- 1.5 % of the cases (measured 95.3, 94.4,
+    95.7 %) and never reaches 0, where the t interval of the same samples goes below 0 in
+    15 % (sigma 0.3, n 3) and 31 % (sigma 0.8, n 5) of them."""
+    import numpy as np
+
+    rng = np.random.default_rng(5)
+    true = math.exp(sigma ** 2 / 2)
+    samples = [rng.lognormal(0.0, sigma, n) for _ in range(4000)]
+    intervals = [st.positive_interval(x) for x in samples]
+    hits = sum(s["low"] <= true <= s["high"] for s in intervals)
+    assert 0.935 <= hits / 4000 <= 0.965
+    assert all(s["low"] > 0 for s in intervals)
+
+
+def test_positive_interval_of_rms_values_against_simulated_truth():
+    """Per-run RMS of 5 samples of unit white noise, 3 runs: the interval covers the mean RMS
+    (estimated from 200000 runs) in 95 +- 1.5 % of 4000 campaigns (measured 95.2 %)."""
+    import numpy as np
+
+    rng = np.random.default_rng(5)
+    true = float(np.mean(np.sqrt((rng.normal(0, 1, (200000, 5)) ** 2).mean(1))))
+    hits = 0
+    for _ in range(4000):
+        rms = np.sqrt((rng.normal(0, 1, (3, 5)) ** 2).mean(1))
+        s = st.positive_interval(rms)
+        hits += s["low"] <= true <= s["high"]
+    assert 0.935 <= hits / 4000 <= 0.965
+
+
+def test_positive_interval_of_one_run_and_of_zeros():
+    one = st.positive_interval([2.0])
+    assert one["mean"] == 2.0 and math.isnan(one["half_width"])
+    zeros = st.positive_interval([0.0, 0.0, 3.0])          # t interval, clipped at 0
+    assert zeros["low"] == 0.0 and zeros["high"] == st.t_interval([0.0, 0.0, 3.0])["high"]

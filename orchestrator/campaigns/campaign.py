@@ -30,9 +30,11 @@ Files in the campaign folder (every file written atomically):
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
+import shutil
 import subprocess
 import time
 from dataclasses import dataclass, field
@@ -40,6 +42,7 @@ from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from ..building import build as fmu_build
+from ..cosim import interrupts
 from ..results import metrics as nav_metrics
 from ..results import recorder
 from ..errors import NavfmuError
@@ -136,12 +139,14 @@ def code_commit() -> str:
     return head + ("+dirty" if dirty.strip() else "")
 
 
-def random_components(model, backend: str) -> List[str]:
-    """Components with an Integer parameter ``seed``, in declaration order."""
+def random_components(model, backend: str, parameters=None) -> List[str]:
+    """Components with an Integer parameter ``seed``, in declaration order (``parameters``:
+    the overrides, checked against the components here)."""
     from ..cosim.master import Simulation
     from ..running.scenarios import registry
 
-    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None)
+    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
+                     parameters=dict(parameters or {}))
     return [d.spec.name for d in sim.components
             if (v := d.variables.get("seed")) is not None and v.type == "Integer"
             and v.causality == "parameter"]
@@ -169,6 +174,18 @@ def parse_seed_offsets(items) -> Tuple[Tuple[str, int], ...]:
         if not sep or not comp:
             raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
     return tuple(offsets)
+
+
+def _check_seed_range(spec: CampaignSpec, offsets: Dict[str, int], runs: int) -> None:
+    """Every run's seeds must fit an FMI Integer (checked before the campaign starts)."""
+    from ..cosim.backends import FMI_INTEGER_MAX, FMI_INTEGER_MIN
+
+    for index in (0, runs - 1):
+        for comp, value in run_seeds(spec, offsets, index).items():
+            if not FMI_INTEGER_MIN <= value <= FMI_INTEGER_MAX:
+                raise NavfmuError(
+                    f"--seed {spec.seed}: run {index} would give {comp}.seed = {value}, which "
+                    f"does not fit an FMI Integer ({FMI_INTEGER_MIN} .. {FMI_INTEGER_MAX})")
 
 
 def run_seeds(spec: CampaignSpec, offsets: Dict[str, int], index: int) -> Dict[str, int]:
@@ -254,17 +271,28 @@ class Campaign:
     offsets: Dict[str, int] = field(default_factory=dict, init=False)
     identity: Dict[str, Any] = field(default_factory=dict, init=False)
     commit: str = field(default="", init=False)
+    runs: int = field(default=0, init=False)
 
     def prepare(self) -> None:
+        """Check everything and write the manifest (:meth:`check`, :meth:`write_manifest`)."""
+        self.check()
+        self.write_manifest()
+
+    def check(self) -> None:
+        """Load the scenario and the filters, compute the identity and compare it with the
+        folder's manifest; writes nothing."""
+        from ..running.prechecks import check_stop_time
         from ..running.scenarios import ensure_fmus, load_scenario, swap_filter
 
         spec = self.spec
         self.model = load_scenario(spec.scenario)
+        check_stop_time(spec.stop_time, self.model.start_time)
         models = [swap_filter(self.model, f) for f in spec.filters]   # unknown filter: error
         if spec.backend == "fmu":      # build once here, never in the workers
             for m in models:
                 ensure_fmus(m, log=self.log)
-        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend))
+        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend,
+                                                            spec.parameters))
         self.identity = {
             "scenario": self.model.name, "ssd": str(Path(self.model.path).resolve()),
             "scenario_sha256": scenario_hash(self.model), "filters": list(spec.filters),
@@ -273,12 +301,16 @@ class Campaign:
             "samples": spec.samples, "parameters": [list(p) for p in spec.parameters],
             "series": spec.series, "code_sha256": code_hash()}
         self.commit = code_commit()
-        self.out.mkdir(parents=True, exist_ok=True)
-        self._check_manifest()
+        self.runs = self._check_manifest()
+        _check_seed_range(spec, self.offsets, self.runs)
 
-    def _check_manifest(self) -> None:
+    def _check_manifest(self) -> int:
+        """The run count of the campaign: the larger of ``--runs`` and the manifest's (a
+        smaller ``--runs`` than a campaign has finished keeps and summarizes them all)."""
         path = self.out / MANIFEST
         runs = self.spec.runs
+        if self.out.exists() and not self.out.is_dir():
+            raise NavfmuError(f"--out {self.out}: exists and is not a folder")
         if path.is_file():
             try:
                 old = json.loads(path.read_text(encoding="utf-8"))
@@ -293,8 +325,21 @@ class Campaign:
                 raise NavfmuError(f"{self.out}: holds another campaign ({what}); resume it "
                                   "with its own options or choose another --out")
             runs = max(runs, int(old.get("runs", 0)))
-        atomic_write(path, lambda f: f.write(json.dumps(
-            {"format": FORMAT, "identity": jsonable(self.identity), "runs": runs}, indent=2)))
+        elif self.out.is_dir() and any(self.out.iterdir()):
+            raise NavfmuError(f"--out {self.out}: the folder holds files but no {MANIFEST}; "
+                              "choose a new or empty folder")
+        return runs
+
+    def write_manifest(self) -> None:
+        """Write ``campaign.json`` (creating the folder)."""
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+            atomic_write(self.out / MANIFEST, lambda f: f.write(json.dumps(
+                {"format": FORMAT, "identity": jsonable(self.identity), "runs": self.runs},
+                indent=2)))
+        except OSError as exc:
+            raise NavfmuError(f"--out {self.out}: cannot write the campaign there: "
+                              f"{exc.strerror or exc}") from None
 
     def job(self, filter_name: str, index: int) -> Dict[str, Any]:
         s = self.spec
@@ -305,14 +350,15 @@ class Campaign:
                 "series": s.series, "out": str(self.out.resolve()), "commit": self.commit}
 
     def missing(self) -> List[Tuple[str, int]]:
-        return [(f, i) for i in range(self.spec.runs) for f in self.spec.filters
+        return [(f, i) for i in range(self.runs) for f in self.spec.filters
                 if read_run(self.out, f, i) is None]
 
     def run(self, executor: Executor, progress=None) -> Dict[str, int]:
         """Run the missing runs; returns counts ``done_before`` and ``ran``."""
         _remove_stale_temporaries(self.out)
+        interrupts.safe_point("campaign-started")
         todo = self.missing()
-        total = self.spec.runs * len(self.spec.filters)
+        total = self.runs * len(self.spec.filters)
         tasks = [Task(key=key, func=run_one, args=(self.job(*key),)) for key in todo]
         ran = 0
         for (f, i), record in executor.run(tasks, progress=progress):
@@ -325,7 +371,7 @@ class Campaign:
         """filter -> the records of runs 0 .. N-1 (all must exist)."""
         out = {}
         for f in self.spec.filters:
-            rows = [read_run(self.out, f, i) for i in range(self.spec.runs)]
+            rows = [read_run(self.out, f, i) for i in range(self.runs)]
             lost = [i for i, r in enumerate(rows) if r is None]
             if lost:
                 raise NavfmuError(f"{self.out}: runs {lost} of {f} are missing")
@@ -341,9 +387,12 @@ def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[
     from ..running.scenarios import paper_reference
 
     campaign = Campaign(spec, Path(out), log=log)
-    campaign.prepare()
     with Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster) as ex:
-        counts = campaign.run(ex, progress=progress)
+        campaign.check()
+        ex.connect()
+        with _undone_if_nothing_ran(campaign):
+            campaign.write_manifest()
+            counts = campaign.run(ex, progress=progress)
     records = campaign.records()
     summary = summarize(records, paper_reference(campaign.model),
                         {**provenance(campaign, records), "mode": ex.mode})
@@ -353,14 +402,38 @@ def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[
     return summary
 
 
+@contextlib.contextmanager
+def _undone_if_nothing_ran(campaign: Campaign):
+    """A campaign that fails (or is stopped) before its first run file exists leaves the
+    folder as it found it: the manifest written for it, the folders made for it go."""
+    out = campaign.out.absolute()
+    created = None          # the outermost folder this campaign will create
+    for folder in (out, *out.parents):
+        if folder.exists():
+            break
+        created = folder
+    had_manifest = (out / MANIFEST).exists()
+    try:
+        yield
+    except BaseException:
+        if not had_manifest and not any((out / "runs").glob("*/run-*.json")):
+            if created is None:
+                (out / MANIFEST).unlink(missing_ok=True)
+                for folder in ("runs", "series"):
+                    shutil.rmtree(out / folder, ignore_errors=True)
+            else:
+                shutil.rmtree(created, ignore_errors=True)
+        raise
+
+
 def provenance(campaign: Campaign, records: Dict[str, List[Dict[str, Any]]]) -> Dict[str, Any]:
     """How the numbers of ``records`` were made: the campaign's identity, runs, the commits
     the runs ran on, the seed ranges."""
     spec = campaign.spec
     first = run_seeds(spec, campaign.offsets, 0)
-    last = run_seeds(spec, campaign.offsets, spec.runs - 1)
+    last = run_seeds(spec, campaign.offsets, campaign.runs - 1)
     commits = sorted({r.get("commit", "") for rows in records.values() for r in rows})
-    return {**campaign.identity, "runs": spec.runs, "commit": ", ".join(commits),
+    return {**campaign.identity, "runs": campaign.runs, "commit": ", ".join(commits),
             "seeds": ", ".join(f"{c}.seed {first[c]}..{last[c]}" for c in first)
             or "no random component"}
 

@@ -45,6 +45,7 @@ def bench_executors(scenario: str, filters: Sequence[str] = ("Kf",), runs: int =
                     stop_time: Optional[float] = 50.0, workers: int = 2, dask: bool = True,
                     log=print) -> Dict[str, Any]:
     """Wall times of one campaign per executor mode and the derived ratios (JSON-ready)."""
+    Executor(workers=workers)      # --workers checked before the serial leg runs
     modes = {"serial": {"workers": 1}, "pool": {"workers": workers}}
     if dask:
         modes["dask"] = {"workers": workers, "local_cluster": True}

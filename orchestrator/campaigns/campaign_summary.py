@@ -8,6 +8,7 @@ per-run RMS and the pooled RMS those of :mod:`orchestrator.results.metrics`.
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Dict, List, Mapping, Optional, Sequence
 
 from ..results import metric_comparisons
@@ -60,7 +61,8 @@ def summarize(records: Mapping[str, Sequence[Mapping[str, Any]]],
     for key, group, axis, label, unit in recorded_axes(records):
         values = {f: per_run_values(records[f], group, axis) for f in filters}
         entry = {"label": label, "unit": unit,
-                 "filters": {f: {**st.t_interval(v), "pooled_rms": metric_comparisons.pooled_rms(v),
+                 "filters": {f: {**st.positive_interval(v),
+                                 "pooled_rms": metric_comparisons.pooled_rms(v),
                                  "paper": paper.get(f, {}).get(key)}
                              for f, v in values.items()}}
         if len(filters) > 1:
@@ -78,6 +80,8 @@ def summarize(records: Mapping[str, Sequence[Mapping[str, Any]]],
 
 
 def _ci(s: Mapping[str, float], digits: int) -> str:
+    if not math.isfinite(s["half_width"]):      # one run: no interval
+        return f"{s['mean']:.{digits}f} (n = {s['n']})"
     return f"{s['mean']:.{digits}f} [{s['low']:.{digits}f}, {s['high']:.{digits}f}]"
 
 

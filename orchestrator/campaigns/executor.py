@@ -25,17 +25,32 @@ installed is a :class:`~orchestrator.errors.NavfmuError`.
 
 A task that raises stops the whole batch: the remaining tasks are cancelled and
 :class:`TaskError` names the failed task's key, chained to the original exception (a user
-error inside, :class:`~orchestrator.errors.NavfmuError`, keeps its message).  Ctrl-C cancels
-what has not started and shuts the workers down before ``KeyboardInterrupt`` propagates.
+error inside, :class:`~orchestrator.errors.NavfmuError`, keeps its message).  Ctrl-C or
+SIGTERM (deferred, :mod:`orchestrator.cosim.interrupts`) is looked for every
+:data:`POLL_S` while the driver waits: it cancels what has not started and shuts the
+workers (and a LocalCluster) down before
+:class:`~orchestrator.cosim.interrupts.Interrupted` propagates; the results yielded so far
+are kept by the caller (a campaign's run files), so the campaign resumes.
 """
 from __future__ import annotations
 
+import logging
 import multiprocessing
+import time
+import warnings
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Hashable, Iterable, Iterator, Optional, Tuple
 
+from ..cosim import interrupts
 from ..errors import NavfmuError
+
+#: how long the driver waits for tasks before it looks for a pending Ctrl-C or SIGTERM [s]
+POLL_S = 0.2
+#: how long Dask workers may take to start, a scheduler to answer, a cluster to close [s]
+STARTUP_TIMEOUT_S = 120.0
+CONNECT_TIMEOUT_S = 10.0
+CLOSE_TIMEOUT_S = 10.0
 
 #: progress callback: (tasks done, tasks in the batch)
 Progress = Callable[[int, int], None]
@@ -65,7 +80,33 @@ class TaskError(NavfmuError):
 
 
 def _run_task(task: Task):
-    return task()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # the driver has shown the user its copy of these
+        return task()
+
+
+def _connect(client_class, address: str):
+    """A Dask client of the scheduler at ``address``; a malformed or dead address is the
+    user's error."""
+    try:
+        return client_class(address, timeout=CONNECT_TIMEOUT_S)
+    except (OSError, ValueError, TypeError) as exc:
+        raise NavfmuError(f"--scheduler {address}: cannot connect: {exc}") from None
+
+
+def _next_finished(finished):
+    """The futures of Dask's ``as_completed`` iterator ``finished`` that are done now,
+    waiting at most :data:`POLL_S` (a pending Ctrl-C or SIGTERM is a safe point here)."""
+    deadline = time.monotonic() + POLL_S
+    while not finished.has_ready() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    interrupts.check()
+    return finished.next_batch(block=False) if finished.has_ready() else []
+
+
+def _quiet_dask_logs() -> None:
+    for name in ("distributed", "tornado"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 def _exit_with_parent(parent_pid: int, interval_s: float = 0.2) -> None:
@@ -118,39 +159,72 @@ class Executor:
     def __enter__(self) -> "Executor":
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(abort=exc_type is not None and issubclass(exc_type, KeyboardInterrupt))
 
-    def close(self) -> None:
+    def close(self, abort: bool = False) -> None:
+        """Shut the workers down; ``abort`` (the command was interrupted): pool workers are
+        terminated at once instead of finishing the runs they are in (a run's file is
+        written atomically: a terminated run leaves none)."""
         if self._pool is not None:
+            if abort:
+                for process in list(getattr(self._pool, "_processes", {}).values()):
+                    process.terminate()
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+        if self._client is not None or self._cluster is not None:
+            _quiet_dask_logs()   # closing with tasks running: Dask logs each one it drops
         if self._client is not None:
-            self._client.close()
+            self._client.close(timeout=CLOSE_TIMEOUT_S)
             self._client = None
         if self._cluster is not None:
-            self._cluster.close()
+            self._cluster.close(timeout=CLOSE_TIMEOUT_S)
             self._cluster = None
+
+    def connect(self) -> None:
+        """Start or reach the workers now (a Dask scheduler or LocalCluster), so a bad
+        address is refused before anything is written; pools start with the first batch."""
+        if self.mode == "dask":
+            self._dask_client()
 
     def _dask_client(self):
         if self._client is None:
             try:
-                from dask.distributed import Client, LocalCluster
+                from dask.distributed import Client
             except ImportError:
                 raise NavfmuError("Dask is not installed: pip install 'navfmu[dask]' "
                                   "(needed for --scheduler and --local-cluster)") from None
             if self.local_cluster:
-                self._cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1,
-                                             processes=True, dashboard_address=None)
-                self._client = Client(self._cluster)
+                self._client = Client(self._start_local_cluster())
             else:
-                try:
-                    self._client = Client(self.scheduler, timeout=30)
-                except OSError as exc:
-                    raise NavfmuError(
-                        f"--scheduler {self.scheduler}: cannot connect: {exc}"
-                    ) from None
+                self._client = _connect(Client, self.scheduler)
         return self._client
+
+    def _start_local_cluster(self):
+        """A LocalCluster whose worker processes ignore SIGINT (a terminal's Ctrl-C goes to
+        the whole process group: the driver stops the campaign and shuts the workers down,
+        they must not die mid-task with their own tracebacks).  SIGINT is ignored here only
+        while the workers are being started: they inherit that, this process keeps its
+        deferred handler for the rest of the wait."""
+        from dask.distributed import LocalCluster
+
+        self._cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True,
+                                     dashboard_address=None, silence_logs=logging.CRITICAL)
+        before = {p.pid for p in multiprocessing.active_children()}
+        with interrupts.ignored():
+            self._cluster.scale(self.workers)
+            deadline = time.monotonic() + STARTUP_TIMEOUT_S
+            while (len({p.pid for p in multiprocessing.active_children()} - before)
+                   < self.workers and time.monotonic() < deadline):
+                time.sleep(0.01)
+        deadline = time.monotonic() + STARTUP_TIMEOUT_S
+        while len(self._cluster.scheduler_info.get("workers", {})) < self.workers:
+            interrupts.check()
+            if time.monotonic() > deadline:
+                raise NavfmuError(f"--local-cluster: {self.workers} Dask workers did not "
+                                  f"start within {STARTUP_TIMEOUT_S:.0f} s")
+            time.sleep(0.05)
+        return self._cluster
 
     def _process_pool(self):
         if self._pool is None:
@@ -204,7 +278,8 @@ class Executor:
         pending = {pool.submit(_run_task, t): t.key for t in tasks}
         try:
             while pending:
-                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                finished, _ = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+                interrupts.check()
                 for future in finished:
                     key = pending.pop(future)
                     exc = future.exception()
@@ -222,15 +297,17 @@ class Executor:
         futures = {client.submit(_run_task, t, key=f"navfmu-{i}-{t.key!r}", pure=False): t.key
                    for i, t in enumerate(tasks)}
         try:
-            for future in as_completed(list(futures)):
-                key = futures.pop(future)
-                if future.status == "error":
-                    exc = future.exception()
-                    raise TaskError(key, exc) from exc
-                yield key, future.result()
+            finished = as_completed(list(futures))
+            while futures:
+                for future in _next_finished(finished):
+                    key = futures.pop(future)
+                    if future.status == "error":
+                        exc = future.exception()
+                        raise TaskError(key, exc) from exc
+                    yield key, future.result()
         finally:
-            for future in futures:
-                future.cancel()
+            if futures:
+                client.cancel(list(futures))
 
 
 __all__ = ["Executor", "Task", "TaskError", "Progress"]

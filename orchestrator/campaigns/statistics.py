@@ -9,6 +9,15 @@ Definitions (one each; the per-run numbers come from :mod:`orchestrator.results.
   the runs as independent draws (each run has its own seeds), not the samples inside a run.
   A run whose value is not finite (a diverged filter's NaN RMS, a missing number) is left
   out and counted in ``dropped``: ``n`` is the number of runs the interval is over.
+* :func:`positive_interval`: the mean of ``n`` per-run values of a positive quantity (an
+  RMS, a NEES, a time) with an interval that stays positive: Cox's interval for the mean of
+  a log-normal variable (Land 1972; Zhou & Gao 1997, Stat. Med. 16:783, their eq. 3),
+  ``exp(m + s^2/2 +- t_{(1+level)/2, n-1} sqrt(s^2/n + s^4/(2(n-1))))`` with ``m`` and ``s``
+  the mean and sample standard deviation of the logarithms.  A t interval of such a
+  quantity reaches below zero when the runs spread widely (few runs, a diverging filter);
+  an RMS is skewed to the right like a log-normal one.  The printed centre stays the mean
+  of the values.  Values not above 0 (an error that is exactly zero) fall back to the t
+  interval, its lower end clipped at 0.
 * :func:`paired_difference`: the t-interval of the per-run differences ``a_i - b_i`` of two
   filters run on the same seeds (paired: the truth, IMU and GNSS noise of run ``i`` are the
   same for both, so the noise they share cancels in the difference).
@@ -29,7 +38,9 @@ from ..errors import NavfmuError
 #: confidence level of every interval the campaign prints
 LEVEL = 0.95
 #: how intervals are made, for reports
-METHOD = "two-sided Student t interval over the runs (n - 1 dof)"
+METHOD = ("Cox's log-normal interval over the runs (n - 1 dof; positive, "
+          "statistics.positive_interval)")
+T_METHOD = "two-sided Student t interval over the runs (n - 1 dof)"
 PAIRED_METHOD = "paired t interval of the per-run differences (same seeds)"
 
 
@@ -51,6 +62,25 @@ def t_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float
     half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * sd / math.sqrt(n)
     return {"mean": mean, "low": mean - half, "high": mean + half, "half_width": half,
             "sd": sd, "n": n, "dropped": dropped}
+
+
+def positive_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float]:
+    """:func:`t_interval`'s dict for a positive quantity, the interval Cox's (module
+    docstring): ``mean`` the mean of the values, ``low``/``high`` the interval,
+    ``half_width`` half its length, ``sd`` the values' standard deviation."""
+    t = t_interval(values, level)
+    if t["n"] < 2:
+        return t
+    x = np.array([v for v in values if v is not None], dtype=float)
+    x = x[np.isfinite(x)]
+    if not np.all(x > 0.0):
+        return {**t, "low": max(t["low"], 0.0), "half_width": t["half_width"]}
+    logs = np.log(x)
+    n, m, var = x.size, float(logs.mean()), float(logs.var(ddof=1))
+    half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * math.sqrt(
+        var / n + var * var / (2.0 * (n - 1)))
+    low, high = math.exp(m + var / 2.0 - half), math.exp(m + var / 2.0 + half)
+    return {**t, "low": low, "high": high, "half_width": (high - low) / 2.0}
 
 
 def paired_difference(a: Sequence[float], b: Sequence[float],
@@ -98,5 +128,5 @@ def ordering_holds(per_run: Mapping[str, Sequence[float]], ordering: List[str],
                for a, b in combinations(ordering, 2))
 
 
-__all__ = ["t_interval", "paired_difference", "verdict", "supported_orderings",
-           "ordering_holds", "LEVEL", "METHOD", "PAIRED_METHOD"]
+__all__ = ["t_interval", "positive_interval", "paired_difference", "verdict", "supported_orderings",
+           "ordering_holds", "LEVEL", "METHOD", "T_METHOD", "PAIRED_METHOD"]

@@ -118,6 +118,10 @@ def resolve_parameters(model: SystemModel, component: str, names: Sequence[str],
     lo, hi, types, current = [], [], [], []
     bound = model.component(component).parameters
     for name in names:
+        if name == "seed":
+            raise NavfmuError(f"--params seed: component '{component}''s random seed is not "
+                              "a tuning parameter (the cost would fit one noise draw); give "
+                              "the seeds to train on with --train-seeds")
         if name not in declared:
             raise NavfmuError(f"--params: component '{component}' has no numeric parameter "
                               f"'{name}'")
@@ -253,7 +257,11 @@ def write_tune_outputs(summary: Dict[str, Any], out: Path, ssv: Optional[Path] =
     from ..results import plots  # not imported by the executor's workers
 
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise NavfmuError(f"--out {out}: cannot make the folder: {exc.strerror or exc}"
+                          ) from None
     name = f"{summary['component']}_tuned"
     ssv = Path(ssv) if ssv else out / f"{name}.ssv"
     text = ssv_text(name, summary["best_values"], summary.get("bound_parameters"))

@@ -2,12 +2,23 @@
 window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ..errors import NavfmuError
 
 #: where a command writes when no --out is given (a folder per scenario below it)
 DEFAULT_OUT = Path("navfmu-results")
+
+
+def nonempty_path(ctx, param, value):
+    """click callback: a path option or argument given as empty text is refused (it would
+    otherwise read as "not given" and write to the default place)."""
+    if value is not None and not str(value).strip():
+        import click
+
+        raise click.BadParameter("empty path; give a file or folder name", ctx, param)
+    return value
 
 
 def filter_names(text):
@@ -29,6 +40,9 @@ def parse_window(text):
         t0, t1 = (float(x) for x in text.split(":"))
     except ValueError:
         raise NavfmuError(f"--window: expected 't0:t1' in seconds, got {text!r}") from None
+    if not (math.isfinite(t0) and math.isfinite(t1)):
+        raise NavfmuError(f"--window: t0 and t1 must be finite numbers of seconds, got "
+                          f"{text!r}")
     if not t1 > t0:
         raise NavfmuError(f"--window: t1 must be greater than t0, got {text!r}")
     return t0, t1
@@ -55,4 +69,4 @@ def parse_sets(items):
     return values
 
 
-__all__ = ["DEFAULT_OUT", "filter_names", "parse_window", "parse_sets"]
+__all__ = ["DEFAULT_OUT", "nonempty_path", "filter_names", "parse_window", "parse_sets"]

@@ -4,21 +4,25 @@ montecarlo, report, tune.
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
 with status 2; no traceback.  ``--debug`` shows tracebacks of internal errors and the log of
-a failed component.  Ctrl-C ends every command with ``navfmu: interrupted`` and status 130
-(:mod:`orchestrator.cosim.interrupts`).
+a failed component.  Ctrl-C ends every command with ``navfmu: interrupted`` and status 130,
+SIGTERM with ``navfmu: terminated`` and status 143 (:mod:`orchestrator.cosim.interrupts`).
+Warnings for the user print once each as ``navfmu: warning: ...``
+(:mod:`orchestrator.cli.user_warnings`).
 """
 from __future__ import annotations
 
+import signal
 import sys
 from pathlib import Path
 
 import click
 
 from ..cosim import interrupts
-from .cli_options import DEFAULT_OUT, filter_names, parse_sets, parse_window
+from .cli_options import DEFAULT_OUT, filter_names, nonempty_path, parse_sets, parse_window
 from ..errors import NavfmuError, SimulationError
 from ..cosim.exchange import ALGORITHMS
 from .progress import progress_bars
+from .user_warnings import in_cli_voice
 
 
 class _Group(click.Group):
@@ -59,7 +63,7 @@ def build(names, force):
 
 
 @cli.command()
-@click.argument("fmus", nargs=-1, type=click.Path())
+@click.argument("fmus", nargs=-1, type=click.Path(), callback=nonempty_path)
 def validate(fmus):
     """Validate FMUs with fmpy (default: every FMU in fmus/dist, built first)."""
     from ..building.validation import validate_fmus
@@ -78,7 +82,7 @@ def env_(fmt):
 
 
 def _common_run_options(f):
-    f = click.option("--out", "out", type=click.Path(file_okay=False),
+    f = click.option("--out", "out", type=click.Path(file_okay=False), callback=nonempty_path,
                      help="Output folder (default: navfmu-results/<scenario>).")(f)
     f = click.option("--stop", "stop", type=float, help="Stop time [s] (default: the SSD's).")(f)
     f = click.option("--backend", type=click.Choice(["fmu", "direct"]), default="fmu",
@@ -91,7 +95,7 @@ def _common_run_options(f):
                      help="Result file format; parquet streams the rows to disk while the run "
                      "goes (memory flat in the flight length).")(f)
     f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
-    f = click.option("--replay", "replay", type=click.Path(),
+    f = click.option("--replay", "replay", type=click.Path(), callback=nonempty_path,
                      help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
                      "receiver) by ImuGnssReplay playing this sensor-log folder.")(f)
     f = click.option("--algorithm", type=click.Choice(ALGORITHMS), default=ALGORITHMS[0],
@@ -112,10 +116,11 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
 
 
 @cli.command()
-@click.argument("scenario", type=click.Path())
+@click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--filter", "filter_", help="Swap the 'filter' component: an FMU name (Kf, "
               "SageHusaFading, ...) or the path of an .fmu file.")
 @click.option("--log-sensors", "log_sensors", type=click.Path(file_okay=False),
+              callback=nonempty_path,
               help="Also write the run's IMU, GNSS and truth signals as a sensor log to this "
               "folder (replay it with --replay).")
 @_common_run_options
@@ -127,7 +132,7 @@ def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, n
 
 
 @cli.command()
-@click.argument("scenario", type=click.Path())
+@click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
 @_common_run_options
 def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, replay):
@@ -144,8 +149,8 @@ def convert():
 
 
 @convert.command("gnss-ins-sim")
-@click.argument("src_dir", type=click.Path())
-@click.argument("dst", type=click.Path(file_okay=False))
+@click.argument("src_dir", type=click.Path(), callback=nonempty_path)
+@click.argument("dst", type=click.Path(file_okay=False), callback=nonempty_path)
 @click.option("--run", "run_index", type=int, default=0, show_default=True,
               help="Which simulation run (the R of gyro-R.csv).")
 def convert_gnss_ins_sim(src_dir, dst, run_index):
@@ -157,9 +162,9 @@ def convert_gnss_ins_sim(src_dir, dst, run_index):
 
 
 @convert.command("kf-gins")
-@click.argument("imu_file", type=click.Path())
-@click.argument("gnss_file", type=click.Path())
-@click.argument("rest", nargs=-1, type=click.Path())
+@click.argument("imu_file", type=click.Path(), callback=nonempty_path)
+@click.argument("gnss_file", type=click.Path(), callback=nonempty_path)
+@click.argument("rest", nargs=-1, type=click.Path(), callback=nonempty_path)
 def convert_kf_gins(imu_file, gnss_file, rest):
     """KF-GINS IMU_FILE and GNSS_FILE text (and optionally a .nav TRUTH_FILE) into the
     sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
@@ -173,7 +178,7 @@ def convert_kf_gins(imu_file, gnss_file, rest):
 
 @cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "
              "--filters, several filters against each other), in one process.")
-@click.argument("scenario", type=click.Path(), required=False)
+@click.argument("scenario", type=click.Path(), callback=nonempty_path, required=False)
 @click.option("--stop", type=float, default=100.0, show_default=True,
               help="Simulated time of each run [s].")
 @click.option("--repeat", type=int, default=3, show_default=True,
@@ -206,12 +211,12 @@ def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, wo
 
 
 @cli.command()
-@click.argument("scenario", type=click.Path())
+@click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--runs", type=int, required=True, help="Number of seeds (runs per filter).")
 @click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
 @click.option("--workers", type=int, default=1, show_default=True,
               help="Local worker processes (1: in this process).")
-@click.option("--out", "out", type=click.Path(file_okay=False),
+@click.option("--out", "out", type=click.Path(file_okay=False), callback=nonempty_path,
               help="Campaign folder (default: navfmu-results/<scenario>-montecarlo).")
 @click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
@@ -250,13 +255,15 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
                                         progress=progress_bar("runs", unit="run"),
                                         log=lambda m: click.echo(m, err=True))
     counts = summary["counts"]
-    click.echo(f"{counts['ran']} runs now, {counts['done_before']} done before, "
-               f"{counts['total']} in all; results in {out}/")
+    click.echo(f"{summary['runs']} runs x {len(names)} filters = {counts['total']} filter "
+               f"runs: {counts['ran']} now, {counts['done_before']} done before; results in "
+               f"{out}/")
     click.echo(campaign_summary.format_summary(summary))
 
 
 @cli.command()
-@click.option("--out", "out", type=click.Path(file_okay=False), default="navfmu-report",
+@click.option("--out", "out", type=click.Path(file_okay=False), callback=nonempty_path,
+              default="navfmu-report",
               show_default=True, help="Report folder (report.md, figures/, campaigns/).")
 @click.option("--runs", type=int, default=None,
               help="Runs per filter and scenario (default 3; more: narrower intervals).")
@@ -276,7 +283,7 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
 
     with progress_bars() as progress_bar:
         path = report_module.build_report(
-            out, runs=runs or report_module.DEFAULT_RUNS, workers=workers,
+            out, runs=report_module.DEFAULT_RUNS if runs is None else runs, workers=workers,
             scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
             progress_factory=lambda name: progress_bar(name, unit="run"),
             log=lambda m: click.echo(m, err=True), only_finished=only_finished)
@@ -284,7 +291,7 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
 
 
 @cli.command()
-@click.argument("scenario", type=click.Path())
+@click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--component", default="filter", show_default=True,
               help="Component whose parameters are tuned.")
 @click.option("--params", "params", required=True, help="Comma-separated parameter names.")
@@ -307,9 +314,9 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
               "(same numbers).")
 @click.option("--stop", type=float, help="Stop time of each run [s] (default: the SSD's).")
 @click.option("--window", help="Fitness window t0:t1 [s] (default: the whole run).")
-@click.option("--out", type=click.Path(file_okay=False),
+@click.option("--out", type=click.Path(file_okay=False), callback=nonempty_path,
               help="Output folder (default: navfmu-results/<scenario>/tune).")
-@click.option("--ssv", type=click.Path(dir_okay=False),
+@click.option("--ssv", type=click.Path(dir_okay=False), callback=nonempty_path,
               help="Write the tuned parameter set here (default: OUT/<component>_tuned.ssv).")
 def tune(scenario, component, params, ranges, generations, population, workers, scheduler,
          seed, train_seeds, backend, stop, window, out, ssv):
@@ -323,30 +330,27 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
     except ValueError:
         raise NavfmuError(f"--train-seeds: expected comma-separated integers, got "
                           f"{train_seeds!r}") from None
+    from ..running import scenarios
+    from ..results.outputs import check_writable
+
+    model_name = scenarios.load_scenario(scenario).name
+    out = Path(out) if out else DEFAULT_OUT / model_name / "tune"
+    check_writable(out, "--out", folder=True)
+    if ssv:
+        check_writable(ssv, "--ssv")
     with progress_bars() as progress_bar:
-        summary = tuner.run_tune(
-            scenario,
-            component,
-            names,
-            generations=generations,
-            population=population,
-            workers=workers,
-            seed=seed,
-            ranges=tuner.parse_ranges(ranges),
-            train_seeds=seeds,
-            backend=backend,
-            stop_time=stop,
-            window=parse_window(window),
-            scheduler=scheduler,
-            progress=progress_bar("tune", unit="individual"),
-            log=lambda m: click.echo(m, err=True),
-        )
-    out = Path(out) if out else DEFAULT_OUT / summary["model"] / "tune"
-    written = tuner.write_tune_outputs(summary, out, ssv)
+        summary = tuner.run_tune(scenario, component, names, generations=generations,
+                                 population=population, workers=workers, seed=seed,
+                                 ranges=tuner.parse_ranges(ranges), train_seeds=seeds,
+                                 backend=backend, stop_time=stop, window=parse_window(window),
+                                 scheduler=scheduler,
+                                 progress=progress_bar("tune", unit="individual"),
+                                 log=lambda m: click.echo(m, err=True))
     click.echo(f"best cost {summary['best_cost']:.5f} deg after {summary['evaluations']} "
                f"evaluations; tuned values:")
     for k, v in summary["best_values"].items():
         click.echo(f"  {component}.{k} = {v!r}")
+    written = tuner.write_tune_outputs(summary, out, ssv)
     click.echo(f"wrote {', '.join(str(p) for p in written)}")
     click.echo(f"bind it with: <ssd:ParameterBinding source=\"{written[0].name}\"/> (in place "
                f"of the component's bindings: it holds them too)")
@@ -357,7 +361,9 @@ def _write_system(scenario, out, module_name):
     import importlib
 
     from ..running import scenarios
+    from ..results.outputs import check_writable
 
+    check_writable(out, "--out")
     scenarios.ensure_fmus(scenarios.load_scenario(scenario), log=lambda m: click.echo(m, err=True))
     writer = importlib.import_module(f"..packaging.{module_name}", __package__)
     click.echo(f"wrote {getattr(writer, module_name)(scenario, out)}")
@@ -370,8 +376,10 @@ def _system_command(name, what, doc):
 
     command.__doc__ = doc
     command = click.option("--out", required=True, type=click.Path(dir_okay=False),
+                           callback=nonempty_path,
                            help=f"The {what} to write.")(command)
-    return cli.command(name=name)(click.argument("scenario", type=click.Path())(command))
+    command = click.argument("scenario", type=click.Path(), callback=nonempty_path)(command)
+    return cli.command(name=name)(command)
 
 
 package = _system_command("package", "SSP archive (.ssp)",
@@ -385,14 +393,20 @@ export = _system_command("export", "FMU (.fmu)",
 def main(argv=None):
     debug = "--debug" in (argv if argv is not None else sys.argv[1:])
     try:
-        with interrupts.deferred():
+        with in_cli_voice(lambda m: click.echo(m, err=True), debug=debug), \
+                interrupts.deferred():
             cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
     except NavfmuError as exc:
         click.echo(f"navfmu: error: {exc}", err=True)
         if debug and isinstance(exc, SimulationError) and exc.log:
             click.echo("component log:\n  " + "\n  ".join(exc.log), err=True)
         sys.exit(2)
-    except (click.exceptions.Abort, KeyboardInterrupt):
+    except (click.exceptions.Abort, KeyboardInterrupt) as exc:
+        # click turns a KeyboardInterrupt (and so Terminated) into Abort, the cause kept
+        if isinstance(exc, interrupts.Terminated) or isinstance(exc.__cause__,
+                                                                 interrupts.Terminated):
+            click.echo("navfmu: terminated", err=True)
+            sys.exit(128 + signal.SIGTERM)
         click.echo("navfmu: interrupted", err=True)
         sys.exit(130)
     except click.exceptions.Exit as exc:  # --help

@@ -13,6 +13,7 @@ from navcore.sensors.log_converters import read_gnss_ins_sim, read_kf_gins
 from navcore.sensors.sensorlog import LogError, SensorLog, write_log
 
 from ..errors import NavfmuError
+from ..results.outputs import check_writable
 
 
 def _write(log: SensorLog, destination) -> SensorLog:
@@ -20,8 +21,13 @@ def _write(log: SensorLog, destination) -> SensorLog:
     return log
 
 
+def _check_destination(destination) -> None:
+    check_writable(destination, "convert: destination", folder=True)
+
+
 def convert_gnss_ins_sim(source_dir, destination, run: int = 0) -> SensorLog:
     """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
+    _check_destination(destination)
     try:
         return _write(read_gnss_ins_sim(source_dir, run=run), destination)
     except LogError as exc:
@@ -30,6 +36,7 @@ def convert_gnss_ins_sim(source_dir, destination, run: int = 0) -> SensorLog:
 
 def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination) -> SensorLog:
     """Convert KF-GINS IMU and GNSS text files (and a ``.nav`` reference) into a sensor log."""
+    _check_destination(destination)
     try:
         return _write(read_kf_gins(imu_file, gnss_file, truth_file), destination)
     except LogError as exc:

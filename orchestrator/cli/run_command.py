@@ -29,6 +29,23 @@ def _consistency_line(run, m) -> str:
     return f"  {run.label}: " + "; ".join(extra)
 
 
+def _comparable_reference(model, stop, replay, echo):
+    """paper.json's numbers where the run is the paper's scenario over its length, else None
+    (a shorter run or a replayed log does not compare with the paper's table): said once."""
+    reference = scenarios.paper_reference(model)
+    if reference is None:
+        return None
+    why = None
+    if replay:
+        why = "the sensors are a replayed log"
+    elif stop is not None and stop != model.stop_time:
+        why = f"the run stops at {stop:g} s, the paper's scenario at {model.stop_time:g} s"
+    if why:
+        echo(f"(the paper's numbers are left out: {why})")
+        return None
+    return reference
+
+
 def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
                   log_sensors, algorithm, echo):
     stream_dir = None
@@ -74,7 +91,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         written = write_outputs(runs, out, fmt=fmt, plots_on=False, title=title)
         echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
         return
-    reference = scenarios.paper_reference(model)
+    reference = _comparable_reference(model, stop, replay, echo)
     echo(f"\n{model.name}: RMS errors over "
          f"{runs[0].metrics and next(iter(runs[0].metrics.values()))['window_s']} s")
     echo(report_table(runs, reference))
@@ -91,8 +108,10 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         show_missing=len(filters) > 1)
     if text:
         echo(text)
-    written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
-                            reference=reference, comparison=comparison)
+    with progress_bars() as progress_bar:   # a long CSV takes seconds: show the writing
+        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
+                                reference=reference, comparison=comparison,
+                                progress=progress_bar("writing", unit="part"))
     echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
 
 

@@ -49,6 +49,11 @@ class VarInfo:
     value_reference: int
 
 
+#: the range of an FMI 2.0 Integer (fmi2Integer is a C int, 32 bits): a value outside it is
+#: refused before any conversion (ctypes and numpy would wrap it silently)
+FMI_INTEGER_MIN, FMI_INTEGER_MAX = -2 ** 31, 2 ** 31 - 1
+
+
 def coerce(comp: str, var: VarInfo, value: Any, source: str) -> Any:
     """Convert a parameter value to the variable's type, or raise a NavfmuError naming it."""
     try:
@@ -59,7 +64,12 @@ def coerce(comp: str, var: VarInfo, value: Any, source: str) -> Any:
         if var.type in ("Integer", "Enumeration"):
             if isinstance(value, bool) or (isinstance(value, float) and not value.is_integer()):
                 raise TypeError
-            return int(value)
+            number = int(value)
+            if not FMI_INTEGER_MIN <= number <= FMI_INTEGER_MAX:
+                raise NavfmuError(
+                    f"component '{comp}' ({source}): parameter '{var.name}' = {value!r} does "
+                    f"not fit an FMI Integer (32 bits: {FMI_INTEGER_MIN} .. {FMI_INTEGER_MAX})")
+            return number
         if var.type == "Boolean":
             if isinstance(value, str):
                 low = value.strip().lower()
@@ -72,8 +82,8 @@ def coerce(comp: str, var: VarInfo, value: Any, source: str) -> Any:
         return str(value)
     except (TypeError, ValueError):
         raise NavfmuError(
-            f"component '{comp}' ({source}): parameter '{var.name}' is a {var.type}, "
-            f"got {value!r}"
+            f"component '{comp}' ({source}): parameter '{var.name}' is "
+            f"{'an' if var.type[0] in 'IE' else 'a'} {var.type}, got {value!r}"
         ) from None
 
 

@@ -125,7 +125,7 @@ from navcore.core.timing import TIME_TOLERANCE
 
 from .backends import NUMERIC_TYPES, Instance
 from .component_description import describe_direct, describe_fmu
-from ..errors import NavfmuError, WiringError
+from ..errors import NavfmuError, SkippedParametersWarning, WiringError
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from ..results.recorder import Recording
 from ..results.run_results import Results
@@ -257,7 +257,7 @@ class Simulation:
                 values[d.spec.name][pname] = value
         if skipped:
             warnings.warn("parameters not present in the swapped-in component(s), skipped: "
-                          + ", ".join(skipped), stacklevel=3)
+                          + ", ".join(skipped), SkippedParametersWarning, stacklevel=3)
         for key, value in overrides.items():
             comp, var_name = self._split(key, "parameter override")
             d = self.components[self._index[comp]]

@@ -35,6 +35,7 @@ from typing import Dict, List
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
+from ..results.outputs import check_writable
 
 _FMI_TYPES = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean", "String": "String"}
 #: the container's own type names for a connection (its configuration reader knows no FMI 2
@@ -133,6 +134,7 @@ def export(model_dir, out) -> Path:
         raise NavfmuError(f"--out {out}: an FMU needs the extension .fmu")
     if not out.parent.is_dir():
         raise NavfmuError(f"cannot write {out}: the folder {out.parent} does not exist")
+    check_writable(out, "--out")
     config = _configuration(model)
     work = Path(tempfile.mkdtemp(prefix="navfmu-export-"))
     tmp = (out.parent / f".{out.name}.tmp").resolve()
@@ -140,6 +142,8 @@ def export(model_dir, out) -> Path:
         (work / "unzipped").mkdir()
         create_container_fmu(config, work / "unzipped", tmp)
         tmp.replace(out)
+    except OSError as exc:
+        raise NavfmuError(f"--out {out}: cannot write the FMU: {exc.strerror or exc}") from None
     finally:
         tmp.unlink(missing_ok=True)
         shutil.rmtree(work, ignore_errors=True)

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Dict
 
 from ..errors import NavfmuError
+from ..results.outputs import check_writable
 from ..results.run_results import atomic_write
 from ..model.ssp import FMU_TYPE
 from ..model.ssp_archive import load_model
@@ -84,6 +85,7 @@ def package(model_dir, out) -> Path:
     out = Path(out)
     if out.suffix.lower() != ".ssp":
         raise NavfmuError(f"--out {out}: an SSP archive needs the extension .ssp")
+    check_writable(out, "--out")
     sources = _resource_names(model)
     ssd = model.path
     ssd_text = _rewrite_ssd(ssd.read_text(encoding="utf-8"), sources)
@@ -99,7 +101,10 @@ def package(model_dir, out) -> Path:
             for arcname, path in fmus.items():
                 zf.write(path, arcname)
 
-    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise NavfmuError(f"--out {out}: cannot make its folder: {exc.strerror or exc}") from None
     return atomic_write(out, write, binary=True)
 
 

@@ -30,10 +30,12 @@ from ..results import plots
 from ..results import recorder
 from ..campaigns import statistics as st
 from ..campaigns.campaign_summary import AXES
-from ..errors import NavfmuError, WiringError
+from ..campaigns.executor import Executor
+from ..errors import NavfmuError, SkippedParametersWarning, WiringError
 from ..results.metric_comparisons import (GROUP_KEYS, improvement_percent, per_axis_enu, rms_3d,
     rms_ratio)
 from ..results.run_results import atomic_write
+from ..running.prechecks import check_stop_time
 
 MODELS = fmu_build.ROOT / "models"
 #: runs per filter and scenario by default (README: how long it takes)
@@ -97,7 +99,24 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
     campaign in ``out`` has finished (a campaign cut short or still running), and the
     figures whose run-0 series exist."""
     out = Path(out)
-    (out / "figures").mkdir(parents=True, exist_ok=True)
+    if not str(out).strip():
+        raise NavfmuError("--out: empty path; give a folder")
+    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
+        raise NavfmuError(f"--runs: expected a whole number >= 1, got {runs!r}")
+    Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)  # checks them
+    check_stop_time(stop_time, 0.0)
+    if only_finished and not list((out / "campaigns").glob(f"*/{camp.MANIFEST}")):
+        raise NavfmuError(f"--only-finished: {out / 'campaigns'} holds no campaign to report "
+                          "(run the report without --only-finished first)")
+    with warnings.catch_warnings():
+        # every filter is swapped into every scenario here: skipped parameters are expected
+        warnings.simplefilter("ignore", SkippedParametersWarning)
+        return _build_report(out, runs, workers, scheduler, local_cluster, stop_time, models,
+                             progress_factory, log, only_finished)
+
+
+def _build_report(out, runs, workers, scheduler, local_cluster, stop_time, models,
+                  progress_factory, log, only_finished) -> Path:
     t0 = time.perf_counter()
     sections = []
     for plan in discover(models):
@@ -119,7 +138,9 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
                               progress=progress_factory(name) if progress_factory else None,
                               log=log)
         campaign = camp.Campaign(spec, folder, log=log)
-        campaign.prepare()
+        campaign.check()
+        if only_finished:
+            campaign.runs = spec.runs   # the leading runs every filter has finished
         records = campaign.records()
         plan.update(summary=_summary(campaign, records, plan), records=records,
                     offsets=campaign.offsets, spec=spec)
@@ -153,6 +174,7 @@ def _figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
     from ..running.scenarios import simulate_scenario
 
     name = plan["model"].name
+    (out / "figures").mkdir(parents=True, exist_ok=True)
     figures = {"rms": plots.plot_rms_intervals(
         plan["summary"], out / "figures" / f"{name}_rms.png",
         f"{name}: RMS per run, mean and 95 % interval over {plan['summary']['runs']} runs "
@@ -161,7 +183,7 @@ def _figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
     shown = [f for f in plan["filters"] if f in paper] or plan["filters"][:3]
     seeds = camp.run_seeds(plan["spec"], plan["offsets"], 0)
     entries = []
-    (out / "series").mkdir(exist_ok=True)
+    (out / "series").mkdir(parents=True, exist_ok=True)
     for f in shown:
         path = out / "series" / f"{name}_{f}_run0.parquet"
         if not _same_run(path, seeds, plan["spec"].stop_time or plan["model"].stop_time):
@@ -225,7 +247,7 @@ def _provenance(plan) -> str:
 
 def _per_run(plan, f, fn) -> Optional[Dict[str, float]]:
     values = [fn(r["metrics"]) for r in plan["records"][f] if r["metrics"]]
-    interval = st.t_interval(values) if values else None
+    interval = st.positive_interval(values) if values else None
     return interval if interval and interval["n"] else None
 
 

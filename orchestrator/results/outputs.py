@@ -1,10 +1,11 @@
 """A run's output folder: written whole in a staging folder beside it, then moved into place.
 
 The files of one command (results, metrics, report, plots) are written into a hidden staging
-folder ``.<name>.<random>.partial`` next to the target folder (a Parquet file streamed while
-the run goes is written into another such folder and moved in, :func:`move_into`).  Only when every
-file is there is the staging folder moved onto the target: under an exclusive lock (``fcntl.flock``
-on the parent folder) the previous folder is renamed aside, the staging folder renamed to the
+folder ``.<name>.<host>-<pid>.<random>.partial`` next to the target folder (a Parquet file
+streamed while the run goes is written into another such folder and moved in,
+:func:`move_into`).  Only when every file is there is the staging folder moved onto the
+target: under an exclusive lock (``fcntl.flock`` on the parent folder) the previous folder
+is renamed aside, the staging folder renamed to the
 target, and the previous folder deleted.  So
 
 * the target holds the files of exactly one command: a failed, interrupted or killed command
@@ -12,7 +13,10 @@ target, and the previous folder deleted.  So
   never a mixture, and no file of an earlier command survives beside the new ones (``run``
   then ``compare`` into one folder leaves no stale ``results.csv``);
 * two commands writing to one folder at the same time each stage their own files, and the
-  lock serializes the moves: the folder ends up with one command's files, whole.
+  lock serializes the moves: the folder ends up with one command's files, whole;
+* the staging (and set-aside) folders of a command that was killed (SIGKILL, a power cut)
+  are removed by the next command into the same target: their name holds the host and the
+  process id that made them, and a folder of this host whose process is gone is stale.
 
 A folder that exists already is only replaced if it is an output folder: it holds the
 marker file :data:`MARKER` (written into every output folder) or only files of the kinds we
@@ -24,6 +28,7 @@ import contextlib
 import fcntl
 import os
 import shutil
+import socket
 import tempfile
 from pathlib import Path
 from typing import Iterator
@@ -43,10 +48,49 @@ def _is_output_folder(path: Path) -> bool:
     return all(p.is_file() and p.suffix in OUTPUT_SUFFIXES for p in path.iterdir())
 
 
+def _temporary(target: Path, suffix: str) -> Path:
+    """A new hidden folder beside ``target`` named after it, this host and this process."""
+    return Path(tempfile.mkdtemp(prefix=f".{target.name}.{_OWNER}-{os.getpid()}.",
+                                 suffix=suffix, dir=target.parent))
+
+
+_OWNER = "".join(c if c.isalnum() else "_" for c in socket.gethostname())
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def remove_stale(target) -> None:
+    """Remove the staging and set-aside folders beside ``target`` left by a killed command
+    of this host (see the module docstring)."""
+    target = Path(target).absolute()
+    prefix = f".{target.name}.{_OWNER}-"
+    try:
+        entries = list(target.parent.iterdir())
+    except OSError:
+        return
+    for p in entries:
+        if not (p.name.startswith(prefix) and p.name.endswith((".partial", ".old"))):
+            continue
+        pid = p.name[len(prefix):].split(".", 1)[0]
+        if pid.isdigit() and not _alive(int(pid)) and p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+
+
 def check_target(target) -> Path:
     """Refuse, before any work, an output folder that could not be written or must not be
-    replaced; a staging folder is created and removed beside it to prove it writable."""
+    replaced; a staging folder is created and removed beside it to prove it writable (and
+    stale ones of killed commands are removed)."""
     target = Path(target)
+    if not str(target).strip():
+        raise NavfmuError("--out: empty path; give a folder")
     if target.exists() and not target.is_dir():
         raise NavfmuError(f"--out {target}: exists and is not a folder")
     if target.is_dir() and not _is_output_folder(target):
@@ -55,12 +99,39 @@ def check_target(target) -> Path:
     parent = target.absolute().parent
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        probe = tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial", dir=parent)
-        os.rmdir(probe)
+        os.rmdir(_temporary(parent / target.name, ".partial"))
     except OSError as exc:
         raise NavfmuError(f"--out {target}: cannot write into {parent}: "
                           f"{exc.strerror or exc}") from None
+    remove_stale(target)
     return target
+
+
+def check_writable(path, what: str, folder: bool = False) -> Path:
+    """Refuse, before any work, a file (or, ``folder``, a folder) ``path`` that cannot be
+    written: it exists as the other kind, or no file can be created in its folder (the
+    nearest existing one: missing folders are made when the output is written).  A probe
+    file is created and removed there; nothing else is touched."""
+    path = Path(path)
+    if not str(path).strip():
+        raise NavfmuError(f"{what}: empty path")
+    if path.is_dir() and not folder:
+        raise NavfmuError(f"{what} {path}: is a folder; give a file name")
+    if path.exists() and folder and not path.is_dir():
+        raise NavfmuError(f"{what} {path}: exists and is not a folder")
+    parent = path.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    try:
+        if not parent.is_dir():
+            raise NotADirectoryError(20, "not a folder")
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".probe", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise NavfmuError(f"{what} {path}: cannot write into {parent}: "
+                          f"{exc.strerror or exc}") from None
+    return path
 
 
 @contextlib.contextmanager
@@ -83,8 +154,7 @@ def _commit(stage: Path, target: Path, names) -> None:
             if not target.is_dir() or not _is_output_folder(target):
                 raise NavfmuError(f"--out {target}: replaced meanwhile by something navfmu did "
                                   "not write; nothing was written")
-            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old",
-                                        dir=target.parent))
+            old = _temporary(target, ".old")
             os.rename(target, old / "previous")
         os.rename(stage, target)
     if old is not None:
@@ -96,8 +166,7 @@ def staged(target) -> Iterator[Path]:
     """``with staged(out) as folder:`` write the files into ``folder``; when the block ends
     normally they replace ``out`` together, otherwise they are deleted."""
     target = check_target(target).absolute()
-    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial",
-                                  dir=target.parent))
+    stage = _temporary(target, ".partial")
     try:
         yield stage
         _commit(stage, target, [p.name for p in stage.iterdir()])
@@ -111,8 +180,7 @@ def stream_folder(target) -> Path:
     folder) for files a command streams while it runs; :func:`move_into` moves each into the
     staging folder and removes this folder with the last one."""
     target = check_target(target).absolute()
-    return Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".partial",
-                                 dir=target.parent))
+    return _temporary(target, ".partial")
 
 
 def move_into(path, stage: Path) -> Path:
@@ -127,4 +195,5 @@ def move_into(path, stage: Path) -> Path:
     return dest
 
 
-__all__ = ["MARKER", "check_target", "staged", "stream_folder", "move_into"]
+__all__ = ["MARKER", "check_target", "check_writable", "remove_stale", "staged",
+           "stream_folder", "move_into"]

@@ -17,6 +17,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 from navcore.filters.innovation_stats import chi2_lower_quantile  # noqa: E402
 from navcore.ins import earth  # noqa: E402
 
@@ -141,34 +142,71 @@ def _moving_rms(t, x, valid, window_s):
 def plot_error_rms(entries, path, title=""):
     """Several filters: the RMS of every error over a sliding window (solid, one colour per
     filter) and the RMS of the filter's own 1 sigma over the same window (dashed: what the
-    filter claims), log scale, so long runs and filters far apart stay readable."""
-    fig, axes = plt.subplots(3, 3, figsize=(14, 9.5), sharex=True)
+    filter claims), log scale, so long runs and filters far apart stay readable.  Lines are
+    drawn widest first (the first filter), so a filter whose curve lies on another's shows
+    as a narrower line inside it; 1 sigma curves that agree within 1 % are drawn once, with
+    the names of all of them; the legend sits below the panels, off the data."""
+    fig, axes = plt.subplots(3, 3, figsize=(14, 10.5), sharex=True)
     span = max(float(e["time"][-1] - e["time"][0]) for _, _, _, e in entries if e["time"].size)
     window = max(RMS_WINDOW_S, RMS_WINDOW_FRACTION * span)
-    for f_i, (label, results, name, e) in enumerate(entries):
-        t, valid = e["time"], e["valid"]
-        attitude = _attitude_sigmas(results, name)
-        step = max(1, t.size // 3000)  # a smooth curve needs no more points
-        for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
-            for col, (axis, key, sign, std) in enumerate(axes_spec):
-                ax = axes[row, col]
+    widths = np.linspace(2.4, 0.9, len(entries))
+    for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
+        for col, (axis, key, sign, std) in enumerate(axes_spec):
+            ax = axes[row, col]
+            sigmas = []
+            for f_i, (label, results, name, e) in enumerate(entries):
+                t, valid = e["time"], e["valid"]
+                step = max(1, t.size // 3000)  # a smooth curve needs no more points
                 rms = _moving_rms(t, e[key] * scale, valid, window)
-                ax.semilogy(t[::step], rms[::step], color=f"C{f_i}", lw=0.9, label=label)
-                sigma = _sigma(results, name, std, attitude)
+                ax.semilogy(t[::step], rms[::step], color=f"C{f_i}", lw=widths[f_i],
+                            alpha=0.85, label=label, zorder=2 + f_i)
+                sigma = _sigma(results, name, std, _attitude_sigmas(results, name))
                 if sigma is not None:
                     srms = _moving_rms(t, sigma * scale, valid, window)
-                    ax.semilogy(t[::step], srms[::step], color=f"C{f_i}", lw=0.7, ls="--",
-                                label=f"{label} 1 sigma (own)")
-                ax.set_title(f"{group} error {axis}: RMS over {window:g} s", fontsize=9)
-                ax.set_ylabel(unit)
-                ax.grid(True, which="both", alpha=0.3)
+                    sigmas.append((f_i, label, t[::step], srms[::step]))
+            for members, (t, srms) in _coinciding(sigmas):
+                ax.semilogy(t, srms, color=f"C{members[0][0]}" if len(members) == 1 else "k",
+                            lw=0.8, ls="--", zorder=10,
+                            label=f"{', '.join(m[1] for m in members)}: 1 sigma (own)")
+            ax.set_title(f"{group} error {axis}: RMS over {window:g} s", fontsize=9)
+            ax.set_ylabel(unit)
+            ax.grid(True, which="both", alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    axes[0, 0].legend(fontsize=7, loc="best", ncol=2)
+    handles, labels = _legend_entries(axes.flat)
+    fig.legend(handles, labels, loc="lower center", ncol=min(4, len(labels)), fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, 0.03))
     fig.suptitle(title or f"RMS errors over a sliding {window:g} s window")
     fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
-    fig.tight_layout(rect=(0, 0.035, 1, 1))
+    rows = 1 + (len(labels) - 1) // 4
+    fig.tight_layout(rect=(0, 0.05 + 0.025 * rows, 1, 1))
     return _save(fig, path)
+
+
+def _coinciding(curves, tolerance=0.01):
+    """Group ``(index, label, t, values)`` curves whose values agree within ``tolerance``
+    (relative) wherever both are finite; yields ``(members, (t, values))`` per group."""
+    groups = []
+    for curve in curves:
+        for members, (t, ref) in groups:
+            both = np.isfinite(ref) & np.isfinite(curve[3]) if ref.shape == curve[3].shape \
+                else None
+            if both is not None and both.any() and np.all(
+                    np.abs(curve[3][both] - ref[both]) <= tolerance * np.abs(ref[both])):
+                members.append(curve)
+                break
+        else:
+            groups.append(([curve], (curve[2], curve[3])))
+    return groups
+
+
+def _legend_entries(axes):
+    """Every distinct legend label of ``axes`` once, in the order first drawn."""
+    seen = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(label, handle)
+    return list(seen.values()), list(seen)
 
 
 def plot_attitude_errors(entries, path, title="", angles=nav_metrics.ATTITUDE):
@@ -203,6 +241,7 @@ def plot_fitness(summary, path):
     ax.plot(g, summary["best_so_far"], "o-", ms=3, label="best so far")
     ax.plot(g, summary["generation_mean"], "s--", ms=3, alpha=0.7, label="generation mean")
     ax.set_xlabel("generation")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))   # generations are whole
     ax.set_ylabel("cost: attitude RMS [deg] (eq. 20)")
     ax.grid(True, alpha=0.3)
     ax.legend()
@@ -229,9 +268,8 @@ def plot_nis(entries, path, title=""):
         dofs.update(int(d) for d in np.unique(results.column(name, "nis_dof")[upd]))
     for dof in sorted(dofs):
         lo, hi = chi2_lower_quantile(np.array([0.025, 0.975]), dof)
-        ax.axhline(hi, color="k", lw=0.8, ls="--")
-        ax.axhline(lo, color="k", lw=0.8, ls=":")
-        ax.text(ax.get_xlim()[0], hi, f" chi2({dof}) 97.5 %", va="bottom", fontsize=8)
+        ax.axhline(hi, color="k", lw=0.8, ls="--", label=f"chi2({dof}) 97.5 %")
+        ax.axhline(lo, color="k", lw=0.8, ls=":", label=f"chi2({dof}) 2.5 %")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("NIS")
     ax.grid(True, alpha=0.3)

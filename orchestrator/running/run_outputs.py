@@ -26,55 +26,72 @@ FUZZY_INPUT_OUTPUTS = ("fuzzy_e_accel", "fuzzy_de_accel", "fuzzy_e_mag", "fuzzy_
 
 
 def write_outputs(runs: Sequence[Run], out: Path, fmt="csv", plots_on=True, title="",
-                  reference=None, comparison=None) -> List[Path]:
+                  reference=None, comparison=None, progress=None) -> List[Path]:
     """Results (one file per run), metrics.json, report.json (the paper comparison with
     ``reference``, when it has anything; ``comparison``: that comparison when the caller has
     already computed it) and plots, replacing the folder ``out`` as a whole
     (:func:`orchestrator.results.outputs.staged`: all of them appear together or none does).
-    Returns the paths the files have in ``out``."""
+    ``progress(done, total)`` is told of every part written: each results file, the JSON
+    files, the plots as one part.  Returns the paths the files have in ``out``."""
     out = Path(out)
     if comparison is None:
         comparison = paper_comparison(runs, reference)
     with outputs.staged(out) as stage:
+        written = _Written(progress, len(runs) + 1 + bool(comparison) + bool(plots_on))
         names = [p.name for p in _write_files(runs, stage, fmt, plots_on, title, reference,
-                                              comparison)]
+                                              comparison, written)]
     return [out / n for n in names]
 
 
 class _Written(list):
-    """The paths written so far; a pending Ctrl-C stops between files."""
+    """The paths written so far; a pending Ctrl-C or SIGTERM stops between files;
+    ``progress`` hears of each of the ``parts`` done (:meth:`part_done`)."""
 
-    def add(self, path):
+    def __init__(self, progress=None, parts=0):
+        super().__init__()
+        self.progress, self.parts, self.done = progress, parts, 0
+        if progress is not None:
+            progress(0, parts)
+
+    def add(self, path, part=False):
         if path:
             self.append(path)
-        interrupts.check()
+        if part:
+            self.part_done()
+        interrupts.safe_point("writing")
+
+    def part_done(self):
+        self.done += 1
+        if self.progress is not None:
+            self.progress(min(self.done, self.parts), self.parts)
 
 
-def _write_files(runs, out: Path, fmt, plots_on, title, reference, comparison) -> List[Path]:
+def _write_files(runs, out: Path, fmt, plots_on, title, reference, comparison,
+                 written: "_Written") -> List[Path]:
     """Write every output file into the folder ``out``.  A run streamed to a Parquet file
     (:attr:`Run.series_file`) has its file moved in."""
-    written = _Written()
     streamed = {}
     for run in runs:
         stem = "results" if len(runs) == 1 else f"results_{run.label}"
         if run.series_file is not None:     # streamed while it ran: move it into place
             streamed[id(run)] = outputs.move_into(run.series_file, out)
-            written.add(streamed[id(run)])
+            written.add(streamed[id(run)], part=True)
         elif fmt == "npz":
-            written.add(run.results.to_npz(out / f"{stem}.npz"))
+            written.add(run.results.to_npz(out / f"{stem}.npz"), part=True)
         else:
-            written.add(run.results.to_csv(out / f"{stem}.csv"))
+            written.add(run.results.to_csv(out / f"{stem}.csv"), part=True)
     summary = {run.label: {"metrics": run.metrics,
                            "step_time_s": run.results.step_time_s,
                            "exchange_step_time_s": run.results.exchange_step_time_s,
                            "metadata": jsonable(run.results.metadata)} for run in runs}
-    written.add(atomic_write(out / "metrics.json",
-                             lambda f: f.write(json.dumps(summary, indent=2, sort_keys=True))))
+    written.add(atomic_write(out / "metrics.json", lambda f: f.write(
+        json.dumps(summary, indent=2, sort_keys=True))), part=True)
     if comparison:
         written.add(atomic_write(out / "report.json", lambda f: f.write(
-            json.dumps(jsonable(comparison), indent=2, sort_keys=True))))
+            json.dumps(jsonable(comparison), indent=2, sort_keys=True))), part=True)
     if plots_on and all(has_truth(run.results) for run in runs):
         _write_plots(runs, streamed, out, title, reference, written)
+        written.part_done()
     return written
 
 

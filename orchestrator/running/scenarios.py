@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional
 
 from ..building import build as fmu_build
 from ..building.build import ensure_fmus
@@ -43,13 +43,20 @@ def resolve_filter(name_or_path: str) -> Path:
     p = Path(name_or_path)
     if p.suffix == ".fmu" or "/" in name_or_path:
         if not p.is_file():
-            raise NavfmuError(f"--filter: FMU file not found: {p}")
+            raise NavfmuError(f"filter FMU file not found: {p}")
         return p.resolve()
     if not (fmu_build.FMU_SOURCES / f"{name_or_path}.py").is_file():
-        known = ", ".join(s.stem for s in fmu_build.slave_scripts())
-        raise NavfmuError(f"--filter: unknown filter '{name_or_path}' (known FMUs: {known}; or "
-                          "give the path of an .fmu file)")
+        raise NavfmuError(f"unknown filter '{name_or_path}' (our filters: "
+                          f"{', '.join(filter_fmus())}; or give the path of an .fmu file)")
     return fmu_build.fmu_path(name_or_path)
+
+
+def filter_fmus() -> List[str]:
+    """Our FMUs that are navigation filters (their component outputs ``nav_time``), not the
+    sensors or the replay."""
+    known = registry()
+    return [s.stem for s in fmu_build.slave_scripts() if s.stem in known
+            and any(port.name == "nav_time" for port in known[s.stem].outputs)]
 
 
 def swap_filter(model: SystemModel, filter: str) -> SystemModel:

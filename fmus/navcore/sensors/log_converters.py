@@ -165,6 +165,24 @@ KF_GINS_GNSS = ("time", "lat", "lon", "h", "std_n", "std_e", "std_d")
 KF_GINS_NAV = ("week", "sow", "lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 
 
+def _check_kf_gins_pair(imu_file, imu, gnss_file, gnss) -> None:
+    """What tells a KF-GINS GNSS file from an IMU file (both have seven columns): the
+    standard deviations are positive, and fixes come less often than IMU samples."""
+    for axis in ("std_n", "std_e", "std_d"):
+        bad = np.flatnonzero(~(gnss[axis] > 0.0))
+        if bad.size:
+            raise LogError(f"{gnss_file}, line {gnss['_line'][bad[0]]}: {axis} = "
+                           f"{gnss[axis][bad[0]]:g} m, a standard deviation must be positive "
+                           f"(is {gnss_file} the IMU file? the order is IMU_FILE GNSS_FILE)")
+    span = lambda t: float(t[-1] - t[0]) if len(t) > 1 else 0.0
+    imu_rate = (len(imu["time"]) - 1) / span(imu["time"]) if span(imu["time"]) > 0 else 0.0
+    gnss_rate = (len(gnss["time"]) - 1) / span(gnss["time"]) if span(gnss["time"]) > 0 else 0.0
+    if imu_rate and gnss_rate > imu_rate:
+        raise LogError(f"{gnss_file}: {gnss_rate:.3g} fixes per second, more than the "
+                       f"{imu_rate:.3g} IMU samples per second of {imu_file}: are the files "
+                       "swapped? (the order is IMU_FILE GNSS_FILE)")
+
+
 def read_kf_gins(imu_file, gnss_file, truth_file=None) -> SensorLog:
     """The log of KF-GINS's IMU and GNSS text files and, optionally, a ``.nav`` reference
     (module docstring).  Times are the seconds of the GPS week; a ``.nav`` file must stay in
@@ -181,6 +199,7 @@ def read_kf_gins(imu_file, gnss_file, truth_file=None) -> SensorLog:
     gnss = {"time": g[:, 0], "lat": g[:, 1] * _D2R, "lon": g[:, 2] * _D2R, "h": g[:, 3],
             "valid": np.ones(len(g)), "std_n": g[:, 4], "std_e": g[:, 5], "std_d": g[:, 6],
             "_line": g_lines}
+    _check_kf_gins_pair(imu_file, imu, gnss_file, gnss)
     truth: Optional[Dict[str, np.ndarray]] = None
     if truth_file is not None:
         nav, nav_lines = read_plain_text(truth_file, KF_GINS_NAV)

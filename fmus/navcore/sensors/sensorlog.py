@@ -348,7 +348,10 @@ def write_log(folder, log: SensorLog) -> Path:
         raise LogError(f"cannot write the sensor log {folder}: {exc}") from None
     if folder.exists() and not folder.is_dir():
         raise LogError(f"cannot write the sensor log {folder}: it exists and is not a folder")
-    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
+    except OSError as exc:
+        raise LogError(f"cannot write the sensor log {folder}: {exc.strerror or exc}") from None
     try:
         tables = {IMU_FILE: log.imu, GNSS_FILE: log.gnss, TRUTH_FILE: log.truth}
         for name, data in tables.items():
