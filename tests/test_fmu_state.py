@@ -4,9 +4,10 @@ bit, crafted, foreign or damaged ones are refused without side effect.
 A refused blob or state is fmi2Error from fmi2DeSerializeFMUstate or fmi2SetFMUstate with an
 Error-status message (the FMUs' patched pythonfmu library,
 orchestrator/building/native_library.py; the tests skip with its reason where it could not be
-built); the tests check that, that the attack's side effect did not happen, and that the instance then continues exactly from its
-previous state.  The fallback of pythonfmu's own library (fmi2OK, the message, fmi2Discard at
-the next fmi2DoStep) is tested in tests/test_native_library.py.
+built); the tests check that, that the attack's side effect did not happen, and that the
+instance then continues exactly from its previous state. The fallback of pythonfmu's own library
+(fmi2OK, the message, fmi2Discard at the next fmi2DoStep) is tested in
+tests/test_native_library.py.
 """
 from __future__ import annotations
 
