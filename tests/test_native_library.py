@@ -1,9 +1,9 @@
 """The patched pythonfmu library (orchestrator/building/native_library.py,
 native/vendor/pythonfmu-export): it compiles here with the interface of the wheel's library,
-every built FMU carries it, and without it (no compiler, Windows, NAVFMU_PYTHONFMU_LIBRARY=wheel) a refused call reports as
-pythonfmu's own library allows: fmi2OK, an Error-status message, fmi2Discard at the next step.
-The fmi2Error answers themselves are tested where the calls are (test_fmu_state.py,
-test_fmus.py)."""
+every built FMU carries it, and without it (no compiler, Windows,
+NAVFMU_PYTHONFMU_LIBRARY=wheel) a refused call reports as pythonfmu's own library allows:
+fmi2OK, an Error-status message, fmi2Discard at the next step.  The fmi2Error answers
+themselves are tested where the calls are (test_fmu_state.py, test_fmus.py)."""
 from __future__ import annotations
 
 import os
