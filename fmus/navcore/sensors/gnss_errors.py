@@ -9,7 +9,10 @@ a measured fix.  It reproduces the measurement disturbances of the papers:
 * paper 004 (Cai et al., sec. 3.1): "one epoch every 10 s carrying m times the nominal noise"
   (``outlier_period``, ``outlier_offset``, ``outlier_multiple``);
 * paper 000 (Yang et al., Table 1): different position sigmas per axis (``pos_sigma_*``);
-* GNSS outages (``outages``): the fix is flagged invalid.
+* GNSS outages (``outages``): the fix is flagged invalid;
+* time-correlated errors and slowly varying biases of a real receiver (``pos_gm_*``,
+  ``pos_bias_*``, ``vel_gm_*``; first-order Gauss-Markov, :mod:`navcore.gnss_correlated`;
+  off by default, drawn from a stream of their own).
 
 Random numbers
 --------------
@@ -36,6 +39,8 @@ import numpy as np
 from ..core.limits import Limits
 from ..errors import InputError, ParameterError
 from ..ins.earth import ned_to_lla_delta
+from .gnss_correlated import PARAMETERS as CORRELATED_PARAMETERS
+from .gnss_correlated import CorrelatedGnssErrors
 
 #: tolerance [s] used when comparing fix times with window edges and outlier epochs
 TIME_TOLERANCE = 1e-6
@@ -202,12 +207,15 @@ class GnssErrorModel:
         the epoch, shifted by ``TIME_TOLERANCE``).
     ``outages`` (str, "")
         ``"t0,t1; ..."``: fixes inside ``[t0, t1)`` are returned with ``valid`` False.
+    ``pos_gm_sigma_*``, ``pos_bias_sigma_*`` [m], ``vel_gm_sigma_*`` [m/s] (0 = off) and their
+        ``*_tau_s`` [s]: the time-correlated errors and biases of
+        :mod:`navcore.gnss_correlated`, added to the white errors (before any outlier).
 
     ``seed`` seeds the one random generator; the state is made of plain attributes (the
     generator included) so ``copy.deepcopy`` saves and restores it bit for bit.
     """
 
-    state_fields = ("rng", "last_pos_error_ned", "last_vel_error_ned")
+    state_fields = ("rng", "correlated", "last_pos_error_ned", "last_vel_error_ned")
     derived_fields = ("pos_sigma", "vel_sigma", "noise_steps", "outlier_patches",
                       "outlier_period", "outlier_offset", "outlier_multiple", "fix_interval",
                       "outages", "seed")
@@ -233,6 +241,7 @@ class GnssErrorModel:
         "fix_interval": (1.0, "s", "interval between fixes (to match outlier epochs to fixes)",
                          Limits(0.0, 3600.0, low_open=True)),
         "outages": ("", "", "'t0,t1; ...' fixes inside [t0,t1) are invalid", None),
+        **CORRELATED_PARAMETERS,
     }
 
     #: random numbers drawn per fix (constant, see module docstring)
@@ -276,6 +285,9 @@ class GnssErrorModel:
         except (TypeError, ValueError):
             raise ParameterError(f"parameter 'seed' must be an integer, got {seed!r}") from None
         self.rng = np.random.default_rng(self.seed)
+        self.correlated = CorrelatedGnssErrors(
+            {name: read_declared(params, name, table) for name in CORRELATED_PARAMETERS},
+            self.seed)
         #: NED position [m] and velocity [m/s] errors of the latest fix (for evaluation)
         self.last_pos_error_ned = np.zeros(3)
         self.last_vel_error_ned = np.zeros(3)
@@ -338,6 +350,10 @@ class GnssErrorModel:
 
         pos_sigma, vel_sigma = self.sigma_at(t)
         errors = {"pos": pos_sigma * z[0:3], "vel": vel_sigma * z[3:6]}
+        if self.correlated.active:
+            pos_c, vel_c = self.correlated.step(t)
+            errors["pos"] += pos_c
+            errors["vel"] += vel_c
         outlier = False
 
         # u[0:6]: patch signs, u[6:12]: patch magnitudes (pos n,e,d then vel n,e,d)
