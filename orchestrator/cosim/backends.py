@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -216,6 +216,11 @@ class Instance(ABC):
     @abstractmethod
     def terminate(self) -> None:
         """End the instance and release its resources (idempotent)."""
+
+    def take_warnings(self) -> List[str]:
+        """The warnings the component reported since the last call (an FMU's log messages of
+        status Warning, a navcore component's notices), each ``"<instance>: <text>"``."""
+        return []
 
     def __enter__(self):
         return self

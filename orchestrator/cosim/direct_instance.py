@@ -178,6 +178,9 @@ class DirectInstance(Instance):
         self.component.set_state(comp_state)
         self._inputs, self._outputs, self.time = dict(inputs), dict(outputs), time
 
+    def take_warnings(self):
+        return [f"{self.name}: {notice}" for notice in self.component.take_notices()]
+
     def terminate(self) -> None:
         hook = getattr(self.component, "terminate", None)
         if callable(hook):

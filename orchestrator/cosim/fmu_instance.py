@@ -24,6 +24,11 @@ LOG_MESSAGES_KEPT = 200
 # unique componentEnvironment and is found again by it (or by its instance name).
 _LOG_SINKS: Dict[int, "collections.deque"] = {}
 _LOG_SINKS_BY_NAME: Dict[bytes, "collections.deque"] = {}
+#: the same instances' messages of status Warning, all of them (not only the latest)
+_WARNING_SINKS: Dict[int, list] = {}
+_WARNING_SINKS_BY_NAME: Dict[bytes, list] = {}
+#: fmi2Status of a warning
+_WARNING = 1
 _ENV_IDS = itertools.count(1)
 _LOGGER_CALLBACK = None
 #: shared libraries of freed FMU instances, kept loaded for the life of the process
@@ -43,6 +48,14 @@ def _dispatch_log(env, instance_name, status, category, message):
         print(line)
         return
     sink.append(line)
+    if status == _WARNING:
+        warnings = _WARNING_SINKS.get(env) if env is not None else None
+        if warnings is None:
+            warnings = _WARNING_SINKS_BY_NAME.get(instance_name)
+        if warnings is not None:
+            name = instance_name.decode("utf-8", "replace") if instance_name else "?"
+            body = text.rstrip()
+            warnings.append(body if body.startswith(f"{name}: ") else f"{name}: {body}")
 
 
 def _logger_callback():
@@ -110,6 +123,9 @@ class FmuInstance(Instance):
         self._env_id = next(_ENV_IDS)
         _LOG_SINKS[self._env_id] = self.log
         _LOG_SINKS_BY_NAME[name.encode("utf-8")] = self.log
+        self.warnings: list = []
+        _WARNING_SINKS[self._env_id] = self.warnings
+        _WARNING_SINKS_BY_NAME[name.encode("utf-8")] = self.warnings
         try:
             callbacks = fmi2CallbackFunctions()
             callbacks.logger = _logger_callback()
@@ -293,6 +309,10 @@ class FmuInstance(Instance):
 
     def free_state(self, state) -> None:
         self._checked("fmi2FreeFMUstate", self._fmu.freeFMUstate, state)
+
+    def take_warnings(self):
+        warnings, self.warnings[:] = list(self.warnings), []
+        return warnings
 
     def terminate(self) -> None:
         """Terminate (if initialized and not after Fatal), free the instance, delete the

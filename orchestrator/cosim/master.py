@@ -382,6 +382,7 @@ class Simulation:
             record(recording.slot(0))
             loop_ns = self._loop(exchange.step, record, recording, n_steps, progress)
             recording.finish()
+            warnings_reported = [w for inst in instances for w in inst.take_warnings()]
         except BaseException:
             if sink is not None:
                 sink.abort()
@@ -392,6 +393,7 @@ class Simulation:
 
         results = self._results(start, stop, n_steps, recording.size if sink is None else 0,
                                 recording.buffers, rec_index, position, timing, loop_ns)
+        results.metadata["warnings"] = warnings_reported
         if sink is not None:
             sink.close(results)
         return results

@@ -136,14 +136,23 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
                      parameters=parameters, record=record, algorithm=algorithm)
     prechecks.check_simulation(sim, stop_time)
     if stream_to is not None:
-        return _streamed_run(label, model, sim, stop_time, progress, window, stream_to)
+        run = _streamed_run(label, model, sim, stop_time, progress, window, stream_to)
+        report_warnings(run.results, log)
+        return run
     results = sim.run(stop_time=stop_time, progress=progress)
+    report_warnings(results, log)
     run = Run(label, model, results)
     if not has_truth(results):
         return run
     for f in nav_metrics.filters_of(results):
         run.metrics[f] = nav_metrics.filter_metrics(results, f, window=window)
     return run
+
+
+def report_warnings(results, log) -> None:
+    """Each warning a component reported during the run, as ``navfmu: warning: ...``."""
+    for warning in results.metadata.get("warnings", ()):
+        log(f"navfmu: warning: {warning}")
 
 
 def _streamed_run(label, model, sim, stop_time, progress, window, stream_to) -> Run:

@@ -23,6 +23,8 @@ from ..sensors.imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_
     GYRO_BIAS_LIMITS)
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from ..filters.latency import SolutionHistory
+from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
+from ..filters.recovery import RECOVERY_PARAMETERS
 from ..ins.strapdown import Strapdown
 from ..core.timing import same_time, time_tolerance
 
@@ -112,12 +114,13 @@ class InsGnssFilter(Component):
     inputs = signals.FILTER_INPUTS
     default_experiment = (0.0, 500.0, 0.01)
     state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
-                    "n_stale", "late_fixes")
+                    "n_stale", "late_fixes", "nis_monitor")
     derived_fields = ("max_fix_age",)
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
-        cls.parameters = _FILTER_PARAMETERS + tuple(cls.extra_parameters)
+        cls.parameters = (_FILTER_PARAMETERS + tuple(cls.extra_parameters) + RECOVERY_PARAMETERS
+                          + NIS_WARNING_PARAMETERS)
         cls.outputs = signals.FILTER_OUTPUTS + tuple(cls.extra_outputs)
 
     # -- configuration -----------------------------------------------------------------
@@ -167,6 +170,7 @@ class InsGnssFilter(Component):
         self.pending = []            # fixes from the future: (gnss_time, lat, lon, h, v)
         self.n_stale = 0
         self.late_fixes = False      # a fix was applied in the past: dense checkpoints
+        self.nis_monitor = NisMonitor(p["nis_warning_s"])
         self.out = {q.name: q.default() for q in self.outputs}
         self._write_solution()
         self.write_diagnostics(None)  # extra outputs start from the engine's initial state
@@ -287,6 +291,9 @@ class InsGnssFilter(Component):
         out["fading_factor"] = result.fading_factor
         out["outlier"] = result.outlier
         self.write_diagnostics(result)
+        warning = self.nis_monitor.observe(self.nav_time, result.nis, len(z))
+        if warning:
+            self.notify(f"{self.model_name}: {warning}")
 
     def write_diagnostics(self, result):
         """The extra outputs, after every update (``result``) and once at initialization

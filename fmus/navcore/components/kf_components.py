@@ -15,6 +15,7 @@ from ..filters.adaptive_laws import DEFAULT_R_FLOOR_FRACTION
 from ..core.component import Limits, integer, real, string
 from .filter_component import InsGnssFilter
 from ..filters.innovation_stats import CHI2_THRESHOLD_PAPER_004
+from ..filters.recovery import R_MAX_SCALE, recovery_options
 
 class Kf(InsGnssFilter):
     """Baseline 15-state loosely coupled error-state Kalman filter (closed loop)."""
@@ -49,6 +50,7 @@ class SageHusaFading(InsGnssFilter):
              "diagonal (variances)", DEFAULT_R_FLOOR_FRACTION, Limits(0.0, 1e6, low_open=True)),
         real("max_fading_factor", "", "cap on the fading factor lambda (0 = no cap, as in the "
              "paper; else >= 1)", 0.0, Limits(0.0, 1e6)),
+        R_MAX_SCALE,
     )
     extra_outputs = _R_EST_OUTPUTS
 
@@ -57,7 +59,8 @@ class SageHusaFading(InsGnssFilter):
         cap = p["max_fading_factor"]
         self.require("max_fading_factor", not 0.0 < cap < 1.0, "must be 0 (no cap) or >= 1")
         return dict(forgetting_factor=p["forgetting_factor"], reserve_gamma=p["reserve_gamma"],
-                    r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None)
+                    r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None,
+                    r_max_scale=p["r_max_scale"], **recovery_options(p))
 
     def write_diagnostics(self, result):
         super().write_diagnostics(result)
@@ -119,7 +122,7 @@ class NewtonRobustKf(InsGnssFilter):
         self.require("replacement_variance", p["replacement_variance"] in REPLACEMENT_VARIANCES,
                      f"is not one of {list(REPLACEMENT_VARIANCES)}")
         return dict(chi2_threshold=p["chi2_threshold"], newton_order=p["newton_order"],
-                    replacement_variance=p["replacement_variance"])
+                    replacement_variance=p["replacement_variance"], **recovery_options(p))
 
 
 class Igg3RobustKf(InsGnssFilter):
@@ -144,7 +147,7 @@ class Igg3RobustKf(InsGnssFilter):
     def engine_options(self):
         p = self.params
         self.require("igg_k1", p["igg_k1"] > p["igg_k0"], f"must be > igg_k0 = {p['igg_k0']}")
-        return dict(igg_k0=p["igg_k0"], igg_k1=p["igg_k1"])
+        return dict(igg_k0=p["igg_k0"], igg_k1=p["igg_k1"], **recovery_options(p))
 
     def write_diagnostics(self, result):
         super().write_diagnostics(result)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from ..core.component import Limits, ParameterError, integer, real
 from .filter_component import InsGnssFilter
+from ..filters.recovery import recovery_options
 from ..filters.ukf_filters import CtfaUkfEngine, ImmUkfEngine, UkfEngine
 
 #: accepted Q scales of the IMM models (relative to the configured Q)
@@ -74,7 +75,7 @@ class CtfaUkf(Ukf):
     def engine_options(self):
         p = self.params
         return dict(super().engine_options(), q_max_scale=p["q_max_scale"], t1=p["ctfa_t1"],
-                    t2=p["ctfa_t2"], pass_decay=p["ctfa_pass_decay"])
+                    t2=p["ctfa_t2"], pass_decay=p["ctfa_pass_decay"], **recovery_options(p))
 
     def make_engine(self, config, nav):
         engine = super().make_engine(config, nav)
@@ -113,7 +114,7 @@ class ImmUkf(Ukf):
         p = self.params
         names = [f"imm_q_scale_{j}" for j in range(1, p["imm_models"] + 1)]
         return dict(super().engine_options(), q_scales=[p[n] for n in names],
-                    p_stay=p["imm_p_stay"])
+                    p_stay=p["imm_p_stay"], **recovery_options(p))
 
     def write_diagnostics(self, result):
         super().write_diagnostics(result)

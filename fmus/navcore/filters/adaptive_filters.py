@@ -35,6 +35,7 @@ from . import robust_laws
 from ..ins.error_model import N_STATES
 from .innovation_stats import chi2_gate, chi_square_per_observation, nis
 from .ins_gnss_kf import KfEngine, UpdateResult
+from .recovery import GuardedEngine, bounded_r, inflate_navigation
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
@@ -58,7 +59,7 @@ def masked_update(P_pred, z, R, keep):
 
 
 # ------------------------------------------------------------------------------------------
-class SageHusaFadingEngine(KfEngine):
+class SageHusaFadingEngine(GuardedEngine, KfEngine):
     """Simplified Sage-Husa R estimation + fading memory (paper 001, secs. 1.1-1.2).
 
     One update (``v = z``, closed loop; equations of paper 001)::
@@ -95,14 +96,25 @@ class SageHusaFadingEngine(KfEngine):
         (10 % of the sigma): never binds while the estimator behaves, and keeps R invertible
         when a long quiet stretch or compressed innovations drive it towards H P H'.
     max_fading_factor : optional cap on lambda (None = paper 001's uncapped eq. 12).
+    r_max_scale : recovery guard (with ``recovery`` on): R_hat stays at most this multiple of
+        R0 per axis (:func:`navcore.filters.recovery.bounded_r`), so a diverging state cannot drive
+        the estimate away; paper 001's eq. 9 has no upper bound.
+    recovery : the recovery guard of :mod:`navcore.filters.recovery` (ours; off = paper 001's law):
+        here only the bound ``r_max_scale``.  This filter takes every fix, and after an outage
+        its own fading factor (eq. 12) inflates P as much as the innovation asks, so it needs
+        no re-acquisition (one on top of the fading factor made it worse after each outage
+        of models/mems_outages).  ``recovery_epochs`` serves Iakf.
     """
 
     state_fields = ("R", "sage_husa_index")
-    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor", "r_min")
+    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor", "r_min",
+                      "r_max")
 
     def __init__(self, config, nav, *, forgetting_factor, reserve_gamma, r_floor_fraction,
-                 max_fading_factor):
+                 max_fading_factor, r_max_scale, **recovery):
         super().__init__(config, nav)
+        self.init_guard(**recovery)
+        self.r_max = float(r_max_scale) * np.diag(self.R0) if self.guard.enabled else None
         self.forgetting_factor = float(forgetting_factor)
         self.reserve_gamma = float(reserve_gamma)
         self.max_fading_factor = max_fading_factor
@@ -132,6 +144,8 @@ class SageHusaFadingEngine(KfEngine):
         self.sage_husa_index += 1
         self.R = laws.sage_husa_r_update(R_used, v, self.H, K, P, self.sage_husa_index,
                                          self.forgetting_factor, self.r_min)
+        if self.r_max is not None:      # recovery guard: bounded adaptive scale
+            self.R = bounded_r(self.R, self.r_max)
         self.apply(dx, P)
         return S, R_used
 
@@ -177,6 +191,13 @@ class IakfEngine(SageHusaFadingEngine):
     filter whose tuning is optimistic early in a flight sees clean epochs cross the gate
     more often than alpha; the smaller alpha compresses fewer of them (measured on
     aircraft_500s: docs/aircraft_500s.md).
+    Recovery guard (ours, :mod:`navcore.filters.recovery`; off = paper 001's law): an epoch whose
+    innovation would be compressed after ``recovery_epochs`` fix intervals without an
+    uncompressed one (a run of compressions or an outage) is re-acquired: its innovation is
+    taken uncompressed (Y = 1), so steps 3-4 -- the divergence test and paper 001's own
+    fading factor -- inflate the prediction as much as the innovation asks.  R_hat is bounded
+    as in :class:`SageHusaFadingEngine`.
+
     After an update, ``compression`` holds Y and ``tau`` the statistic.
     """
 
@@ -199,9 +220,14 @@ class IakfEngine(SageHusaFadingEngine):
         G = P_std[:m, :m] + self.R
         K_std = np.linalg.solve(G, P_std[:, :m].T).T             # paper 001 eq. 7, for eq. 14
         Y, tau, _ = laws.compression_factor(v, G, K_std, self.outlier_alpha)
+        self.guard.open_epoch()
+        if self.guard.due(np.full(m, Y < 1.0)).any():   # recovery guard: taken uncompressed,
+            self.guard.n_reacquired += 1                   # the fading factor inflates P
+            Y = 1.0
         v_used = v if Y == 1.0 else Y * v                        # paper 001 eq. 13
         lam, P_pred = self.faded_prediction(v_used, p_prop, q_acc)
         S, R_used = self.update_and_estimate_r(P_pred, v_used)
+        self.guard.close_epoch(Y == 1.0)
         self.compression = Y
         self.tau = tau
         # NIS of the raw innovation against the unfaded prediction: the statistic the
@@ -219,7 +245,7 @@ UNUSABLE_VARIANCE_FACTOR = 1e6
 REPLACEMENT_VARIANCES = ("propagated", "nominal")
 
 
-class NewtonRobustKfEngine(KfEngine):
+class NewtonRobustKfEngine(GuardedEngine, KfEngine):
     """Paper 004: per-observation chi-square test + Newton extrapolation of failed observations.
 
     Each update:
@@ -260,6 +286,11 @@ class NewtonRobustKfEngine(KfEngine):
     ``interval`` being the first gap seen; a missed fix (outage, stale fix) therefore
     clears the history instead of extrapolating over an unequal spacing.
 
+    Recovery guard (ours, :mod:`navcore.filters.recovery`; off = the paper's law): a component that
+    fails the test after ``recovery_epochs`` fix intervals without an accepted value (a run of
+    faults or an outage) is re-acquired: the prediction is inflated until its innovation is
+    consistent, the test runs again on it and the component is taken as measured.
+
     After an update: ``chi2_values`` (m,), ``chi2_max``, ``rejected`` (bool mask),
     ``n_rejected``.
     """
@@ -269,8 +300,10 @@ class NewtonRobustKfEngine(KfEngine):
                     "n_rejected")
     derived_fields = ("chi2_threshold", "newton_order", "replacement_variance")
 
-    def __init__(self, config, nav, *, chi2_threshold, newton_order, replacement_variance):
+    def __init__(self, config, nav, *, chi2_threshold, newton_order, replacement_variance,
+                 **recovery):
         super().__init__(config, nav)
+        self.init_guard(**recovery)
         self.chi2_threshold = float(chi2_threshold)
         self.newton_order = int(newton_order)
         self.replacement_variance = replacement_variance
@@ -327,6 +360,14 @@ class NewtonRobustKfEngine(KfEngine):
         P_pred, S = self.predicted_innovation()
         chi2 = chi_square_per_observation(z, S)
         faults = chi2 > self.chi2_threshold
+        self.guard.open_epoch()
+        due = self.guard.due(faults)
+        if due.any():                 # recovery guard: re-acquire with an inflated prediction
+            lam = self.guard.reacquisition(z, P_pred, self.R0, due)
+            P_pred = inflate_navigation(P_pred, lam)
+            S = P_pred[:self.m, :self.m] + self.R0
+            chi2 = chi_square_per_observation(z, S)
+            faults = (chi2 > self.chi2_threshold) & ~due
         epoch = self._next_epoch()
         if self.history.last_epoch is not None and epoch != self.history.last_epoch + 1:
             self.history.clear()  # a missed fix: the samples are no longer equally spaced
@@ -355,6 +396,7 @@ class NewtonRobustKfEngine(KfEngine):
         while len(self.sample_variances) > len(self.history):
             self.sample_variances.popleft()
         self.apply(dx, P)
+        self.guard.close_epoch(~faults)
         self.history.apply_correction(self.H @ dx)
         self.chi2_values = chi2
         self.chi2_max = float(chi2.max())
@@ -364,7 +406,7 @@ class NewtonRobustKfEngine(KfEngine):
 
 
 # ------------------------------------------------------------------------------------------
-class Igg3RobustKfEngine(KfEngine):
+class Igg3RobustKfEngine(GuardedEngine, KfEngine):
     """IGG-III equivalent-weight robust filter (the "等价权函数法" of paper 004 sec. 1.2).
 
     Per component, the standardized innovation ``u_i = v_i / sqrt(S_ii)`` with
@@ -374,14 +416,20 @@ class Igg3RobustKfEngine(KfEngine):
     The component's defaults k0 = 1.5, k1 = 3.0 (Yang Yuanxi's usual constants): 13 % of clean
     components are down-weighted a little, 0.3 % rejected.
 
+    Recovery guard (ours, :mod:`navcore.filters.recovery`; off = the plain IGG-III law): a component
+    rejected (w = 0) after ``recovery_epochs`` fix intervals without an accepted value is
+    re-acquired: the prediction is inflated until its innovation is consistent, the weights
+    are computed again on it and the component keeps at least full weight.
+
     After an update: ``weights`` (m,), ``n_rejected`` (components with w = 0).
     """
 
     state_fields = ("weights", "n_rejected")
     derived_fields = ("igg_k0", "igg_k1")
 
-    def __init__(self, config, nav, *, igg_k0, igg_k1):
+    def __init__(self, config, nav, *, igg_k0, igg_k1, **recovery):
         super().__init__(config, nav)
+        self.init_guard(**recovery)
         self.igg_k0 = float(igg_k0)
         self.igg_k1 = float(igg_k1)
         self.weights = np.ones(self.m)
@@ -393,6 +441,13 @@ class Igg3RobustKfEngine(KfEngine):
         P_pred, S = self.predicted_innovation()
         u = z / np.sqrt(np.diag(S))
         w = robust_laws.igg3_weight(u, self.igg_k0, self.igg_k1)
+        self.guard.open_epoch()
+        due = self.guard.due(w == 0.0)
+        if due.any():                 # recovery guard: re-acquire with an inflated prediction
+            P_pred = inflate_navigation(P_pred, self.guard.reacquisition(z, P_pred, self.R0, due))
+            S = P_pred[:self.m, :self.m] + self.R0
+            u = z / np.sqrt(np.diag(S))
+            w = np.where(due, 1.0, robust_laws.igg3_weight(u, self.igg_k0, self.igg_k1))
         keep = w > 0.0
         R = self.R0.copy()
         idx = np.flatnonzero(keep)
@@ -402,6 +457,7 @@ class Igg3RobustKfEngine(KfEngine):
         else:
             dx, P = masked_update(P_pred, z, R, keep)
         self.apply(dx, P)
+        self.guard.close_epoch(keep)
         self.weights = w
         self.n_rejected = int((~keep).sum())
         r0 = np.diag(self.R0)

@@ -87,9 +87,10 @@ import numpy as np
 from ..ins import earth
 from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from ..ins.error_model import ATT, BA, BG, N_STATES, POS, VEL
-from .imm import ImmBank
+from .imm import ImmBank, imm_combine
 from .innovation_stats import nis
 from .ins_gnss_kf import KfEngine, UpdateResult
+from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
 from ..ins.strapdown import _gravity, _radii
 from .unscented import UnscentedKalmanFilter
 
@@ -337,6 +338,26 @@ class UkfEngine(KfEngine):
         self.ukf.x = np.zeros(N_STATES)
         return UpdateResult(res["innovation"], res["S"], res["nis"], q_scale=self.q_scale)
 
+    def reacquire(self, z, x, P, filters):
+        """Recovery guard (:mod:`navcore.filters.recovery`) of the adaptive UKFs, which accept every
+        fix: the first fix after ``recovery_epochs`` intervals without one whose NIS against
+        the prediction (mean ``x``, covariance ``P``) exceeds the 99 % chi-square gate
+        inflates the navigation part of every filter's covariance in ``filters`` until that
+        NIS is m.  Returns the factor (1: nothing done)."""
+        guard = self.guard
+        guard.open_epoch()
+        lam = 1.0
+        if guard.may_reacquire():
+            m = self.m
+            v = z - x[:m]
+            due = guard.due(flag_by_gate(nis(v, P[:m, :m] + self.R0), m))
+            if due.any():
+                lam = guard.reacquisition(v, P, self.R0, due)
+                for flt in filters:
+                    flt.P = inflate_navigation(flt.P, lam)
+        guard.close_epoch(True)
+        return lam
+
     def _feedback(self, dx):
         self.nav.correct(dx[POS], dx[VEL], dx[ATT])
         self.gyro_bias = self.gyro_bias + dx[BG]
@@ -344,7 +365,7 @@ class UkfEngine(KfEngine):
         self.n_updates += 1
 
 
-class CtfaUkfEngine(UkfEngine):
+class CtfaUkfEngine(GuardedEngine, UkfEngine):
     """Paper 000's CTFA-UKF: the UKF plus the chi-square fuzzy adaptive Q schedule (paper 000
     eqs. 24-25).
 
@@ -362,13 +383,16 @@ class CtfaUkfEngine(UkfEngine):
     ``q_scale`` is the current Q relative to Qmin, ``chi2`` the latest statistic.
     ``pass_decay`` (ours, not the paper's; 1 = paper 000 eq. 25 as printed): factor on ``Q - Qmin``
     at every update that passes the test, so Q returns towards Qmin after a manoeuvre.
+    Recovery guard (ours; off = paper 000's law): :meth:`UkfEngine.reacquire` before the update.
     """
 
     state_fields = ("schedule", "chi2")
     derived_fields = ("q_max_scale",)
 
-    def __init__(self, config, nav, *, q_max_scale, t1, t2, pass_decay, **kwargs):
+    def __init__(self, config, nav, *, q_max_scale, t1, t2, pass_decay, recovery,
+                 recovery_epochs, **kwargs):
         super().__init__(config, nav, **kwargs)
+        self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
         if self.m == 3:
             d1, d2 = PAPER_T1, PAPER_T2
         else:
@@ -382,6 +406,8 @@ class CtfaUkfEngine(UkfEngine):
         self.chi2 = 0.0
 
     def update(self, z):
+        self._predict()
+        self.reacquire(z, self.ukf.x, self.ukf.P, (self.ukf,))
         result = super().update(z)
         self.chi2 = result.nis                       # paper 000 eq. 24
         self.q_scale = float(self.schedule.update(self.chi2)[0, 0])   # paper 000 eq. 25, next steps
@@ -389,7 +415,7 @@ class CtfaUkfEngine(UkfEngine):
         return result
 
 
-class ImmUkfEngine(UkfEngine):
+class ImmUkfEngine(GuardedEngine, UkfEngine):
     """IMM-UKF (paper 000's comparison, its ref. [14]): a bank of UKFs differing in Q.
 
     ``q_scales`` (one per model) multiply the configured Q; ``p_stay`` is the diagonal of the
@@ -399,13 +425,14 @@ class ImmUkfEngine(UkfEngine):
     measurement, updates the model probabilities from the Gaussian likelihoods and combines.  The
     combined error estimate is fed back to the single nominal INS and subtracted from every model
     (closed loop).  ``q_scale`` = probability-weighted scale; ``model_probabilities``;
-    the NIS is that of the combined prediction.
+    the NIS is that of the combined prediction.  Recovery guard (ours; off = the plain IMM):
+    :meth:`UkfEngine.reacquire` on the mixed prediction, inflating every model.
     """
 
     state_fields = ("bank",)
     derived_fields = ("q_scales",)
 
-    def __init__(self, config, nav, *, q_scales, p_stay, **kwargs):
+    def __init__(self, config, nav, *, q_scales, p_stay, recovery, recovery_epochs, **kwargs):
         super().__init__(config, nav, **kwargs)
         q_scales = [float(s) for s in q_scales]
         r = len(q_scales)
@@ -418,6 +445,7 @@ class ImmUkfEngine(UkfEngine):
         self.bank = ImmBank([self._new_ukf() for _ in range(r)], Pi)
         self.ukf = None
         self.q_scale = float(self.bank.mu @ self.q_scales)
+        self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
 
     @property
     def model_probabilities(self):
@@ -449,6 +477,9 @@ class ImmUkfEngine(UkfEngine):
         bank = self.bank
         if bank.needs_mixing:        # no prediction since the last update: start the cycle
             bank.mix()
+        if self.reacquire(z, bank.x, bank.P, bank.filters) != 1.0:
+            bank.x, bank.P = imm_combine(bank.mu, [f.x for f in bank.filters],
+                                         [f.P for f in bank.filters])
         m = self.m
         # chi-square statistic of the combined (mixture) prediction
         v = z - bank.x[:m]

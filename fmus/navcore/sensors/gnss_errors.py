@@ -11,7 +11,7 @@ a measured fix.  It reproduces the measurement disturbances of the papers:
 * paper 000 (Yang et al., Table 1): different position sigmas per axis (``pos_sigma_*``);
 * GNSS outages (``outages``): the fix is flagged invalid;
 * time-correlated errors and slowly varying biases of a real receiver (``pos_gm_*``,
-  ``pos_bias_*``, ``vel_gm_*``; first-order Gauss-Markov, :mod:`navcore.gnss_correlated`;
+  ``pos_bias_*``, ``vel_gm_*``; first-order Gauss-Markov, :mod:`navcore.sensors.gnss_correlated`;
   off by default, drawn from a stream of their own).
 
 Random numbers
@@ -209,7 +209,7 @@ class GnssErrorModel:
         ``"t0,t1; ..."``: fixes inside ``[t0, t1)`` are returned with ``valid`` False.
     ``pos_gm_sigma_*``, ``pos_bias_sigma_*`` [m], ``vel_gm_sigma_*`` [m/s] (0 = off) and their
         ``*_tau_s`` [s]: the time-correlated errors and biases of
-        :mod:`navcore.gnss_correlated`, added to the white errors (before any outlier).
+        :mod:`navcore.sensors.gnss_correlated`, added to the white errors (before any outlier).
 
     ``seed`` seeds the one random generator; the state is made of plain attributes (the
     generator included) so ``copy.deepcopy`` saves and restores it bit for bit.

@@ -1,0 +1,210 @@
+"""Recovery guards of the adaptive and robust filters: re-acquisition after outages and runs of
+rejections, and bounded adaptive scales.
+
+A gate (a chi-square test, an equivalent-weight function, an outlier compression) trusts the
+filter's predicted covariance.  When the real errors outgrow it -- an IMU worse than the
+filter's Q, a GNSS outage that let the INS drift further than P says, biased and
+time-correlated GNSS errors -- every later fix looks like an outlier and is rejected, so the
+state never comes back; an adaptive R estimate fed by those innovations runs away instead.
+The literature's remedy is to read a *run* of rejections as a fault of the state, not of the
+measurements, and to inflate the state covariance until the measurement is consistent with it
+again (Groves 2013, *Principles of GNSS, Inertial, and Multisensor Integrated Navigation
+Systems*, 2nd ed., ch. 17, innovation filtering: consecutive rejected measurements indicate that the state
+estimates are at fault; the error covariance is then increased or the filter reinitialized),
+with adaptive factors kept within bounds (Yang, He & Xu 2001, *Adaptively robust filtering for
+kinematic geodetic positioning*, J. Geodesy 75: the adaptive factor bounded; the fading
+factor of the strong tracking filter, Zhou & Frank 1996, Int. J. Control 65, chosen, as here,
+so that the innovation matches its predicted covariance).
+
+:class:`RecoveryGuard` (one per filter engine) implements, when parameter ``recovery`` is on:
+
+* **rejection-run limit** -- per measurement component, the time since it was last accepted
+  counts the epochs of a run of rejections *and* of an outage (no fix at all) alike.  A
+  component the filter's law flags again after ``recovery_epochs`` fix intervals without an
+  accepted value is re-acquired: the navigation part of the predicted covariance (position,
+  velocity, attitude and their cross terms with the biases; :func:`inflate_navigation`) is
+  inflated by the factor ``lambda >= 1`` for which the flagged components' innovation has its
+  expected NIS (:func:`inflation_factor`: ``v' (lambda H P H' + R)^-1 v = k`` for k components),
+  and the law runs again on the inflated prediction with those components accepted.  So the
+  first fix after an outage of ``recovery_epochs`` intervals or more that the law would
+  reject is taken, with the covariance inflated by what the outage really did to the state;
+  a shorter outage or a single outlier between accepted fixes is left to the law.
+* **bounded adaptive scales** -- :func:`bounded_r` keeps an estimated R at most ``r_max_scale``
+  times the configured R per axis (SageHusaFading, Iakf).
+
+With ``recovery`` off every filter is its paper's law as printed; the papers' scenarios set it
+off (their filter.ssv), so their numbers are those of the law.  What each filter flags:
+``navcore.filters.adaptive_filters`` and ``navcore.filters.ukf_filters`` say it in their classes.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .array_checks import symmetrize
+from ..core.component import Limits, boolean, integer, real
+from ..ins.error_model import ATT, POS, VEL
+from .innovation_stats import chi2_gate
+
+#: significance of the chi-square gate of filters whose law has no gate of its own
+#: (SageHusaFading, the UKF family): a fix whose NIS exceeds the 99 % quantile is flagged
+FLAG_ALPHA = 0.01
+#: largest covariance inflation of one re-acquisition (a 1e6-fold variance: 1000 sigma)
+MAX_INFLATION = 1e6
+#: fix intervals shorter than this fraction of the smallest one seen are not intervals
+_INTERVAL_TOLERANCE = 1e-6
+
+#: parameters every filter component declares (the Kf, Ukf and InsOnly have no guard: the
+#: parameters are accepted so that one filter.ssv serves every filter of a scenario)
+RECOVERY_PARAMETERS = (
+    boolean("recovery", "recovery guards of the adaptive and robust filters (re-acquisition "
+            "after outages and runs of rejections, bounded adaptive scales); false = each "
+            "paper's law as printed", True),
+    integer("recovery_epochs", "fix intervals without an accepted value after which a "
+            "component the filter's law rejects is re-acquired with an inflated covariance",
+            5, Limits(1, 100000)),
+)
+#: bound of the estimated R (SageHusaFading, Iakf)
+R_MAX_SCALE = real("r_max_scale", "", "recovery guard: the estimated R stays at most this "
+                   "multiple of the configured R per axis (variances; with recovery on)",
+                   10.0, Limits(1.0, 1e12))
+
+
+def recovery_options(params):
+    """Engine keyword arguments of the guard from a component's parameters."""
+    return dict(recovery=bool(params["recovery"]), recovery_epochs=int(params["recovery_epochs"]))
+
+
+def inflation_factor(v, HPH, R, target):
+    """The factor ``lambda >= 1`` with ``v' (lambda HPH + R)^-1 v = target`` (1 when the NIS is
+    already at most ``target``; at most :data:`MAX_INFLATION`).
+
+    Whitened by R (``R = L L'``), ``v' (lambda A + R)^-1 v = sum_i c_i^2 / (lambda mu_i + 1)``
+    with ``mu_i`` the eigenvalues of ``L^-1 A L^-T`` and ``c`` the whitened innovation in
+    their basis: decreasing in lambda, so bisection on log lambda finds the root.
+    """
+    L = np.linalg.cholesky(R)
+    A = np.linalg.solve(L, np.linalg.solve(L, HPH).T)
+    mu, U = np.linalg.eigh(symmetrize(A))
+    c2 = (U.T @ np.linalg.solve(L, v)) ** 2
+    mu = np.maximum(mu, 0.0)
+
+    def nis_at(lam):
+        return float(np.sum(c2 / (lam * mu + 1.0)))
+
+    if nis_at(1.0) <= target:
+        return 1.0
+    if nis_at(MAX_INFLATION) > target:
+        return MAX_INFLATION
+    lo, hi = 0.0, np.log(MAX_INFLATION)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if nis_at(np.exp(mid)) > target:
+            lo = mid
+        else:
+            hi = mid
+    return float(np.exp(hi))
+
+
+_NAV = np.zeros(15, dtype=bool)
+_NAV[POS] = _NAV[VEL] = _NAV[ATT] = True
+
+
+def inflate_navigation(P, lam):
+    """``D P D`` with ``D = diag(sqrt(lam))`` on position, velocity and attitude, 1 on the
+    biases: the navigation block times lambda, its cross terms with the biases times
+    sqrt(lambda), the bias block unchanged (positive definite whenever P is)."""
+    if lam == 1.0:
+        return P
+    d = np.where(_NAV, np.sqrt(lam), 1.0)
+    return P * np.outer(d, d)
+
+
+def bounded_r(R, r_max):
+    """``R`` with its variances at most ``r_max`` (m,): D^-1 R D^-1 (D = diag(sqrt(r_max)))
+    with its eigenvalues capped at 1, scaled back -- the ceiling counterpart of
+    :func:`navcore.filters.adaptive_laws.guard_positive_definite` (correlations kept)."""
+    scale = np.sqrt(r_max)
+    S = R / np.outer(scale, scale)
+    w, V = np.linalg.eigh(symmetrize(S))
+    if w[-1] <= 1.0:
+        return R
+    return symmetrize((V * np.minimum(w, 1.0)) @ V.T * np.outer(scale, scale))
+
+
+class RecoveryGuard:
+    """The rejection-run and outage bookkeeping of one filter (module docstring).
+
+    The engine calls :meth:`advance` for every IMU interval, :meth:`open_epoch` at the start
+    of an update, :meth:`due` with the components its law flags, and :meth:`close_epoch` with
+    the components it accepted.  ``n_reacquired`` counts re-acquisitions.
+    """
+
+    state_fields = ("elapsed", "interval", "since_accepted", "n_reacquired")
+    derived_fields = ("enabled", "epochs")
+
+    def __init__(self, m, *, recovery, recovery_epochs):
+        self.enabled = bool(recovery)
+        self.epochs = int(recovery_epochs)
+        self.elapsed = 0.0                 # s since the last update
+        self.interval = 0.0                # smallest fix interval seen [s] (0: none yet)
+        self.since_accepted = np.zeros(m)  # s since each component was last accepted
+        self.n_reacquired = 0
+
+    def advance(self, dt):
+        self.elapsed += dt
+
+    def open_epoch(self):
+        gap = self.elapsed
+        self.elapsed = 0.0
+        if gap > 0.0 and (self.interval == 0.0 or gap < self.interval):
+            self.interval = gap
+        self.since_accepted = self.since_accepted + gap
+
+    def may_reacquire(self):
+        """True when some component has gone ``recovery_epochs`` intervals without an accepted
+        value (so a flagged one would be re-acquired; lets a filter skip computing flags)."""
+        return (self.enabled and self.interval > 0.0 and bool(np.any(
+            self.since_accepted >= self.epochs * self.interval * (1.0 - _INTERVAL_TOLERANCE))))
+
+    def due(self, flagged):
+        """The flagged components to re-acquire now (bool mask)."""
+        flagged = np.asarray(flagged, dtype=bool)
+        if not self.enabled or self.interval == 0.0 or not flagged.any():
+            return np.zeros_like(flagged)
+        limit = self.epochs * self.interval * (1.0 - _INTERVAL_TOLERANCE)
+        return flagged & (self.since_accepted >= limit)
+
+    def close_epoch(self, accepted):
+        self.since_accepted = np.where(accepted, 0.0, self.since_accepted)
+
+    def reacquisition(self, v, HPH, R, due):
+        """The inflation factor for the components ``due`` (counted as a re-acquisition)."""
+        idx = np.flatnonzero(due)
+        self.n_reacquired += 1
+        return inflation_factor(v[idx], HPH[np.ix_(idx, idx)], R[np.ix_(idx, idx)], idx.size)
+
+
+def flag_by_gate(nis_value, m):
+    """Every component flagged when the NIS exceeds the chi2(m) gate at :data:`FLAG_ALPHA`
+    (filters whose law has no gate of its own)."""
+    return np.full(m, nis_value > chi2_gate(FLAG_ALPHA, m))
+
+
+
+
+class GuardedEngine:
+    """Mixin of a guarded filter engine: holds its :class:`RecoveryGuard` (``guard``) and
+    counts the IMU time between updates for it.  List it before the engine's base class."""
+
+    state_fields = ("guard",)
+
+    def init_guard(self, *, recovery, recovery_epochs):
+        self.guard = RecoveryGuard(self.m, recovery=recovery, recovery_epochs=recovery_epochs)
+
+    def propagate(self, dtheta, dvel, dt):
+        super().propagate(dtheta, dvel, dt)
+        self.guard.advance(dt)
+
+
+__all__ = ["RECOVERY_PARAMETERS", "R_MAX_SCALE", "GuardedEngine", "RecoveryGuard", "bounded_r",
+           "flag_by_gate", "inflate_navigation", "inflation_factor", "recovery_options"]
