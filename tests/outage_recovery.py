@@ -40,6 +40,8 @@ class FilterRecovery:
     max_error: float             # largest 3-D position error over the run [m]
     error_to_sigma_gnss: float   # RMS true error / RMS reported sigma, epochs with a fix
     error_to_sigma_outage: float  # the same over the epochs without a fix
+    warnings: List[str] = None     # the notices the component gave (the NIS warning)
+    r_scale_max: float = 1.0       # largest adaptive R scale (trace R / trace R0) reported
     rows: np.ndarray = None
     error: np.ndarray = None
 
@@ -65,6 +67,7 @@ def recovery(sensors: SensorRecord, model: str, overrides: Optional[Dict] = None
     return FilterRecovery(model, after, float(error.max()),
                           rms(error[with_gnss]) / rms(sigma[with_gnss]),
                           rms(error[settled & ~with_gnss]) / rms(sigma[settled & ~with_gnss]),
+                          run.component.take_notices(), float(run.outputs["r_scale"].max()),
                           run.rows, error)
 
 
@@ -77,12 +80,14 @@ def format_table(results: Dict[str, FilterRecovery], sensors: SensorRecord) -> s
     kf = results["Kf"]
     spans = [f"{t1 - t0:.0f} s" for t0, t1 in outages(sensors)]
     head = ("| filter | " + " | ".join(f"after {s} [m] (x Kf)" for s in spans)
-            + " | max [m] (x Kf) | RMS error / RMS sigma: with fixes, in outages |")
-    lines = [head, "|" + "---|" * (len(spans) + 3)]
+            + " | max [m] (x Kf) | RMS error / RMS sigma: with fixes, in outages | NIS warning at |")
+    lines = [head, "|" + "---|" * (len(spans) + 4)]
     for name, r in results.items():
         cells = [f"{a:.2f} ({a / k:.2f})" for a, k in zip(r.after, kf.after)]
         cells.append(f"{r.max_error:.2f} ({r.max_error / kf.max_error:.2f})")
         cells.append(f"{r.error_to_sigma_gnss:.1f}, {r.error_to_sigma_outage:.1f}")
+        cells.append(", ".join(w.split("at t = ")[1].split(" s ")[0] + " s" for w in r.warnings
+                               if "chi-square band" in w) or "-")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

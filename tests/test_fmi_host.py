@@ -245,3 +245,31 @@ def test_stale_fix_is_logged_once_through_the_fmi_logger(dist):
         f.close()
     stale = [m for m in logs if "max_fix_age" in m]
     assert len(stale) == 1 and "gnss_time = 0 s" in stale[0], logs
+
+
+def test_nis_warning_is_logged_once_through_the_fmi_logger(dist):
+    """A Kf told its GNSS is 100 times better than it is: the NIS stays far above its band and
+    the FMU says so once, as a warning of its logger, on one line."""
+    logs = []
+    f = _Fmu(dist / "Kf.fmu", "kf", {"init_lat": LAT, "init_h": 100.0, "r_pos_n": 0.01,
+                                      "r_pos_e": 0.01, "r_pos_d": 0.01,
+                                      "measurement": "position", "nis_warning_s": 20.0},
+             logs=logs)
+    rng = np.random.default_rng(3)
+    try:
+        for k in range(4000):
+            f.set("imu_time", (k + 1) * 0.01)
+            f.set("imu_dt", 0.01)
+            f.set("imu_dvel_z", -0.098)
+            if (k + 1) % 100 == 0:                  # 1 Hz fixes with 1 m of noise
+                f.set("gnss_time", (k + 1) * 0.01)
+                f.set("gnss_lat", LAT + rng.normal() / 6.4e6)
+                f.set("gnss_h", 100.0 + rng.normal())
+                f.set("gnss_valid", True)
+                f.set("gnss_epoch", (k + 1) // 100)
+            f.fmu.doStep(k * 0.01, 0.01)
+    finally:
+        f.close()
+    warned = [(status, m) for status, m in f.records if "chi-square band" in m]
+    assert len(warned) == 1 and warned[0][0] == 1, logs        # 1: fmi2Warning
+    assert "\n" not in warned[0][1].strip() and warned[0][1].startswith("kf: Kf: at t = ")

@@ -24,6 +24,11 @@ def _consistency_line(run, m) -> str:
     if "nees" in m:
         extra.append("NEES pos/vel/att " + "/".join(f"{m['nees'][g]:.2f}" for g in
                                                     ("position", "velocity", "attitude")))
+    if "inside_3sigma_pct" in m:
+        inside = m["inside_3sigma_pct"]
+        extra.append("inside 3 sigma [%] pos/vel/att " + " / ".join(
+            ",".join(f"{v:.0f}" for v in inside[g].values())
+            for g in ("position", "velocity", "attitude")))
     if "time_per_step_ms" in m:
         extra.append(f"{m['time_per_step_ms'] * 1e3:.0f} us per filter step")
     return f"  {run.label}: " + "; ".join(extra)

@@ -373,13 +373,23 @@ def _detection(plan) -> List[str]:
     return (["**Outlier detection**:", ""] + lines + [""]) if lines else []
 
 
+def _mean_inside(metrics, group):
+    """Mean over the axes of a group's percentage inside +-3 sigma (None without sigmas)."""
+    per_axis = (metrics.get("inside_3sigma_pct") or {}).get(group)
+    return sum(per_axis.values()) / len(per_axis) if per_axis else None
+
+
 def _consistency(sections) -> List[str]:
     lines = ["## Consistency: NEES and NIS", "",
              "Mean NEES per group (expected 3 for a consistent filter) and mean NIS at the "
              "updates (expected: its dof; 95 % band of one run's mean in brackets), each "
-             "mean [95 % CI] over the runs.", "",
+             "mean [95 % CI] over the runs; NEES uses the diagonal of the covariance.  Inside "
+             "+-3 sigma: percentage of the samples with |error| <= 3 sigma, mean of the three "
+             "axes of the group (99.7 % for a consistent filter), mean [95 % CI] over the runs.",
+             "",
              "| scenario | filter | NEES position | NEES velocity | NEES attitude | mean NIS | "
-             "dof | one run's band |", "|---|---|---|---|---|---|---|---|"]
+             "dof | one run's band | inside 3 sigma pos/vel/att [%] |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for plan in sections:
         for f, rows in plan["records"].items():
             nees = [_per_run(plan, f, lambda m, g=g: (m.get("nees") or {}).get(g))
@@ -387,9 +397,12 @@ def _consistency(sections) -> List[str]:
             nis = _per_run(plan, f, lambda m: (m.get("nis") or {}).get("mean"))
             first = rows[0]["metrics"].get("nis") or {}
             band = first.get("band95")
+            inside = [_per_run(plan, f, lambda m, g=g: _mean_inside(m, g))
+                      for g in ("position", "velocity", "attitude")]
             lines.append(f"| {plan['model'].name} | {f} | " + " | ".join(_ci(n, 2) for n in nees)
                          + f" | {_ci(nis, 2)} | {first.get('dof', '-')} | "
-                         + (f"{band[0]:.2f}-{band[1]:.2f}" if band else "-") + " |")
+                         + (f"{band[0]:.2f}-{band[1]:.2f}" if band else "-") + " | "
+                         + " / ".join(_ci(v, 1) for v in inside) + " |")
     return lines + [""]
 
 

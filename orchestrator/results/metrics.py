@@ -17,8 +17,13 @@ Definitions (errors are estimate - truth):
   rows where a new GNSS fix arrived: ``samples="fixes"``); max |error| per axis.  Computed
   by :class:`MetricAccumulator` over one or several consecutive chunks of rows (streamed
   runs): root of (sum of squares / number of samples).
-* NEES per group (position, velocity, attitude) from the filter's 1-sigma outputs (diagonal):
-  mean over the window of sum_i (e_i / sigma_i)^2, to compare with the group's dimension 3.
+* NEES per group (position, velocity, attitude) from the filter's 1-sigma outputs: mean over
+  the window of sum_i (e_i / sigma_i)^2, to compare with the group's dimension 3.  It uses the
+  diagonal of the covariance only (the filters output their 1-sigmas, not the blocks), so
+  correlations between the axes of a group are ignored.
+* Inside +-3 sigma: per group and axis, the percentage of the window's samples with
+  |e_i| <= 3 sigma_i (99.73 % for a consistent Gaussian error); samples without a sigma
+  (sigma <= 0) are not counted.
 * A filter with an ``aligned`` output counts only the samples where it is true (an AHRS
   before its initialization has no solution).
 * An attitude-only (AHRS) filter has no nav_lat/nav_v*: only the attitude errors exist; its
@@ -188,6 +193,8 @@ class MetricAccumulator:
         self.peak = {}
         self.nees_sum = {g: 0.0 for g in _NEES_GROUPS}
         self.nees_n = {g: 0 for g in _NEES_GROUPS}
+        self.inside_3sigma = {g: np.zeros(len(AXES)) for g in _NEES_GROUPS}
+        self.sigma_n = {g: np.zeros(len(AXES)) for g in _NEES_GROUPS}
         self.nis_sum, self.nis_n, self.dof_counts = 0.0, 0, {}
         self.epochs = {"injected": [], "n_rejected": [], "dof": []}
 
@@ -220,10 +227,14 @@ class MetricAccumulator:
                 sig = np.stack([col(self.filter_name, std + a)[mask] for a in AXES])
                 err_ = np.stack([e[err + a][mask] for a in AXES])
                 with np.errstate(divide="ignore", invalid="ignore"):
-                    ratio2 = np.where(sig > 0, (err_ / sig) ** 2, np.nan).sum(axis=0)
+                    per_axis = np.where(sig > 0, (err_ / sig) ** 2, np.nan)
+                    ratio2 = per_axis.sum(axis=0)
                 finite = ~np.isnan(ratio2)
                 self.nees_sum[g] += float(ratio2[finite].sum())
                 self.nees_n[g] += int(finite.sum())
+                counted = ~np.isnan(per_axis)
+                self.sigma_n[g] += counted.sum(axis=1)
+                self.inside_3sigma[g] += (counted & (per_axis <= 9.0)).sum(axis=1)
         if self.has_nis:
             upd = (col(self.filter_name, "updated") > 0.5) & mask
             if upd.any():
@@ -264,6 +275,10 @@ class MetricAccumulator:
         if self.has_std:
             out["nees"] = {g: (self.nees_sum[g] / self.nees_n[g] if self.nees_n[g]
                                else float("nan")) for g in _NEES_GROUPS}
+            out["inside_3sigma_pct"] = {
+                g: {a: (100.0 * float(self.inside_3sigma[g][i] / self.sigma_n[g][i])
+                        if self.sigma_n[g][i] else float("nan")) for i, a in enumerate(AXES)}
+                for g in _NEES_GROUPS}
         if self.nis_n:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n

@@ -111,9 +111,9 @@ class SageHusaFadingEngine(GuardedEngine, KfEngine):
                       "r_max")
 
     def __init__(self, config, nav, *, forgetting_factor, reserve_gamma, r_floor_fraction,
-                 max_fading_factor, r_max_scale, **recovery):
+                 max_fading_factor, r_max_scale, recovery, recovery_epochs):
         super().__init__(config, nav)
-        self.init_guard(**recovery)
+        self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
         self.r_max = float(r_max_scale) * np.diag(self.R0) if self.guard.enabled else None
         self.forgetting_factor = float(forgetting_factor)
         self.reserve_gamma = float(reserve_gamma)
@@ -301,9 +301,9 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
     derived_fields = ("chi2_threshold", "newton_order", "replacement_variance")
 
     def __init__(self, config, nav, *, chi2_threshold, newton_order, replacement_variance,
-                 **recovery):
+                 recovery, recovery_epochs):
         super().__init__(config, nav)
-        self.init_guard(**recovery)
+        self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
         self.chi2_threshold = float(chi2_threshold)
         self.newton_order = int(newton_order)
         self.replacement_variance = replacement_variance
@@ -427,9 +427,9 @@ class Igg3RobustKfEngine(GuardedEngine, KfEngine):
     state_fields = ("weights", "n_rejected")
     derived_fields = ("igg_k0", "igg_k1")
 
-    def __init__(self, config, nav, *, igg_k0, igg_k1, **recovery):
+    def __init__(self, config, nav, *, igg_k0, igg_k1, recovery, recovery_epochs):
         super().__init__(config, nav)
-        self.init_guard(**recovery)
+        self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
         self.igg_k0 = float(igg_k0)
         self.igg_k1 = float(igg_k1)
         self.weights = np.ones(self.m)

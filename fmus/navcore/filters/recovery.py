@@ -9,12 +9,12 @@ state never comes back; an adaptive R estimate fed by those innovations runs awa
 The literature's remedy is to read a *run* of rejections as a fault of the state, not of the
 measurements, and to inflate the state covariance until the measurement is consistent with it
 again (Groves 2013, *Principles of GNSS, Inertial, and Multisensor Integrated Navigation
-Systems*, 2nd ed., ch. 17, innovation filtering: consecutive rejected measurements indicate that the state
-estimates are at fault; the error covariance is then increased or the filter reinitialized),
-with adaptive factors kept within bounds (Yang, He & Xu 2001, *Adaptively robust filtering for
-kinematic geodetic positioning*, J. Geodesy 75: the adaptive factor bounded; the fading
-factor of the strong tracking filter, Zhou & Frank 1996, Int. J. Control 65, chosen, as here,
-so that the innovation matches its predicted covariance).
+Systems*, 2nd ed., ch. 17, innovation filtering: consecutive rejected measurements indicate
+that the state estimates are at fault; the error covariance is then increased or the filter
+reinitialized), with adaptive factors kept within bounds (Yang, He & Xu 2001, *Adaptively
+robust filtering for kinematic geodetic positioning*, J. Geodesy 75: the adaptive factor
+bounded; the fading factor of the strong tracking filter, Zhou & Frank 1996, Int. J. Control
+65, chosen, as here, so that the innovation matches its predicted covariance).
 
 :class:`RecoveryGuard` (one per filter engine) implements, when parameter ``recovery`` is on:
 
@@ -66,7 +66,7 @@ RECOVERY_PARAMETERS = (
 #: bound of the estimated R (SageHusaFading, Iakf)
 R_MAX_SCALE = real("r_max_scale", "", "recovery guard: the estimated R stays at most this "
                    "multiple of the configured R per axis (variances; with recovery on)",
-                   10.0, Limits(1.0, 1e12))
+                   4.0, Limits(1.0, 1e12))
 
 
 def recovery_options(params):

@@ -17,9 +17,9 @@ velocity error (``vel_gm_*``).  Each process ``x`` is stationary: its first valu
     x_k = exp(-dt / tau) x_{k-1} + sigma sqrt(1 - exp(-2 dt / tau)) n_k,   n_k ~ N(0, 1)
 
 All sigmas default to 0 (off): the receiver's errors are then exactly the white ones of
-:mod:`navcore.sensors.gnss_errors`, bit for bit.  The processes draw from their own generator (seeded
-from the receiver's ``seed``, a different stream), so switching them on never changes the white
-noise, outliers or outages of the same seed.
+:mod:`navcore.sensors.gnss_errors`, bit for bit.  The processes draw from their own generator
+(seeded from the receiver's ``seed``, a different stream), so switching them on never changes
+the white noise, outliers or outages of the same seed.
 """
 from __future__ import annotations
 
