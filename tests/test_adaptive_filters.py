@@ -226,7 +226,8 @@ def test_newton_extrapolated_variance_and_first_epoch():
                       r_sigma=np.array([5, 5, 5, 0.3, 0.3, 0.3]))
     nav = Strapdown.from_euler(0.7, 2.0, 100.0, np.zeros(3), 0.0, 0.0, 0.0)
     kf = NewtonRobustKfEngine(config, nav, chi2_threshold=CHI2_THRESHOLD_PAPER_004,
-                              newton_order=4, replacement_variance="propagated")
+                              newton_order=4, replacement_variance="propagated",
+                              recovery=False, recovery_epochs=5)
     r0 = np.diag(kf.R0)
     # first epoch, a gross error on north position: nothing to extrapolate from, the
     # component is left out of the update (and the others are used)

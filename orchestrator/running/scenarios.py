@@ -150,8 +150,9 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
 
 
 def report_warnings(results, log) -> None:
-    """Each warning a component reported during the run, as ``navfmu: warning: ...``."""
-    for warning in results.metadata.get("warnings", ()):
+    """Each warning a component reported during the run, as ``navfmu: warning: ...`` through
+    ``log`` (None: kept in ``results.metadata["warnings"]`` only)."""
+    for warning in results.metadata.get("warnings", ()) if log is not None else ():
         log(f"navfmu: warning: {warning}")
 
 

@@ -119,8 +119,8 @@ class InsGnssFilter(Component):
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
-        cls.parameters = (_FILTER_PARAMETERS + tuple(cls.extra_parameters) + RECOVERY_PARAMETERS
-                          + NIS_WARNING_PARAMETERS)
+        cls.parameters = (_FILTER_PARAMETERS + RECOVERY_PARAMETERS + NIS_WARNING_PARAMETERS
+                          + tuple(cls.extra_parameters))
         cls.outputs = signals.FILTER_OUTPUTS + tuple(cls.extra_outputs)
 
     # -- configuration -----------------------------------------------------------------

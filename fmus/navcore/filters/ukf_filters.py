@@ -339,8 +339,8 @@ class UkfEngine(KfEngine):
         return UpdateResult(res["innovation"], res["S"], res["nis"], q_scale=self.q_scale)
 
     def reacquire(self, z, x, P, filters):
-        """Recovery guard (:mod:`navcore.filters.recovery`) of the adaptive UKFs, which accept every
-        fix: the first fix after ``recovery_epochs`` intervals without one whose NIS against
+        """Recovery guard (:mod:`navcore.filters.recovery`) of the adaptive UKFs, which accept
+        every fix: the first fix after ``recovery_epochs`` intervals without one whose NIS against
         the prediction (mean ``x``, covariance ``P``) exceeds the 99 % chi-square gate
         inflates the navigation part of every filter's covariance in ``filters`` until that
         NIS is m.  Returns the factor (1: nothing done)."""
