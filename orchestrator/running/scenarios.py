@@ -11,6 +11,7 @@ the output files (:mod:`orchestrator.running.run_outputs`) and the benchmarks
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional
@@ -21,7 +22,7 @@ from ..results import metrics as nav_metrics
 from . import prechecks
 from ..results import recorder
 from ..results import windows as paper_windows
-from ..errors import NavfmuError
+from ..errors import NavfmuError, NavfmuWarning
 from ..cosim.master import Simulation
 from ..results.run_results import Results
 from ..model.ssp import SystemModel
@@ -137,10 +138,10 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     prechecks.check_simulation(sim, stop_time)
     if stream_to is not None:
         run = _streamed_run(label, model, sim, stop_time, progress, window, stream_to)
-        report_warnings(run.results, log)
+        report_warnings(run.results)
         return run
     results = sim.run(stop_time=stop_time, progress=progress)
-    report_warnings(results, log)
+    report_warnings(results)
     run = Run(label, model, results)
     if not has_truth(results):
         return run
@@ -149,11 +150,12 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     return run
 
 
-def report_warnings(results, log) -> None:
-    """Each warning a component reported during the run, as ``navfmu: warning: ...`` through
-    ``log`` (None: kept in ``results.metadata["warnings"]`` only)."""
-    for warning in results.metadata.get("warnings", ()) if log is not None else ():
-        log(f"navfmu: warning: {warning}")
+def report_warnings(results) -> None:
+    """Each warning a component reported during the run (kept in
+    ``results.metadata["warnings"]``) raised as a :class:`NavfmuWarning`: the command line
+    prints it once as ``navfmu: warning: ...``."""
+    for warning in results.metadata.get("warnings", ()):
+        warnings.warn(warning, NavfmuWarning, stacklevel=3)
 
 
 def _streamed_run(label, model, sim, stop_time, progress, window, stream_to) -> Run:
