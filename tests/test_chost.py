@@ -234,3 +234,114 @@ def test_pythonfmu_loader_leaves_script_globals_fully_referenced(cases):
     assert r.returncode == 0, r.stderr
     counted, referrers = map(int, r.stdout.split())
     assert counted >= referrers
+
+
+# -- every refusal path, in a host whose logger builds std::strings (as OMSimulator's does) ----
+REFUSAL_SOURCE = Path(__file__).resolve().parent / "chost" / "fmi2_refusals.cpp"
+#: FMUs driven through every refusal path: a filter, a sensor, the replay, an AHRS
+REFUSAL_FMUS = ["Kf", "GnssReceiver", "ImuGnssReplay", "UkfAhrs"]
+#: String values whose initialization must be refused, per FMU
+BAD_STRINGS = {"ImuGnssReplay": {"log": ["", "/nonexistent/navfmu/log"]}}
+FMI2_OK, FMI2_WARNING, FMI2_DISCARD, FMI2_ERROR, FMI2_FATAL = range(5)
+#: the status each refused call must return (the exit_init_* cases: FMI2_ERROR)
+REFUSAL_STATUS = {
+    "instantiate_without_script": FMI2_FATAL, "instantiate_null_resources": FMI2_FATAL,
+    "do_step_before_initialization": FMI2_ERROR, "get_unknown_value_reference": FMI2_ERROR,
+    "get_real_as_integer": FMI2_ERROR, "set_output": FMI2_ERROR,
+    "set_fixed_parameter_after_initialization": FMI2_ERROR, "do_step_at_wrong_time": FMI2_ERROR,
+    "do_step_of_zero_size": FMI2_ERROR, "do_step_with_nan_input": FMI2_DISCARD,
+    "do_step_after_an_error": FMI2_DISCARD, "do_step_after_an_error_again": FMI2_DISCARD,
+    "deserialize_foreign_blob": FMI2_ERROR, "calls_without_an_instance": FMI2_ERROR,
+    "set_debug_logging_null_category": FMI2_ERROR, "get_directional_derivative": FMI2_ERROR,
+    "set_real_input_derivatives": FMI2_ERROR, "get_real_output_derivatives": FMI2_ERROR,
+    "cancel_step": FMI2_ERROR, "get_status": FMI2_ERROR,
+    "get_real_status_of_wrong_kind": FMI2_DISCARD, "get_integer_status": FMI2_DISCARD,
+    "get_boolean_status_of_wrong_kind": FMI2_DISCARD, "get_string_status": FMI2_DISCARD,
+}
+#: refused without a message: no instance to log through, and a repeated refusal
+SILENT = {"calls_without_an_instance", "do_step_after_an_error_again"}
+
+
+@pytest.fixture(scope="module")
+def refusal_host(tmp_path_factory):
+    cxx = shutil.which("c++") or shutil.which("g++")
+    if cxx is None:
+        pytest.skip("no C++ compiler (c++, g++) on PATH: cannot build the C++ FMI host")
+    include = Path(fmpy.__file__).parent / "c-code"
+    exe = tmp_path_factory.mktemp("cxxhost") / "fmi2_refusals"
+    r = subprocess.run([cxx, "-std=c++17", "-O1", "-Wall", "-Wextra", "-Werror", "-I",
+                        str(include), "-o", str(exe), str(REFUSAL_SOURCE), "-ldl"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, f"compiling {REFUSAL_SOURCE} failed:\n{r.stderr}"
+    return exe
+
+
+def _refusal_args(name, folder):
+    """The host's arguments for FMU ``name`` and the model description's LogCategories."""
+    fmu = fmu_build.fmu_path(name)
+    md = read_model_description(str(fmu))
+    unzipped = Path(extract(str(fmu), unzipdir=str(folder / "fmu")))
+    (folder / "empty").mkdir()
+    by_name = {v.name: v for v in md.modelVariables}
+    real = [v for v in md.modelVariables if v.type == "Real"]
+    output = next(v for v in real if v.causality == "output")
+    inputs = [v for v in real
+              if v.causality == "input" and not v.name.endswith(("_time", "_dt"))]
+    parameter = next((v for v in real if v.causality == "parameter"), None)
+    args = [str(unzipped / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"),
+            md.guid, (unzipped / "resources").as_uri(), (folder / "empty").as_uri(),
+            md.defaultExperiment.stepSize, str(output.valueReference),
+            str(inputs[0].valueReference if inputs else -1),
+            str(parameter.valueReference if parameter else -1)]
+    for pname, text in STRING_PARAMETERS.get(name, {}).items():
+        args.append(f"s:{by_name[pname].valueReference}={text}")
+    for pname, texts in BAD_STRINGS.get(name, {}).items():
+        args += [f"bad_s:{by_name[pname].valueReference}={t}" for t in texts]
+    if parameter is not None:
+        args.append(f"bad_r:{parameter.valueReference}=nan")
+    return args, {c.name for c in md.logCategories}, bool(inputs), parameter is not None
+
+
+def _parse_cases(stdout):
+    cases, current = {}, None
+    for line in stdout.splitlines():
+        kind, *rest = line.split()
+        if kind == "case":
+            current = cases[rest[0]] = {"status": int(rest[2]), "messages": []}
+        elif kind == "msg":
+            current["messages"].append((int(rest[0]), rest[1] if len(rest) > 1 else ""))
+    return cases
+
+
+@pytest.mark.parametrize("name", REFUSAL_FMUS)
+def test_every_refusal_reaches_a_cxx_host_log_with_a_declared_category(
+        refusal_host, env_file, tmp_path, name):
+    """With loggingOn = fmi2False, every refused call returns its FMI status and logs a
+    message of that status or worse (errors are reported whatever loggingOn says; a refused
+    step is fmi2Discard with an Error message), each with a category
+    is one the model description declares: never NULL, which would end this host (its
+    logger builds std::strings, as OMSimulator's does) with std::terminate, status 134."""
+    fmu_build.build([name], log=None)
+    args, categories, has_inputs, has_real = _refusal_args(name, tmp_path)
+    r = subprocess.run(["sh", "-c", '. "$0" && exec "$@"', str(env_file), str(refusal_host),
+                        *args], env={"PATH": os.environ.get("PATH", "/usr/bin:/bin")},
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, f"{_describe(r.returncode)}\n{r.stderr[-3000:]}"
+    cases = _parse_cases(r.stdout)
+    expected = dict(REFUSAL_STATUS)
+    if not has_inputs:
+        for case in ("do_step_with_nan_input", "do_step_after_an_error",
+                     "do_step_after_an_error_again"):
+            expected.pop(case)
+    init_cases = {c for c in cases if c.startswith("exit_init_")}
+    n_bad = has_real + sum(len(t) for t in BAD_STRINGS.get(name, {}).values())
+    assert len(init_cases) == n_bad
+    expected.update({c: FMI2_ERROR for c in init_cases})
+    assert {c: v["status"] for c, v in cases.items()} == expected, r.stderr[-3000:]
+    for case, result in cases.items():
+        statuses = [s for s, _ in result["messages"]]
+        if case in SILENT:
+            assert statuses == [], case
+        else:
+            assert statuses and max(statuses) >= expected[case], (case, result["messages"])
+        assert {c for _, c in result["messages"]} <= categories, (case, result["messages"])

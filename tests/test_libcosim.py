@@ -106,3 +106,37 @@ def test_paper_scenarios_full_length_in_libcosim(built, model_dir):
     applied = int(np.nansum(theirs.column("filter", "updated")))
     assert reached > 0.9 * (theirs.time[-1] - theirs.time[0])
     assert applied == reached
+
+
+def test_a_packaged_replay_runs_in_libcosim_from_any_working_directory(built, tmp_path):
+    """The replay's log travels inside its FMU copy in the archive and is found through the
+    FMU's resource location: libcosim started in an empty folder elsewhere records the model
+    folder's numbers bit for bit (before, the relative ``log`` was looked up in the process's
+    working directory and the run failed unless started in the model folder)."""
+    import subprocess
+    import sys
+    import textwrap
+
+    from orchestrator.packaging.package import package
+
+    model_dir = next(p for p in MODELS if (p / "log").is_dir())
+    archive = package(model_dir, tmp_path / "packed" / "replay.ssp")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    out = tmp_path / "recording.npz"
+    code = textwrap.dedent(f"""
+        import numpy as np
+        from orchestrator.cosim.libcosim_run import run_libcosim
+        r = run_libcosim({str(archive)!r}, 3.0)
+        np.savez({str(out)!r}, time=r.time, **{{c: r.data[c] for c in r.components}})
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], cwd=elsewhere, capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert list(elsewhere.iterdir()) == []
+    folder = run_libcosim(model_dir, 3.0)
+    got = np.load(out)
+    np.testing.assert_array_equal(got["time"], folder.time)
+    for c in folder.components:
+        np.testing.assert_array_equal(got[c], folder.data[c], err_msg=c)
+    assert np.ptp(folder.column("filter", "nav_lat")) > 0

@@ -8,6 +8,8 @@ from pythonfmu import Fmi2Slave
 
 from navcore.ins.constants import DEG as _DEG, G0 as _G0
 
+from .start_values import start_text
+
 #: every unit symbol used on our interfaces: (FMI 2.0 BaseUnit exponents, factor to SI).
 #: Datasheet units (only in parameters whose name says so) carry their factor; those with a
 #: fractional exponent (deg/sqrt(h), ug/sqrt(Hz)) are declared without a BaseUnit.
@@ -50,6 +52,8 @@ def to_xml(slave, model_options=None):
         name = sv.get("name")
         child = sv[0] if len(sv) else None
         unit = slave._units.get(name, "")
+        if child is not None and "start" in child.attrib and name in slave._values:
+            child.set("start", start_text(child.tag, slave._values[name]))  # exact
         if child is not None and child.tag == "Real" and unit:
             child.set("unit", unit)
             if unit not in used_units:

@@ -17,9 +17,12 @@ from navcore.errors import NavcoreError, RefusedCall, numerical_failure
 
 from .fmu_state import (fmu_identity, fmu_state_from_bytes, fmu_state_to_bytes,
                         get_fmu_state, set_fmu_state)
+from .log_categories import LOG_CATEGORIES, log
 from .model_description import to_xml
 from .pythonfmu_fixes import balance_loader_decref, finalize_python_at_exit
 from .refusals import FmiCallRefused, refusals_return_error, refuse
+from .resource_files import resolved_file_parameters
+from .start_values import apply_start_values
 
 _VAR_CLASSES = {"Real": Real, "Integer": Integer, "Boolean": Boolean, "String": String}
 
@@ -40,6 +43,7 @@ def setup(slave, component_class):
     slave._start_time = 0.0
     slave._stop_time = None
     slave._failed = None
+    slave._failure_repeated = False  # the refusal after an error was logged
     slave._refused_state = None
     slave._refused = None      # a refused get/set, reported by the next do_step
     slave._vr_names = {}       # type -> {value reference: name}
@@ -61,6 +65,7 @@ def setup(slave, component_class):
             Fmi2Variability.continuous if port.type == "Real" else Fmi2Variability.discrete
         )
         _register(slave, port, Fmi2Causality.output, variability, None)
+    slave._start_error = apply_start_values(slave, cls.parameters)
 
 
 def _register(slave, port, causality, variability, initial):
@@ -91,7 +96,12 @@ def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
 
 
 def exit_initialization_mode(slave):
-    params = {p.name: slave._values[p.name] for p in slave.component_class.parameters}
+    if slave._start_error is not None:
+        _fail(slave, slave._start_error, refuse=True)
+        return
+    params = resolved_file_parameters(
+        slave, {p.name: slave._values[p.name] for p in slave.component_class.parameters})
+    slave._values.update(params)  # a state's parameters are those the component was built with
     inputs = set(slave._input_names)
     slave._settable = {t: {vr: n for vr, n in names.items() if n in inputs}
                        for t, names in slave._settable.items()}
@@ -115,8 +125,11 @@ def do_step(slave, current_time, step_size):
         slave._refused_state = None
         return False
     if slave._failed is not None:
-        slave.log(f"{slave.instance_name}: refusing to step after an earlier error: "
-                  f"{slave._failed}", Fmi2Status.error)
+        if not slave._failure_repeated:  # once: a host that steps on must not flood its log
+            slave._failure_repeated = True
+            slave.log(f"{slave.instance_name}: refusing to step after an earlier error: "
+                      f"{slave._failed} (every further step is refused without a message)",
+                      Fmi2Status.error)
         return False
     if slave._refused is not None:
         message, slave._refused = slave._refused, None
@@ -153,7 +166,7 @@ def do_step(slave, current_time, step_size):
 def _fail(slave, message, details=None, refuse=False):
     """Record the instance's first error and log it; with ``refuse``, where the binary allows
     it, the message is the fmi2Error of the call instead (the traceback is logged before it)."""
-    slave._failed = message
+    slave._failed, slave._failure_repeated = message, False
     text = f"{slave.instance_name}: {message}"
     if refuse and refusals_return_error(slave):
         if details:
@@ -238,6 +251,8 @@ def bind_methods(slave_class):
     slave_class._fmu_state_to_bytes = staticmethod(fmu_state_to_bytes)
     slave_class._fmu_state_from_bytes = classmethod(fmu_state_from_bytes)
     slave_class.to_xml = to_xml
+    slave_class.log_categories = LOG_CATEGORIES
+    slave_class.log = log
     for type_name in ("Real", "Integer", "Boolean", "String"):
         setattr(slave_class, f"get_{type_name.lower()}", _getter(type_name))
         setattr(slave_class, f"set_{type_name.lower()}", _setter(type_name))

@@ -11,7 +11,6 @@ never leaves a broken ``.fmu`` behind.
 """
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 import sys
@@ -23,6 +22,7 @@ from navcore.core.state_format import build_hash
 
 from . import native_library
 from ..errors import NavfmuError
+from ..results.run_results import atomic_write
 
 ROOT = Path(__file__).resolve().parents[2]
 FMU_SOURCES = ROOT / "fmus"
@@ -96,10 +96,8 @@ def build_one(script: Path, dist: Path = DIST, library: Path = None) -> Path:
                                   "(its installation lacks the FMI wrapper libraries)")
         if library is not None:
             native_library.replace_in_fmu(built, script.stem, library)
-        fd, partial = tempfile.mkstemp(dir=dist, prefix=f".{script.stem}.", suffix=".part")
-        os.close(fd)
-        shutil.copyfile(built, partial)
-        os.replace(partial, target)
+        with open(built, "rb") as src:  # atomic_write: the user's umask, not mkstemp's 0600
+            atomic_write(target, lambda f: shutil.copyfileobj(src, f), binary=True)
     target.with_suffix(".fmu.sha256").write_text(build_stamp(script, library is not None) + "\n")
     return target
 

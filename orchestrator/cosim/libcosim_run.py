@@ -10,9 +10,10 @@ libcosim offers for Real and Integer variables only: libcosim has no call betwee
 initialization and the first step, so **Boolean outputs are NaN in row 0** (listed in
 ``metadata["unobserved_at_start"]``).
 
-libcosim runs with the model's folder (for an archive: our extraction of it, the same files)
-as the working directory: an FMU reading a file parameter relative to it (the replay's
-``log``) finds it as our loader does (relative to the .ssd).  Column names, order and units
+libcosim runs a model folder with that folder as the working directory: an FMU reading a
+file parameter relative to it (the replay's ``log``) finds it as our loader does (relative
+to the .ssd).  An ``.ssp`` archive runs in the caller's working directory: its FMU copies
+carry the files their parameters name (:mod:`orchestrator.packaging.fmu_copies`).  Column names, order and units
 come from each FMU's model description, as in our master.  The
 loader's log is set to WARNING (:data:`LOG_LEVEL`), so a clean model prints nothing.
 libcosimpy is an optional dependency (the ``test`` extra); without it,
@@ -135,7 +136,7 @@ def run_libcosim(source, stop_time: Optional[float] = None) -> Results:
                 first.start_time_series(index[name], v.value_reference,
                                         getattr(CosimVariableType, v.type.upper()))
     wall = _time.perf_counter()
-    with _working_directory(model.path.parent):
+    with _working_directory(model.path.parent if model.archive is None else None):
         _steps(execution, lib, readers, first, table, model, names, outputs, offsets, index)
     wall = _time.perf_counter() - wall
     return _results(model, start, stop, n_steps, table, names, outputs, offsets, wall, ssp_path)
@@ -143,6 +144,9 @@ def run_libcosim(source, stop_time: Optional[float] = None) -> Results:
 
 @contextlib.contextmanager
 def _working_directory(folder):
+    if folder is None:
+        yield
+        return
     previous = os.getcwd()
     os.chdir(folder)
     try:

@@ -3,9 +3,11 @@
 The archive is a zip with, at its root, ``SystemStructure.ssd`` (the model's, comments kept)
 and every other file of the model folder at its relative path (``.ssv`` parameter files,
 ``paper.json``, data such as the replay's sensor ``log/``; hidden files left out), and every
-component's FMU under ``resources/<file name>``; each Component's ``source`` is
-rewritten to ``resources/<file name>`` (two different FMUs with the same file name get
-``_2``, ``_3``... suffixes), and every Component carries ``type``.  libcosim and our
+component's FMU under ``resources/<file name>``: a copy whose model description carries the
+scenario's parameter values as start values, with the files a String parameter names
+(:mod:`orchestrator.packaging.fmu_copies`).  Each Component's ``source`` is rewritten to
+``resources/<file name>`` (two different copies with the same file name get ``_2``,
+``_3``... suffixes), and every Component carries ``type``.  libcosim and our
 :func:`orchestrator.model.ssp.load_model` read it unchanged.  The archive is written to a
 temporary name and renamed.
 """
@@ -21,28 +23,26 @@ from ..results.outputs import check_writable
 from ..results.run_results import atomic_write
 from ..model.ssp import FMU_TYPE
 from ..model.ssp_archive import load_model
+from .fmu_copies import FmuCopy, component_copies, fmu_bytes
 
 RESOURCES = "resources"
 
 
-def _resource_names(model) -> Dict[str, str]:
-    """component name -> archive path of its FMU (one entry per distinct FMU file)."""
-    by_file: Dict[Path, str] = {}
+def _resource_names(copies: Dict[str, FmuCopy]) -> Dict[str, str]:
+    """component name -> archive path of its FMU copy (one entry per distinct copy)."""
+    by_copy: Dict[tuple, str] = {}
     taken = set()
     names = {}
-    for c in model.components:
-        src = Path(c.source).resolve()
-        if not src.is_file():
-            raise NavfmuError(f"component '{c.name}': FMU file not found: {src} (navfmu build?)")
-        if src not in by_file:
-            stem, n = src.stem, 1
-            candidate = f"{RESOURCES}/{src.name}"
+    for component, copy in copies.items():
+        if copy.key() not in by_copy:
+            stem, suffix, n = copy.source.stem, copy.source.suffix, 1
+            candidate = f"{RESOURCES}/{copy.source.name}"
             while candidate in taken:
                 n += 1
-                candidate = f"{RESOURCES}/{stem}_{n}{src.suffix}"
+                candidate = f"{RESOURCES}/{stem}_{n}{suffix}"
             taken.add(candidate)
-            by_file[src] = candidate
-        names[c.name] = by_file[src]
+            by_copy[copy.key()] = candidate
+        names[component] = by_copy[copy.key()]
     return names
 
 
@@ -86,20 +86,20 @@ def package(model_dir, out) -> Path:
     if out.suffix.lower() != ".ssp":
         raise NavfmuError(f"--out {out}: an SSP archive needs the extension .ssp")
     check_writable(out, "--out")
-    sources = _resource_names(model)
+    copies = component_copies(model)
+    sources = _resource_names(copies)
     ssd = model.path
     ssd_text = _rewrite_ssd(ssd.read_text(encoding="utf-8"), sources)
     files = list(_folder_files(ssd))
-    fmus = {arc: Path(c.source).resolve() for c in model.components
-            for arc in [sources[c.name]]}
+    fmus = {sources[name]: fmu_bytes(copy, name) for name, copy in copies.items()}
 
     def write(f):
         with zipfile.ZipFile(f, "w", compression=zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("SystemStructure.ssd", ssd_text)
             for arcname, path in files:
                 zf.write(path, arcname)
-            for arcname, path in fmus.items():
-                zf.write(path, arcname)
+            for arcname, data in fmus.items():
+                zf.writestr(arcname, data)
 
     try:
         out.parent.mkdir(parents=True, exist_ok=True)

@@ -46,6 +46,7 @@ _IMU_NAMES = tuple(zip(signals.IMU_DTHETA_NAMES, signals.IMU_DVEL_NAMES, signals
 class ImuGnssReplay(Component):
     """Plays a sensor log through the IMU, GNSS and truth outputs (module docstring)."""
 
+    file_parameters = ("log",)
     description = ("Replays a recorded sensor log (IMU increments, GNSS fixes, optional truth; "
                    "the navfmu sensor-log format) through the outputs of TrajectoryImu and "
                    "GnssReceiver, so any INS/GNSS filter runs on recorded or foreign data.")

@@ -52,6 +52,7 @@ class TrajectoryImu(Component):
                    "increments along it, with bias, noise, Gauss-Markov, scale-factor, "
                    "misalignment and manoeuvre-dependent noise errors; a three-axis "
                    "magnetometer and a vibration disturbance.")
+    file_parameters = ("profile",)
     parameters = (
         string("profile", "built-in motion profile name (static, turntable_240s, "
                "aircraft_500s, manoeuvre_1h, uav_maneuver) or path of a JSON profile file",

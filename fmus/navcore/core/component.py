@@ -147,6 +147,9 @@ class Component(ABC):
     outputs: ClassVar[Tuple[Port, ...]] = ()
     #: default experiment (start, stop, step) written to the model description
     default_experiment: ClassVar[Tuple[float, float, float]] = (0.0, 10.0, 0.01)
+    #: String parameters that name a file or folder (an FMU resolves a relative one against
+    #: its resources folder first, where ``navfmu package`` puts the files a scenario names)
+    file_parameters: ClassVar[Tuple[str, ...]] = ()
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

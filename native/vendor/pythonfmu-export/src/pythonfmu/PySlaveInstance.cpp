@@ -188,6 +188,11 @@ public:
             pClass_ = findClass(resourceLocation(), moduleName);
             if (pClass_ == nullptr) {
                 handle_py_exception("[ctor] findClass", gilState);
+                // navfmu patch: no script found, no Python error pending (upstream went on
+                // with a NULL class and crashed)
+                PyGILState_Release(gilState);
+                throw std::runtime_error("fmi2Instantiate: no FMU script found in the resource "
+                    "location '" + resourceLocation() + "' (slavemodule.txt names '" + moduleName + "')");
             }
 
             initialize(gilState);

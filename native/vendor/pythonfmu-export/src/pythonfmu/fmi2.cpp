@@ -4,11 +4,11 @@
 #include "fmi/fmi2Functions.h"
 #include "fmu_except.hpp"
 
+#include <cctype>
 #include <exception>
 #include <limits>
 #include <memory>
 #include <optional>
-#include <regex>
 
 namespace
 {
@@ -23,10 +23,19 @@ public:
     { }
 
 protected:
+    // navfmu patch: the category is never NULL (PyLogger::log fills it in); the message goes
+    // out as the format string of the host's printf-style logger, so its '%' are doubled;
+    // a host without a logger gets nothing
     void debugLog(fmi2Status s, const std::string& category, const std::string& message) override
     {
-        f_->logger(f_->componentEnvironment, instanceName_.c_str(),
-            s, category.empty() ? nullptr : category.c_str(), message.c_str());
+        if (f_ == nullptr || f_->logger == nullptr) return;
+        std::string text;
+        text.reserve(message.size());
+        for (const char ch : message) {
+            text += ch;
+            if (ch == '%') text += '%';
+        }
+        f_->logger(f_->componentEnvironment, instanceName_.c_str(), s, category.c_str(), text.c_str());
     }
 
 private:
@@ -49,6 +58,38 @@ struct Fmi2Component
     std::unique_ptr<pythonfmu::SlaveInstance> slave;
     std::unique_ptr<Fmi2Logger> logger;
 };
+
+
+// navfmu patch: the folder a file URI names ("file:///p", "file://localhost/p", "file:/p",
+// percent escapes decoded; upstream only removed "file://" and decoded "%20"); anything
+// else is taken as a path
+std::string resourcePath(const std::string& uri)
+{
+    std::string path = uri;
+    if (path.rfind("file:", 0) == 0) {
+        path.erase(0, 5);
+        if (path.rfind("//", 0) == 0) {
+            const auto slash = path.find('/', 2);
+            path.erase(0, slash == std::string::npos ? path.size() : slash);
+        }
+    }
+    std::string decoded;
+    for (std::size_t i = 0; i < path.size(); ++i) {
+        const auto hex = [](char ch) {
+            return std::isxdigit(static_cast<unsigned char>(ch)) != 0;
+        };
+        if (path[i] == '%' && i + 2 < path.size() && hex(path[i + 1]) && hex(path[i + 2])) {
+            decoded += static_cast<char>(std::stoi(path.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            decoded += path[i];
+        }
+    }
+#ifdef _MSC_VER
+    if (decoded.size() > 2 && decoded[0] == '/' && decoded[2] == ':') decoded.erase(0, 1);
+#endif
+    return decoded;
+}
 
 } // namespace
 
@@ -82,17 +123,18 @@ fmi2Component fmi2Instantiate(fmi2String instanceName,
     fmi2Boolean loggingOn)
 {
 
-    // Convert URI %20 to space
-    auto resources = std::regex_replace(std::string(fmuResourceLocation), std::regex("%20"), " ");
-    const auto find = resources.find("file://");
-
-    if (find != std::string::npos) {
-#ifdef _MSC_VER
-        resources.replace(find, 8, "");
-#else
-        resources.replace(find, 7, "");
-#endif
+    // navfmu patch: a missing instance name, resource location or callback structure is
+    // refused (fmi2Instantiate returns NULL, with a message where a logger was given)
+    if (instanceName == nullptr || fmuResourceLocation == nullptr || functions == nullptr) {
+        if (functions != nullptr && functions->logger != nullptr) {
+            functions->logger(functions->componentEnvironment, instanceName ? instanceName : "",
+                fmi2Fatal, "logStatusFatal", "fmi2Instantiate: %s is NULL",
+                instanceName == nullptr ? "instanceName" : "fmuResourceLocation");
+        }
+        return nullptr;
     }
+
+    const auto resources = resourcePath(fmuResourceLocation); // navfmu patch
 
     auto logger = std::make_unique<Fmi2Logger>(instanceName, functions);
     logger->setDebugLogging(loggingOn);
@@ -131,8 +173,18 @@ fmi2Status fmi2SetDebugLogging(
     const fmi2String categories[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
 
     std::vector<std::string> categoriesVec;
+    // navfmu patch: a NULL category array or entry is refused, not read
+    for (size_t i = 0; i < nCategories; ++i) {
+        if (categories == nullptr || categories[i] == nullptr) {
+            component->logger->log(fmi2Error,
+                "fmi2SetDebugLogging: category " + std::to_string(i) + " of " +
+                    std::to_string(nCategories) + " is NULL (the debug logging was not changed)");
+            return fmi2Error;
+        }
+    }
     if (nCategories > 0) {
         // Convert categories to std::vector<std::string>
         categoriesVec.reserve(nCategories);
@@ -156,6 +208,7 @@ fmi2Status fmi2SetupExperiment(
     fmi2Real stopTime)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SetupExperiment(
             startTime,
@@ -175,6 +228,7 @@ fmi2Status fmi2SetupExperiment(
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->EnterInitializationMode();
         return fmi2OK;
@@ -191,6 +245,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->ExitInitializationMode();
         return fmi2OK;
@@ -207,6 +262,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 fmi2Status fmi2Terminate(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->Terminate();
         return fmi2OK;
@@ -223,6 +279,7 @@ fmi2Status fmi2Terminate(fmi2Component c)
 fmi2Status fmi2Reset(fmi2Component c)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->Reset();
         return fmi2OK;
@@ -243,6 +300,7 @@ fmi2Status fmi2GetReal(
     fmi2Real value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->GetReal(vr, nvr, value);
         return fmi2OK;
@@ -262,6 +320,7 @@ fmi2Status fmi2GetInteger(
     fmi2Integer value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->GetInteger(vr, nvr, value);
         return fmi2OK;
@@ -281,6 +340,7 @@ fmi2Status fmi2GetBoolean(
     fmi2Boolean value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->GetBoolean(vr, nvr, value);
         return fmi2OK;
@@ -300,6 +360,7 @@ fmi2Status fmi2GetString(
     fmi2String value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->GetString(vr, nvr, value);
         return fmi2OK;
@@ -320,6 +381,7 @@ fmi2Status fmi2SetReal(
     const fmi2Real value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SetReal(vr, nvr, value);
         return fmi2OK;
@@ -339,6 +401,7 @@ fmi2Status fmi2SetInteger(
     const fmi2Integer value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SetInteger(vr, nvr, value);
         return fmi2OK;
@@ -358,6 +421,7 @@ fmi2Status fmi2SetBoolean(
     const fmi2Boolean value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SetBoolean(vr, nvr, value);
         return fmi2OK;
@@ -377,6 +441,7 @@ fmi2Status fmi2SetString(
     const fmi2String value[])
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SetString(vr, nvr, value);
         return fmi2OK;
@@ -395,6 +460,7 @@ fmi2Status fmi2GetFMUstate(
     fmi2FMUstate* state)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->GetFMUstate(*state);
         return fmi2OK;
@@ -412,6 +478,7 @@ fmi2Status fmi2SetFMUstate(
     fmi2FMUstate state)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SetFMUstate(state);
         return fmi2OK;
@@ -429,6 +496,7 @@ fmi2Status fmi2FreeFMUstate(
     fmi2FMUstate* state)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->FreeFMUstate(*state);
         return fmi2OK;
@@ -447,6 +515,7 @@ fmi2Status fmi2SerializedFMUstateSize(
     size_t* size)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         *size = component->slave->SerializedFMUstateSize(state);
         return fmi2OK;
@@ -466,6 +535,7 @@ fmi2Status fmi2SerializeFMUstate(
     size_t size)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->SerializeFMUstate(state, bytes, size);
         return fmi2OK;
@@ -485,6 +555,7 @@ fmi2Status fmi2DeSerializeFMUstate(
     fmi2FMUstate* state)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         component->slave->DeSerializeFMUstate(bytes, size, *state);
         return fmi2OK;
@@ -507,9 +578,9 @@ fmi2Status fmi2GetDirectionalDerivative(
     const fmi2Real[],
     fmi2Real[])
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
-        "cppfmu",
         "FMI function not supported: fmi2GetDirectionalDerivative");
     return fmi2Error;
 }
@@ -521,9 +592,9 @@ fmi2Status fmi2SetRealInputDerivatives(
     const fmi2Integer[],
     const fmi2Real[])
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
-        "cppfmu",
         "FMI function not supported: fmi2SetRealInputDerivatives");
     return fmi2Error;
 }
@@ -535,9 +606,9 @@ fmi2Status fmi2GetRealOutputDerivatives(
     const fmi2Integer[],
     fmi2Real[])
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
-        "cppfmu",
         "FMI function not supported: fmiGetRealOutputDerivatives");
     return fmi2Error;
 }
@@ -549,6 +620,7 @@ fmi2Status fmi2DoStep(
     fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     try {
         double endTime = currentCommunicationPoint;
         const auto ok = component->slave->DoStep(
@@ -574,6 +646,7 @@ fmi2Status fmi2DoStep(
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
         "FMI function not supported: fmi2CancelStep");
@@ -587,6 +660,7 @@ fmi2Status fmi2GetStatus(
     const fmi2StatusKind,
     fmi2Status*)
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Error,
         "FMI function not supported: fmi2GetStatus");
@@ -599,6 +673,7 @@ fmi2Status fmi2GetRealStatus(
     fmi2Real* value)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     if (s == fmi2LastSuccessfulTime) {
         *value = component->lastSuccessfulTime;
         return fmi2OK;
@@ -615,6 +690,7 @@ fmi2Status fmi2GetIntegerStatus(
     const fmi2StatusKind,
     fmi2Integer*)
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Discard,
         "FMI function not supported: fmi2GetIntegerStatus");
@@ -627,6 +703,7 @@ fmi2Status fmi2GetBooleanStatus(
     fmi2Boolean* value)
 {
     const auto component = static_cast<Fmi2Component*>(c);
+    if (component == nullptr) return fmi2Error; // navfmu patch: no instance
     if (s == fmi2Terminated) {
         *value = component->wantsToTerminate ? fmi2True : fmi2False;
         return fmi2OK;
@@ -641,6 +718,7 @@ fmi2Status fmi2GetStringStatus(
     const fmi2StatusKind,
     fmi2String*)
 {
+    if (c == nullptr) return fmi2Error; // navfmu patch: no instance
     static_cast<Fmi2Component*>(c)->logger->log(
         fmi2Discard, "FMI function not supported: fmi2GetStringStatus");
     return fmi2Discard;
