@@ -246,6 +246,7 @@ FMI2_OK, FMI2_WARNING, FMI2_DISCARD, FMI2_ERROR, FMI2_FATAL = range(5)
 #: the status each refused call must return (the exit_init_* cases: FMI2_ERROR)
 REFUSAL_STATUS = {
     "instantiate_without_script": FMI2_FATAL, "instantiate_null_resources": FMI2_FATAL,
+    "callback_structure_released_after_instantiation": FMI2_ERROR,
     "do_step_before_initialization": FMI2_ERROR, "get_unknown_value_reference": FMI2_ERROR,
     "get_real_as_integer": FMI2_ERROR, "set_output": FMI2_ERROR,
     "set_fixed_parameter_after_initialization": FMI2_ERROR, "do_step_at_wrong_time": FMI2_ERROR,

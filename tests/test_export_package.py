@@ -90,3 +90,74 @@ def test_archive_beyond_its_bounds_or_escaping_is_refused(tmp_path, monkeypatch)
     with pytest.raises(SspError, match="lies outside the archive"):
         load_model(escaping)
     assert not (tmp_path / "outside.ssd").exists()
+
+
+def test_packaged_fmu_copies_start_with_the_scenarios_values(built, tmp_path):
+    """Every bound parameter (the .ssd's and the .ssv's, Strings included) is the start value
+    of the component's FMU copy in the archive, and the FMU starts from it with no parameter
+    set by the host (as in OMSimulator, which applies no .ssv String, or fmpy's SSP runner,
+    which applies no binding)."""
+    import zipfile
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    from orchestrator.packaging.package import package
+
+    archive = package(MODEL, tmp_path / "aircraft_500s.ssp")
+    model = load_model(MODEL)
+    packed = load_model(archive)
+    strings_checked = 0
+    for spec in model.components:
+        fmu = packed.component(spec.name).source
+        assert validate_fmu(str(fmu)) == [], spec.name
+        md = read_model_description(str(fmu))
+        starts = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
+        assert spec.parameters, spec.name
+        for name, (type_name, value) in spec.parameters.items():
+            text = starts[name].start
+            parsed = {"Real": float, "Integer": int, "String": str,
+                      "Boolean": lambda t: t == "true"}[type_name](text)
+            assert parsed == value and type(parsed) is type(value), (spec.name, name)
+        strings = [(n, v) for n, (t, v) in spec.parameters.items() if t == "String"]
+        if not strings:
+            continue
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu)),
+                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bare")
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        got = slave.getString([starts[n].valueReference for n, _ in strings])
+        assert [g.decode() if isinstance(g, bytes) else g for g in got] == \
+            [v for _, v in strings], spec.name
+        strings_checked += len(strings)
+        slave.terminate()
+        slave.freeInstance()
+    assert strings_checked >= 2   # the receiver's noise steps and outlier patches
+    with zipfile.ZipFile(fmu_build.DIST / "GnssReceiver.fmu") as z:
+        original = z.read("modelDescription.xml")
+    assert b'name="noise_steps"' in original and b'<String start=""' in original
+
+
+def test_exported_fmu_claims_only_its_platforms_and_reports_errors_with_logging_off(built,
+                                                                                    tmp_path):
+    """No binaries/darwin64 (its components carry no macOS binary), no stray Container.zip,
+    and a refused parameter reaches the host's logger with loggingOn false."""
+    import zipfile
+
+    fmu = export(MODEL, tmp_path / "system.fmu")
+    with zipfile.ZipFile(fmu) as z:
+        names = z.namelist()
+    platforms = {n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") > 1
+                 and not n.endswith("/")}
+    assert "Container.zip" not in names
+    assert platforms == {"linux64", "win64"}
+    for component in ("trajectory", "gnss", "filter"):
+        assert any(n.startswith(f"resources/{component}/binaries/win64/") for n in names)
+    messages = []
+    with pytest.raises(Exception, match="fmi2ExitInitializationMode"):
+        simulate_fmu(str(fmu), stop_time=0.1, step_size=0.01, debug_logging=False,
+                     start_values={"gnss.fix_interval": -1.0},
+                     logger=lambda c, name, status, cat, msg: messages.append((status, msg)))
+    assert [s for s, m in messages if b"'fix_interval' = -1.0" in m] == [3]

@@ -21,7 +21,10 @@ reproduces our master's ``--algorithm jacobi`` run of the model *with the hints 
 
 Container variables: every output of every component as ``component.variable`` (unit kept),
 and every parameter the system structure binds as a fixed parameter of that name whose start
-is the bound value (so the FMU runs the scenario as it is, and a host may change it).
+is the bound value (so the FMU runs the scenario as it is, and a host may change it).  The
+components are the packaged copies of :mod:`orchestrator.fmu_copies` (the scenario's values
+as their start values, the files their Strings name inside), and the archive claims only the
+platforms every component has a binary for.
 """
 from __future__ import annotations
 
@@ -29,13 +32,16 @@ import dataclasses
 import shutil
 import tempfile
 import uuid
+import zipfile
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Set
 
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
 from ..results.outputs import check_writable
+from ..results.run_results import atomic_write
+from .fmu_copies import component_copies, fmu_bytes, start_text
 
 _FMI_TYPES = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean", "String": "String"}
 #: the container's own type names for a connection (its configuration reader knows no FMI 2
@@ -55,13 +61,7 @@ def without_step_hints(model: SystemModel) -> SystemModel:
         model, components=[dataclasses.replace(c, step_hint=None) for c in model.components])
 
 
-def _start_text(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return repr(value) if isinstance(value, float) else str(value)
-
-
-def _configuration(model: SystemModel):
+def _configuration(model: SystemModel, copies: Dict[str, Path]):
     from fmpy import read_model_description
     from fmpy.container_fmu.config import Component, Configuration, Connection
     from fmpy.model_description import (CoSimulation, DefaultExperiment, ModelDescription,
@@ -69,13 +69,11 @@ def _configuration(model: SystemModel):
 
     components, variables, units = {}, {}, {}
     for spec in model.components:
-        if not Path(spec.source).is_file():
-            raise NavfmuError(f"component '{spec.name}': FMU file not found: {spec.source}")
-        md = read_model_description(str(spec.source))
+        md = read_model_description(str(copies[spec.name]))
         if md.fmiVersion != "2.0":
             raise NavfmuError(f"component '{spec.name}': {spec.source} is FMI {md.fmiVersion}; "
                               "the export holds FMI 2.0 components only")
-        components[spec.name] = Component(name=spec.name, filename=Path(spec.source),
+        components[spec.name] = Component(name=spec.name, filename=copies[spec.name],
                                           modelDescription=md)
         variables[spec.name] = {v.name: v for v in md.modelVariables}
         for u in md.unitDefinitions:
@@ -89,7 +87,7 @@ def _configuration(model: SystemModel):
             v = own[pname]
             cv = ModelVariable(name=f"{spec.name}.{pname}", type=_FMI_TYPES[v.type],
                                causality="parameter", variability="fixed", initial="exact",
-                               start=_start_text(value), unit=v.unit, description=v.description)
+                               start=start_text(value), unit=v.unit, description=v.description)
             container_vars.append(cv)
             mappings[cv] = [(comp, v)]
         for v in own.values():
@@ -135,19 +133,56 @@ def export(model_dir, out) -> Path:
     if not out.parent.is_dir():
         raise NavfmuError(f"cannot write {out}: the folder {out.parent} does not exist")
     check_writable(out, "--out")
-    config = _configuration(model)
     work = Path(tempfile.mkdtemp(prefix="navfmu-export-"))
-    tmp = (out.parent / f".{out.name}.tmp").resolve()
     try:
+        copies = _write_copies(model, work / "fmus")
         (work / "unzipped").mkdir()
-        create_container_fmu(config, work / "unzipped", tmp)
-        tmp.replace(out)
+        create_container_fmu(_configuration(model, copies), work / "unzipped",
+                             work / "container.fmu")
+        platforms = _common_platforms(copies.values())
+        atomic_write(out, lambda f: _repack(work / "container.fmu", f, platforms), binary=True)
     except OSError as exc:
         raise NavfmuError(f"--out {out}: cannot write the FMU: {exc.strerror or exc}") from None
     finally:
-        tmp.unlink(missing_ok=True)
         shutil.rmtree(work, ignore_errors=True)
     return out
+
+
+def _write_copies(model: SystemModel, folder: Path) -> Dict[str, Path]:
+    """component name -> its FMU copy with the scenario's start values (and files), written
+    as ``folder/<component>.fmu`` (the container extracts each under its file's stem)."""
+    folder.mkdir()
+    paths = {}
+    for name, copy in component_copies(model).items():
+        paths[name] = folder / f"{name}.fmu"
+        paths[name].write_bytes(fmu_bytes(copy, name))
+    return paths
+
+
+def _common_platforms(fmus) -> Set[str]:
+    """The FMI 2.0 platforms (``binaries/<platform>``) every one of ``fmus`` has a binary for."""
+    common = None
+    for fmu in fmus:
+        with zipfile.ZipFile(fmu) as z:
+            have = {n.split("/")[1] for n in z.namelist()
+                    if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+        common = have if common is None else common & have
+    return common or set()
+
+
+def _repack(container: Path, f, platforms: Set[str]) -> None:
+    """fmpy's container archive without what it cannot keep: the binaries of platforms the
+    components have none for (fmpy adds darwin64, win64 and linux64 whatever they carry), and
+    the partial copy of itself (``Container.zip``) that fmpy's make_archive puts into it."""
+    with zipfile.ZipFile(container) as src, \
+            zipfile.ZipFile(f, "w", compression=zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            parts = info.filename.split("/")
+            if info.filename == "Container.zip":
+                continue
+            if parts[0] == "binaries" and len(parts) > 1 and parts[1] not in platforms:
+                continue
+            dst.writestr(info, src.read(info))
 
 
 __all__ = ["export", "without_step_hints"]

@@ -180,6 +180,22 @@ int main(int argc, char** argv)
     none = fresh(nullptr);
     report("instantiate_null_resources", none == nullptr ? 4 : 0);
 
+    // the host's callback structure is gone after fmi2Instantiate (FMI 2.0 does not promise
+    // it lives on; fmpy's container FMU passes a temporary): the FMU must have copied it
+    {
+        auto* temporary = static_cast<fmi2CallbackFunctions*>(std::malloc(sizeof callbacks));
+        std::memcpy(static_cast<void*>(temporary), &callbacks, sizeof callbacks);
+        fmi2Component c = instantiate("host", fmi2CoSimulation, guid, uri, temporary, fmi2False,
+                                      fmi2False);
+        std::memset(static_cast<void*>(temporary), 0xff, sizeof callbacks);
+        std::free(temporary);
+        const fmi2ValueReference vr = 999999;
+        fmi2Real v = 0.0;
+        const int status = c == nullptr ? -1 : get_real(c, &vr, 1, &v);
+        if (c != nullptr) free_instance(c);
+        report("callback_structure_released_after_instantiation", status);
+    }
+
     // initialization refused
     int n_bad = 0;
     for (const auto& [vr, text] : bad_strings) {

@@ -19,27 +19,29 @@ class Fmi2Logger : public pythonfmu::PyLogger
 public:
     explicit Fmi2Logger(const std::string& instanceName, const fmi2CallbackFunctions* f)
         : PyLogger(instanceName)
-        , f_(f)
+        , f_(f != nullptr ? *f : fmi2CallbackFunctions{}) // navfmu patch: a copy
     { }
 
 protected:
     // navfmu patch: the category is never NULL (PyLogger::log fills it in); the message goes
     // out as the format string of the host's printf-style logger, so its '%' are doubled;
-    // a host without a logger gets nothing
+    // a host without a logger function gets nothing
     void debugLog(fmi2Status s, const std::string& category, const std::string& message) override
     {
-        if (f_ == nullptr || f_->logger == nullptr) return;
+        if (f_.logger == nullptr) return;
         std::string text;
         text.reserve(message.size());
         for (const char ch : message) {
             text += ch;
             if (ch == '%') text += '%';
         }
-        f_->logger(f_->componentEnvironment, instanceName_.c_str(), s, category.c_str(), text.c_str());
+        f_.logger(f_.componentEnvironment, instanceName_.c_str(), s, category.c_str(), text.c_str());
     }
 
 private:
-    const fmi2CallbackFunctions* f_;
+    // navfmu patch: the host's structure copied, not its address kept (a host may pass a
+    // temporary, as fmpy's container FMU does)
+    fmi2CallbackFunctions f_;
 };
 
 // A struct that holds all the data for one model instance.
