@@ -112,6 +112,9 @@ def test_packaged_fmu_copies_start_with_the_scenarios_values(built, tmp_path):
         fmu = packed.component(spec.name).source
         assert validate_fmu(str(fmu)) == [], spec.name
         md = read_model_description(str(fmu))
+        step = spec.step_hint if spec.step_hint is not None else model.base_step
+        assert [float(x) for x in (md.defaultExperiment.startTime, md.defaultExperiment.stopTime,
+                                   md.defaultExperiment.stepSize)] == [0.0, 500.0, step]
         starts = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
         assert spec.parameters, spec.name
         for name, (type_name, value) in spec.parameters.items():

@@ -22,10 +22,10 @@ from fmpy import read_model_description
 from fmpy.ssp.simulation import simulate_ssp
 
 from orchestrator.building import build as fmu_build
-from orchestrator.packaging.export import without_step_hints
 from orchestrator.cosim.master import Simulation
-from orchestrator.packaging.package import package
 from orchestrator.model.ssp_archive import load_model
+from orchestrator.packaging.export import without_step_hints
+from orchestrator.packaging.package import package
 
 MODELS_DIR = Path(__file__).resolve().parents[1] / "models"
 #: model -> seconds run (aircraft_500s: two fixes and the filter's updates; 1000 steps)

@@ -152,3 +152,16 @@ def test_wheel_library_reports_refusals_at_the_next_step(wheel_kf):
         assert info.value.status == FMI2_DISCARD
     finally:
         bad.close()
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_built_fmus_have_the_users_umask(tmp_path, umask):
+    """A simulator running as another user must be able to read fmus/dist: the FMU and its
+    stamp get 0666 & ~umask (the temporary file they are written through is 0600)."""
+    previous = os.umask(umask)
+    try:
+        fmu_build.build(["GnssReceiver"], force=True, dist=tmp_path, log=None)
+    finally:
+        os.umask(previous)
+    for path in (tmp_path / "GnssReceiver.fmu", tmp_path / "GnssReceiver.fmu.sha256"):
+        assert path.stat().st_mode & 0o777 == 0o666 & ~umask, path.name

@@ -39,11 +39,13 @@ class FmuCopy:
     """One FMU copy: the FMU it is made from, its start values and the files it carries."""
 
     source: Path
+    #: the scenario's (start time, stop time, the component's step) as DefaultExperiment
+    experiment: Tuple[float, float, float]
     starts: Dict[str, str] = field(default_factory=dict)
     files: Dict[str, Path] = field(default_factory=dict)  # path under resources/ -> file
 
     def key(self) -> Tuple:
-        return (self.source, tuple(sorted(self.starts.items())),
+        return (self.source, self.experiment, tuple(sorted(self.starts.items())),
                 tuple(sorted((k, str(v)) for k, v in self.files.items())))
 
 
@@ -75,7 +77,8 @@ def component_copies(model: SystemModel) -> Dict[str, FmuCopy]:
         src = Path(c.source).resolve()
         if not src.is_file():
             raise NavfmuError(f"component '{c.name}': FMU file not found: {src} (navfmu build?)")
-        copy = FmuCopy(src)
+        step = c.step_hint if c.step_hint is not None else model.base_step
+        copy = FmuCopy(src, (model.start_time, model.stop_time, step))
         for pname, (type_name, value) in c.parameters.items():
             copy.starts[pname] = start_text(value)
             if type_name == "String":
@@ -84,8 +87,14 @@ def component_copies(model: SystemModel) -> Dict[str, FmuCopy]:
     return copies
 
 
-def _with_starts(xml: bytes, starts: Dict[str, str], where: str) -> bytes:
+def _model_description(xml: bytes, copy: FmuCopy, where: str) -> bytes:
+    """The model description with the copy's start values and DefaultExperiment."""
     root = parse_xml(xml, forbid_dtd=True)
+    experiment = root.find("DefaultExperiment")
+    if experiment is not None:
+        for attr, value in zip(("startTime", "stopTime", "stepSize"), copy.experiment):
+            experiment.set(attr, repr(float(value)))
+    starts = copy.starts
     found = set()
     for sv in root.iter("ScalarVariable"):
         name = sv.get("name")
@@ -108,7 +117,7 @@ def fmu_bytes(copy: FmuCopy, component: str) -> bytes:
         for info in src.infolist():
             data = src.read(info)
             if info.filename == MODEL_DESCRIPTION:
-                data = _with_starts(data, copy.starts, where)
+                data = _model_description(data, copy, where)
             dst.writestr(info, data)
         for rel, path in copy.files.items():
             arcname = f"resources/{rel}"

@@ -73,7 +73,8 @@ class AhrsFilter(Component):
     extra_parameters = ()
     extra_outputs = ()
     inputs = signals.AHRS_INPUTS
-    default_experiment = (0.0, 240.0, 0.01)
+    #: paper 003's turntable run (ahrs_turntable: 240 s, IMU at 50 Hz)
+    default_experiment = (0.0, 240.0, 0.02)
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -33,6 +33,12 @@ from ..core.timing import same_time, time_tolerance
 #: fix was taken; the extra half period covers a receiver's own output latency up to 0.5 s
 #: on top (or a 2 Hz receiver with a 1 s delay)
 DEFAULT_MAX_FIX_AGE = 1.5
+#: a first fix farther than this from the filter's position, and farther than
+#: FIRST_FIX_SIGMAS initial position sigmas, is no measurement error: the GNSS source flies
+#: another trajectory than the filter's init_* describe (a host that left a String such as a
+#: trajectory's ``profile`` at its default, or init_* not set); the filter warns once
+FIRST_FIX_DISTANCE_M = 1000.0
+FIRST_FIX_SIGMAS = 100.0
 
 #: accepted ranges of the filters' parameters: the initial state within the ranges of the
 #: signals (navcore.core.signals); an assumed GNSS sigma positive and at most the receiver model's
@@ -280,6 +286,8 @@ class InsGnssFilter(Component):
         gnss_time, lat, lon, h, v = fix
         engine = self.engine
         z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
+        if self.out["nis_dof"] == 0:   # the first fix applied
+            self._check_first_fix(gnss_time, float(np.linalg.norm(z[:3])))
         result = engine.update(z)
         self.history.restart(self.nav_time, engine)
         out = self.out
@@ -294,6 +302,16 @@ class InsGnssFilter(Component):
         warning = self.nis_monitor.observe(self.nav_time, result.nis, len(z))
         if warning:
             self.notify(f"{self.model_name}: {warning}")
+
+    def _check_first_fix(self, gnss_time, distance):
+        bound = max(FIRST_FIX_DISTANCE_M, FIRST_FIX_SIGMAS * self.params["p0_pos"])
+        if distance > bound:
+            self.notify(f"{self.model_name}: the first fix (gnss_time = {gnss_time:.6g} s) is "
+                        f"{distance / 1000.0:.4g} km from the filter's position (parameters "
+                        "init_lat, init_lon, init_h): the GNSS source flies another trajectory "
+                        "than the filter is set up for (a String parameter left at its default, "
+                        "such as the trajectory's 'profile', by a host that does not apply it?); "
+                        "the solution is off until the filter converges to the fixes")
 
     def write_diagnostics(self, result):
         """The extra outputs, after every update (``result``) and once at initialization

@@ -25,6 +25,8 @@ class Ukf(InsGnssFilter):
                    "with a nonlinear rotation-vector large-misalignment error model, fixed Q and "
                    "R, closed-loop feedback.")
     engine_class = UkfEngine
+    #: paper 000's UAV flight (uav_maneuver: 60 min, IMU at 50 Hz)
+    default_experiment = (0.0, 3600.0, 0.02)
     extra_parameters = (
         real("ukf_predict_interval", "s", "interval of the UKF time update (interval means of "
              "the nominal navigation; 0 = every IMU step); always also before an update",
