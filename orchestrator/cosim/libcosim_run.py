@@ -13,8 +13,8 @@ initialization and the first step, so **Boolean outputs are NaN in row 0** (list
 libcosim runs a model folder with that folder as the working directory: an FMU reading a
 file parameter relative to it (the replay's ``log``) finds it as our loader does (relative
 to the .ssd).  An ``.ssp`` archive runs in the caller's working directory: its FMU copies
-carry the files their parameters name (:mod:`orchestrator.packaging.fmu_copies`).  Column names, order and units
-come from each FMU's model description, as in our master.  The
+carry the files their parameters name (:mod:`orchestrator.packaging.fmu_copies`).  Column
+names, order and units come from each FMU's model description, as in our master.  The
 loader's log is set to WARNING (:data:`LOG_LEVEL`), so a clean model prints nothing.
 libcosimpy is an optional dependency (the ``test`` extra); without it,
 :func:`run_libcosim` raises :class:`~orchestrator.errors.NavfmuError` saying so.

@@ -45,9 +45,13 @@ public:
             return;
         }
         if (!debugLogging_ || debugMessages_ >= kMaxDebugMessages) return;
-        if (!categories_.empty() && std::find(categories_.begin(), categories_.end(), cat) == categories_.end()) return;
+        if (!categories_.empty() &&
+            std::find(categories_.begin(), categories_.end(), cat) == categories_.end()) {
+            return;
+        }
         if (++debugMessages_ == kMaxDebugMessages) {
-            debugLog(s, cat, message + " (debug message limit of this instance reached: no further debug messages)");
+            debugLog(s, cat, message + " (debug message limit of this instance reached: "
+                                       "no further debug messages)");
         } else {
             debugLog(s, cat, message);
         }

@@ -35,7 +35,8 @@ protected:
             text += ch;
             if (ch == '%') text += '%';
         }
-        f_.logger(f_.componentEnvironment, instanceName_.c_str(), s, category.c_str(), text.c_str());
+        f_.logger(f_.componentEnvironment, instanceName_.c_str(), s, category.c_str(),
+            text.c_str());
     }
 
 private:
