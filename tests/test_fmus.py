@@ -15,6 +15,8 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
+from navcore.components.registry import REGISTRY
+from navcore.core import signals
 from orchestrator.building import build as fmu_build
 from test_native_library import require_patched
 
@@ -195,8 +197,8 @@ def test_replay_state_save_restore_is_bit_identical(dist):
 
 
 AHRS_FMUS = ["UkfAhrs", "FuzzyUkfAhrs"]
-FILTER_FMUS = [n for n in FMU_NAMES if n not in ("TrajectoryImu", "GnssReceiver",
-                                                  "ImuGnssReplay", *AHRS_FMUS)]
+#: the INS/GNSS filters (the components with the filter contract's inputs)
+FILTER_FMUS = [n for n in FMU_NAMES if REGISTRY[n].inputs == signals.FILTER_INPUTS]
 
 
 @pytest.mark.parametrize("name", FILTER_FMUS)

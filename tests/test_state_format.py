@@ -37,6 +37,8 @@ PARAMS["ImmUkf"] = dict(FILTER_PARAMS, imm_q_scale_2=1e8)
 PARAMS["UkfAhrs"] = {"mag_field_T": 4.5e-5, "mag_inclination": math.atan2(4.0, 2.0)}
 PARAMS["FuzzyUkfAhrs"] = dict(PARAMS["UkfAhrs"], fuzzy_window=5)
 #: the replay plays the shipped 80 s gnss-ins-sim log (100 Hz, from t = 0)
+PARAMS["ImuSensor"] = {"gyro_arw_dpsh": 0.05, "gyro_bias_instability_dph": 1.0,
+                       "gyro_bias_tau_s": 100.0, "mag_field_T": 5e-5, "seed": 7}
 PARAMS["ImuGnssReplay"] = {
     "log": str(Path(__file__).resolve().parent.parent / "models/replay_gnss_ins_sim/log")}
 
@@ -50,6 +52,11 @@ def inputs_at(cls, k):
     stationary increments and a fix every 10 steps, every 7th fix 30 m off (so the adaptive
     and robust branches run)."""
     t1 = (k + 1) * H
+    if cls.model_name == "ImuSensor":   # the sample at the step's start (Jacobi): 1 m/s north
+        t0 = k * H
+        return dict({p.name: p.default() for p in cls.inputs}, truth_time=t0,
+                    truth_lat=LAT + t0 / 6.36e6, truth_lon=2.0, truth_h=100.0, truth_vn=1.0,
+                    truth_roll=1e-4 * math.sin(k), truth_yaw=0.3)
     if cls.model_name == "GnssReceiver":
         return {"truth_time": t1, "truth_lat": 0.7 + 1e-7 * t1, "truth_lon": 2.0,
                 "truth_h": 100.0, "truth_vn": 1.0, "truth_ve": 0.0, "truth_vd": 0.0}

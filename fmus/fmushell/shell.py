@@ -96,6 +96,7 @@ def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
 
 
 def exit_initialization_mode(slave):
+    values = slave._values
     if slave._start_error is not None:
         _fail(slave, slave._start_error, refuse=True)
         return
@@ -108,6 +109,9 @@ def exit_initialization_mode(slave):
     try:
         slave._component = slave.component_class(**params)
         slave._values.update(slave._component.start(slave._start_time))
+        started = slave._component.initial_inputs({n: values[n] for n in slave._input_names})
+        if started is not None:
+            slave._values.update(started)
         if slave._stop_time is not None:
             slave._component.check_stop_time(slave._stop_time)
     except NavcoreError as exc:

@@ -128,7 +128,15 @@ class DirectInstance(Instance):
         self._store_outputs(outputs, "initialize")
 
     def exit_initialization(self) -> None:
-        pass
+        take = getattr(self.component, "initial_inputs", None)
+        if take is None:
+            return
+        try:
+            outputs = take(dict(self._inputs))
+        except self._errors as exc:
+            raise self._error("initialization", exc, self.time) from None
+        if outputs is not None:
+            self._store_outputs(outputs, "initial_inputs")
 
     def _store_outputs(self, outputs, what: str) -> None:
         if outputs is None:

@@ -2,8 +2,11 @@
 
 Each class is a :class:`~navcore.core.component.Component`: it declares its variables (signal names
 and units from :mod:`navcore.core.signals`) and advances with ``step(t, h, inputs)``.  The error
-models they wrap declare their own parameter tables; :func:`ports_from_table` turns such a
-table into ports.
+models they wrap declare their own parameter tables;
+:func:`navcore.components.imu_measurement.ports_from_table` turns such a table into ports.
+TrajectoryImu's IMU and magnetometer outputs are
+:class:`navcore.components.imu_measurement.ImuMeasurement`'s, shared with
+:class:`navcore.components.imu_sensor.ImuSensor`.
 """
 from __future__ import annotations
 
@@ -12,35 +15,12 @@ import numpy as np
 from ..core import signals
 from ..core.component import Component, Limits, ParameterError, boolean, integer, real, string
 from ..sensors.gnss_errors import GnssErrorModel
-from ..sensors.imu_errors import INTENSITY_REFERENCE_RATE, ImuErrorModel
-from ..sensors.magnetometer import MagnetometerModel
-from ..ins.rotations import _euler_rows
+from .imu_measurement import ERROR_PARAMETERS, SEED_LIMITS, ImuMeasurement, ports_from_table
 from ..core.timing import samples_reached, time_tolerance
 from ..ins.trajectory import TrajectoryGenerator
 
-#: accepted seeds (numpy's generators take non-negative integers; FMI Integers are 32 bit)
-SEED_LIMITS = Limits(0, 2**31 - 1)
-
-_UNIT_OF_DATASHEET = {"deg/h": "deg/h", "deg/sqrt(h)": "deg/sqrt(h)", "ug": "ug",
-                      "ug/sqrt(Hz)": "ug/sqrt(Hz)", "ppm": "ppm", "urad": "urad",
-                      "deg/h/g": "deg/h/g", "s": "s", "m": "m", "m/s": "m/s", "rad/s": "rad/s",
-                      "m/s2": "m/s2", "T": "T", "rad": "rad", "Hz": "Hz", "": ""}
-
-
-def ports_from_table(table):
-    """Ports for a ``{name: (default, unit, description, limits)}`` parameter table of a
-    navcore model (``limits`` None for a string)."""
-    ports = []
-    for name, (default, unit, description, limits) in table.items():
-        if isinstance(default, str):
-            ports.append(string(name, description, default))
-        else:
-            ports.append(real(name, _UNIT_OF_DATASHEET[unit], description, default, limits))
-    return tuple(ports)
-
-
 # ---------------------------------------------------------------------------------------
-class TrajectoryImu(Component):
+class TrajectoryImu(ImuMeasurement, Component):
     """6-DOF truth from a motion profile and the IMU increments measured along it.
 
     Samples every ``imu_period`` on its own grid (:mod:`navcore.core.timing`): a communication
@@ -62,10 +42,7 @@ class TrajectoryImu(Component):
              Limits(0.0, 1.0, low_open=True)),
         boolean("extend_profile", "allow a run beyond the profile's end (the truth then flies "
                 "on at the final velocity and attitude)", False),
-        integer("seed", "seed of every random error of the IMU and the magnetometer", 1,
-                SEED_LIMITS),
-        *ports_from_table(ImuErrorModel.PARAMETERS),
-        *ports_from_table(MagnetometerModel.PARAMETERS),
+        *ERROR_PARAMETERS,
     )
     inputs = ()
     outputs = signals.TRUTH + signals.IMU + signals.MAG
@@ -76,23 +53,12 @@ class TrajectoryImu(Component):
     def initialize(self, start_time):
         self.dt = self.params["imu_period"]
         self.generator = TrajectoryGenerator(self.params["profile"], self.dt)
-        error_params = {k: self.params[k] for k in ImuErrorModel.PARAMETERS}
-        self.errors = ImuErrorModel(error_params, self.params["seed"])
-        self.magnetometer = MagnetometerModel(
-            {k: self.params[k] for k in MagnetometerModel.PARAMETERS}, self.params["seed"])
-        mag = self.magnetometer
-        # the magnetometer/vibration model runs (and draws) only when it is switched on, so a
-        # scenario without it keeps its numbers and its speed
-        self.mag_on = bool(mag.field_ned.any() or mag.vibration_on)
+        self.build_error_models()
         self.start_time = float(start_time)
         self.n = 0
         truth = self.generator.state()
         out = self._truth(truth)
-        out.update({p.name: 0.0 for p in signals.IMU + signals.MAG})
-        out["imu_time"] = out["mag_time"] = self.start_time
-        self._no_mag = {p.name: out[p.name] for p in signals.MAG}
-        if self.mag_on:
-            self._write_mag(out, self.start_time, truth)
+        self.start_outputs(out, self.start_time, _attitude(truth))
         self.out = out
         return dict(out)
 
@@ -104,12 +70,6 @@ class TrajectoryImu(Component):
                 f"{self.model_name}: the run ends at {stop_time:g} s, after the end of "
                 f"profile '{self.params['profile']}' at {end:g} s; stop by {end:g} s or set "
                 "parameter 'extend_profile' = true to fly on at the final velocity")
-
-    def _write_mag(self, out, t, truth):
-        C_bn = np.array(_euler_rows(truth["roll"], truth["pitch"], truth["yaw"]))
-        m = self.magnetometer.measure(t, C_bn)
-        out["mag_time"] = t
-        out["mag_x"], out["mag_y"], out["mag_z"] = (float(v) for v in m)
 
     def _truth(self, s):
         return {"truth_time": self.start_time + s["time"], "truth_lat": s["lat"],
@@ -126,24 +86,13 @@ class TrajectoryImu(Component):
         truth, dtheta, dvel = self.generator.step()
         self.n += 1
         t_end = self.start_time + self.n * self.dt
-        intensity = self.generator.last_rate_norm / INTENSITY_REFERENCE_RATE
-        dtheta, dvel = self.errors.apply(t_end, self.dt, dtheta, dvel, intensity)
-        out = self._truth(truth)
-        if self.mag_on:
-            self._write_mag(out, t_end, truth)
-            if self.magnetometer.vibrating(t_end):
-                dvel = dvel + self.magnetometer.accel_disturbance(t_end) * self.dt
-        else:
-            out.update(self._no_mag)
-        out["imu_time"] = t_end
-        out["imu_dt"] = dt = self.dt
-        dth, dv = dtheta.tolist(), dvel.tolist()   # plain floats: the outputs are state
-        update = out.update
-        update(zip(signals.IMU_DTHETA_NAMES, dth))
-        update(zip(signals.IMU_DVEL_NAMES, dv))
-        update(zip(signals.IMU_GYRO_NAMES, [x / dt for x in dth]))
-        update(zip(signals.IMU_ACCEL_NAMES, [x / dt for x in dv]))
-        return out
+        return self.measure(self._truth(truth), t_end, self.dt, dtheta, dvel,
+                            self.generator.last_rate_norm, _attitude(truth))
+
+
+def _attitude(truth):
+    """(roll, pitch, yaw) of a truth dict of the trajectory generator."""
+    return truth["roll"], truth["pitch"], truth["yaw"]
 
 
 # ---------------------------------------------------------------------------------------

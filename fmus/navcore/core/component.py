@@ -14,6 +14,9 @@ Contract of a component
 * ``initialize(start_time)`` validates every parameter (raising :class:`ParameterError`
   with the parameter's name and the reason) and builds the internal state.  It returns the
   outputs valid at ``start_time``.
+* ``initial_inputs(inputs)`` is called once after ``start`` with the input values set in
+  initialization mode (FMI: they hold at the start time); a component that needs them (a
+  sensor taking its vehicle's start sample) returns its outputs updated, the others None.
 * ``step(t, h, inputs)`` advances from ``t`` to ``t + h`` with the input values (a dict
   name -> value, values as set by the connections at this communication point) and returns
   the outputs valid at ``t + h`` (a dict name -> value).  Bad input raises
@@ -256,6 +259,11 @@ class Component(ABC):
     @abstractmethod
     def step(self, t: float, h: float, inputs: Dict[str, Any]) -> Dict[str, Any]:
         """Advance from ``t`` to ``t + h``; return the outputs valid at ``t + h``."""
+
+    def initial_inputs(self, inputs: Dict[str, Any]):
+        """The inputs at the end of initialization mode (module docstring); None: the outputs
+        do not depend on them."""
+        return None
 
     def check_stop_time(self, stop_time: float) -> None:
         """Raise a :class:`ParameterError` if this component, started, cannot run until

@@ -1,0 +1,235 @@
+"""ImuSensor: the IMU and magnetometer of TrajectoryImu, driven by a vehicle's truth inputs.
+
+Any vehicle model (an FMU exported from Modelica or Simulink, a C model, :class:`GuidedUav`)
+connects its truth outputs name to name: ``truth_time``, ``truth_lat``/``truth_lon`` [rad,
+WGS-84 geodetic], ``truth_h`` [m above the ellipsoid], ``truth_vn/ve/vd`` [m/s, NED, over the
+earth], ``truth_roll/pitch/yaw`` [rad, ZYX Euler of body forward-right-down in NED].  The
+outputs, parameters and error models are those of TrajectoryImu
+(:mod:`navcore.components.imu_measurement`, one implementation for both).
+
+Ideal increments (``input_form`` = ``truth``): between two consecutive truth samples the
+increments are the exact inverse of navcore's strapdown (:meth:`Strapdown.inverse_update`,
+the increments that :meth:`Strapdown.update` integrates from the first sample's velocity and
+attitude to the second's), as TrajectoryImu builds them along its profile.  Position is not
+driven by the increments: the mechanization integrates it as the trapezoid of the two
+velocities (:func:`navcore.ins.strapdown.integrate_position`); a vehicle integrating position
+otherwise (a rectangle rule, RK4) differs from it by its own integration error, which for a
+rectangle rule telescopes to at most ``|v_end - v_start| dt / 2`` over a whole flight.
+
+Ideal increments (``input_form`` = ``rates``): for a dynamics model that outputs its rates,
+the inputs ``body_rate_x/y/z`` [rad/s, inertial angular rate in body axes, earth rate
+included] and ``specific_force_x/y/z`` [m/s2, body axes] at the sample instants become
+increments by the trapezoid over the interval, as the sensor-log converters do
+(:func:`navcore.sensors.log_converters.trapezoid_increments`): an error of ``dt^3 w''/12`` per
+interval (third order in the step), plus the sculling and coning content a trapezoid of
+two samples cannot see.  The truth inputs still give the sample times and the attitude of the
+magnetometer.
+
+Sampling: the truth at the start time is the input values at the end of initialization mode
+(the FMI rule: inputs set in initialization mode hold at the start), or, when they are all
+still 0 there (a host that sets none), the inputs of the first step (right under a Jacobi
+master, which passes the start sample; refused otherwise); then every new truth
+sample (``truth_time`` later than the previous one) closes one IMU interval, whose outputs are
+tagged ``imu_time`` = ``truth_time``, ``imu_dt`` = ``imu_period``.  A step that brings the
+same ``truth_time`` again (a Jacobi master, a sensor stepped faster than the vehicle) holds
+the outputs.  So the sensor follows the time tags under any master; it is stepped at least as
+often as the vehicle outputs.
+
+Refusals (an :class:`InputError` naming the input and the time; nothing is resampled): a
+non-finite or out-of-range input; ``truth_time`` going back; a sample interval that is not
+``imu_period`` (within :func:`navcore.core.timing.time_tolerance`); a jump between two samples no
+vehicle makes: a velocity change above :data:`MAX_ACCELERATION` times the interval, a rotation
+above :data:`MAX_ANGULAR_RATE` times the interval, or a position farther from the trapezoid of
+the two velocities than :func:`position_tolerance`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..core import signals
+from ..core.component import Component, InputError, Limits, real, string
+from ..core.timing import same_time
+from ..ins.rotations import _euler_rows, _matTmul_rows, _rotvec_from_rows
+from ..ins.strapdown import Strapdown, _radii, integrate_position
+from ..sensors.log_converters import trapezoid_increments
+from .imu_measurement import ERROR_PARAMETERS, ImuMeasurement
+
+#: largest acceleration over the earth a truth sample may imply [m/s^2]: 100 g, the range of
+#: the IMU's velocity increments (navcore.signals.DVEL, 1 km/s per 1 s interval)
+MAX_ACCELERATION = 1e3
+#: largest angular rate a truth sample may imply [rad/s]: 50 rad/s (2900 deg/s), beyond the
+#: gyro range of tactical and MEMS IMUs
+MAX_ANGULAR_RATE = 50.0
+#: fixed part of the position tolerance [m]: rounding of positions written as text or float32
+POSITION_TOLERANCE_M = 0.01
+
+#: the truth inputs, in the order the sensor reads them
+TRUTH_NAMES = tuple(p.name for p in signals.TRUTH)
+#: the rate-form inputs
+RATES = (
+    *(real(f"body_rate_{a}", "rad/s", f"inertial angular rate about body {a} at truth_time "
+           "(input_form 'rates')") for a in signals.AXES_BODY),
+    *(real(f"specific_force_{a}", "m/s2", f"specific force along body {a} at truth_time "
+           "(input_form 'rates')") for a in signals.AXES_BODY),
+)
+RATE_NAMES = tuple(p.name for p in RATES)
+INPUT_FORMS = ("truth", "rates")
+_FIRST_STEP = "at the first step"
+
+
+def position_tolerance(dv_norm, dt):
+    """Largest distance [m] between a truth position and the trapezoid of the velocities:
+    twice what a rectangle rule gives (``|dv| dt / 2``), plus :data:`POSITION_TOLERANCE_M`."""
+    return dv_norm * dt + POSITION_TOLERANCE_M
+
+
+class ImuSensor(ImuMeasurement, Component):
+    """TrajectoryImu's IMU and magnetometer on a vehicle's truth (module docstring)."""
+
+    description = ("IMU and magnetometer of TrajectoryImu (same outputs, parameters and error "
+                   "models) driven by a vehicle model's truth inputs: the ideal increments "
+                   "between two truth samples are the exact inverse of the strapdown "
+                   "(input_form 'truth'), or the trapezoid of the vehicle's body rates and "
+                   "specific force (input_form 'rates'). Refuses non-finite truth, time going "
+                   "back, a sample interval other than imu_period and jumps no vehicle makes.")
+    parameters = (
+        real("imu_period", "s", "IMU sampling interval: the vehicle's truth_time must advance "
+             "by exactly this between samples", 0.01, Limits(0.0, 1.0, low_open=True)),
+        string("input_form", "'truth': increments by the exact inverse strapdown between two "
+               "truth samples; 'rates': the trapezoid of the body_rate_* and "
+               "specific_force_* inputs", "truth"),
+        *ERROR_PARAMETERS,
+    )
+    inputs = signals.TRUTH + RATES
+    outputs = signals.IMU + signals.MAG
+    default_experiment = (0.0, 500.0, 0.01)
+    state_fields = ("errors", "magnetometer", "ins", "started", "last_time", "last_rates",
+                    "out")
+    derived_fields = ("dt", "rates_form", "mag_on", "_no_mag", "start_time")
+
+    def initialize(self, start_time):
+        self.dt = self.params["imu_period"]
+        form = self.params["input_form"]
+        self.require("input_form", form in INPUT_FORMS, f"is not one of {list(INPUT_FORMS)}")
+        self.rates_form = form == "rates"
+        self.build_error_models()
+        self.start_time = float(start_time)
+        # the strapdown at the latest truth sample (a placeholder until the start sample)
+        self.ins = Strapdown(0.0, 0.0, 0.0, (0.0, 0.0, 0.0), np.eye(3))
+        self.started = False
+        self.last_time = self.start_time
+        self.last_rates = (0.0,) * 6
+        out = {}
+        self.start_outputs(out, self.start_time, None)
+        self.out = out
+        return dict(out)
+
+    def _names(self):
+        return TRUTH_NAMES + RATE_NAMES if self.rates_form else TRUTH_NAMES
+
+    def initial_inputs(self, inputs, when="at the end of initialization mode"):
+        """The truth at the start time: the inputs at the end of initialization mode.  Inputs
+        still at their start values (all 0: a host that sets no inputs in initialization
+        mode) are not a sample: the first step's inputs are taken as the start instead."""
+        if all(inputs[n] == 0.0 for n in self._names()) and when != _FIRST_STEP:
+            return None
+        self.check_inputs(inputs, self._names())
+        t = inputs["truth_time"]
+        if not same_time(t, self.start_time, self.dt):
+            raise InputError(
+                f"{self.model_name}: input 'truth_time' = {t!r} s {when} is not the start time "
+                f"{self.start_time!r} s: the sensor needs the vehicle's truth at the start "
+                "time, set as its inputs in initialization mode")
+        self._take(inputs)
+        self.started = True
+        self.start_magnetometer(self.out, self.start_time, _attitude(inputs))
+        return dict(self.out)
+
+    def _take(self, inputs):
+        v = (inputs["truth_vn"], inputs["truth_ve"], inputs["truth_vd"])
+        self.ins = Strapdown(inputs["truth_lat"], inputs["truth_lon"], inputs["truth_h"], v,
+                             _euler_rows(*_attitude(inputs)))
+        if self.rates_form:
+            self.last_rates = tuple(inputs[n] for n in RATE_NAMES)
+
+    def step(self, t, h, inputs):
+        if not self.started:   # a caller that does not pass the inputs of initialization
+            self.initial_inputs(inputs, _FIRST_STEP)
+        self.check_inputs(inputs, self._names())
+        t_new = inputs["truth_time"]
+        t_last = self.last_time
+        dt = self.dt
+        if same_time(t_new, t_last, dt):
+            return self.out                # the same sample again: hold
+        self._check_interval(t_new, t_last)
+        attitude = _attitude(inputs)
+        if self.rates_form:
+            dtheta, dvel = self._rate_increments(inputs)
+            self._take(inputs)
+        else:
+            dtheta, dvel = self._exact_increments(inputs, attitude, t_new)
+        self.last_time = t_new
+        gx, gy, gz = dtheta.tolist()
+        rate_norm = math.sqrt(gx * gx + gy * gy + gz * gz) / dt
+        return self.measure(self.out, t_new, dt, dtheta, dvel, rate_norm, attitude)
+
+    def _check_interval(self, t_new, t_last):
+        name, dt = self.model_name, self.dt
+        if t_new < t_last:
+            raise InputError(f"{name}: input 'truth_time' = {t_new!r} s goes back from the "
+                             f"previous sample at {t_last!r} s")
+        if not same_time(t_new - t_last, dt, dt):
+            raise InputError(
+                f"{name}: input 'truth_time' = {t_new!r} s is {t_new - t_last:.9g} s after the "
+                f"previous sample at {t_last!r} s; the sensor takes one truth sample every "
+                f"parameter 'imu_period' = {dt!r} s (nothing is resampled): output the "
+                "vehicle's truth at that period and step the sensor at least as often")
+
+    def _exact_increments(self, inputs, attitude, t_new):
+        """The inverse strapdown from the previous truth sample to this one, after checking
+        that no vehicle makes the jump between them."""
+        ins, dt = self.ins, self.dt
+        lat, lon, h = inputs["truth_lat"], inputs["truth_lon"], inputs["truth_h"]
+        v1 = [inputs["truth_vn"], inputs["truth_ve"], inputs["truth_vd"]]
+        C1 = _euler_rows(*attitude)
+        v0 = ins.v_ned.tolist()
+        dv = math.sqrt(sum((a - b) ** 2 for a, b in zip(v1, v0)))
+        where = f"at truth_time = {t_new!r} s"
+        if dv > MAX_ACCELERATION * dt:
+            self._jump(f"the velocity changes by {dv:.6g} m/s in {dt:g} s {where} (more than "
+                       f"{MAX_ACCELERATION:g} m/s2)", "truth_vn")
+        angle = float(np.linalg.norm(_rotvec_from_rows(_matTmul_rows(ins.C_bn.tolist(), C1))))
+        if angle > MAX_ANGULAR_RATE * dt:
+            self._jump(f"the attitude turns by {angle:.6g} rad in {dt:g} s {where} (more than "
+                       f"{MAX_ANGULAR_RATE:g} rad/s)", "truth_roll")
+        plat, plon, ph = integrate_position(ins.lat, ins.lon, ins.h, v0, v1, dt)
+        rn, re = _radii(lat)
+        miss = math.sqrt(((lat - plat) * (rn + h)) ** 2
+                         + ((lon - plon) * (re + h) * math.cos(lat)) ** 2 + (h - ph) ** 2)
+        if miss > position_tolerance(dv, dt):
+            self._jump(f"the position is {miss:.6g} m from where the velocities lead {where} "
+                       f"(tolerance {position_tolerance(dv, dt):.3g} m)", "truth_lat")
+        # the same call (and floats) as the trajectory generator's
+        return ins._inverse_to(lat, lon, h, v1, C1, dt)
+
+    def _jump(self, what, name):
+        first = " (the previous sample is the start, set in initialization mode)" \
+            if self.last_time == self.start_time else ""
+        raise InputError(f"{self.model_name}: input '{name}': {what}{first}: no vehicle makes "
+                         "that jump between two samples")
+
+    def _rate_increments(self, inputs):
+        rates = tuple(inputs[n] for n in RATE_NAMES)
+        limit = (MAX_ANGULAR_RATE,) * 3 + (MAX_ACCELERATION,) * 3
+        for n, x, bound in zip(RATE_NAMES, rates, limit):
+            if abs(x) > bound:
+                raise InputError(f"{self.model_name}: input '{n}' = {x!r} at truth_time = "
+                                 f"{inputs['truth_time']!r} s is beyond {bound:g} (no vehicle)")
+        increments = trapezoid_increments((0.0, self.dt), (self.last_rates, rates))[0]
+        return increments[:3].copy(), increments[3:].copy()
+
+
+def _attitude(inputs):
+    return inputs["truth_roll"], inputs["truth_pitch"], inputs["truth_yaw"]
