@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"navcore": ROOT / "fmus" / "navcore", "orchestrator": ROOT / "orchestrator"}
 # lowest first; a wing may import the wings before it, never one after it
 WING_ORDER = {
-    "navcore": ["core", "ins", "sensors", "filters", "components"],
+    "navcore": ["core", "ins", "sensors", "filters", "vehicles", "components"],
     "orchestrator": ["results", "building", "model", "cosim", "running", "campaigns",
                      "reporting", "packaging", "cli"],
 }

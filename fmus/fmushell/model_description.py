@@ -72,6 +72,10 @@ def to_xml(slave, model_options=None):
                 SubElement(u, "BaseUnit", attrib)
         root.append(unit_defs)
     structure = root.find("ModelStructure")
+    if not getattr(slave.component_class, "outputs_depend_on_inputs", True):
+        # outputs at t computed from inputs at earlier times only: no direct feedthrough
+        for unknown in structure.iter("Unknown"):
+            unknown.set("dependencies", "")
     if output_indices and structure.find("InitialUnknowns") is None:
         initial = SubElement(structure, "InitialUnknowns")
         for index in output_indices:

@@ -1,6 +1,7 @@
 """The IMU and magnetometer outputs of a sensor component, from ideal increments: one
-implementation for :class:`~navcore.components.sensor_components.TrajectoryImu` (increments from its motion
-profile) and :class:`~navcore.components.imu_sensor.ImuSensor` (increments from a vehicle's truth inputs).
+implementation for :class:`~navcore.components.sensor_components.TrajectoryImu` (increments
+from its motion profile) and :class:`~navcore.components.imu_sensor.ImuSensor` (increments from
+a vehicle's truth inputs).
 
 :class:`ImuMeasurement` is a mixin of those components: it declares the parameters of the
 error models (``seed``, every :class:`~navcore.sensors.imu_errors.ImuErrorModel` and

@@ -2,7 +2,7 @@
 
 The components live in one module per family: :mod:`navcore.components.sensor_components`
 (TrajectoryImu, GnssReceiver), :mod:`navcore.components.imu_sensor` (ImuSensor),
-:mod:`navcore.components.replay` (ImuGnssReplay),
+:mod:`navcore.components.guided_uav` (GuidedUav), :mod:`navcore.components.replay` (ImuGnssReplay),
 :mod:`navcore.components.kf_components` (Kf and the adaptive/robust filters of papers 001 and 004),
 :mod:`navcore.components.ukf_components` (the unscented filters of paper 000) and
 :mod:`navcore.components.ahrs_components` (the attitude filters of paper 003); the shell the
@@ -16,6 +16,7 @@ from __future__ import annotations
 from .ahrs_components import FuzzyUkfAhrs, UkfAhrs
 from .kf_components import Iakf, Igg3RobustKf, InsOnly, Kf, NewtonRobustKf, SageHusaFading
 from .replay import ImuGnssReplay
+from .guided_uav import GuidedUav
 from .imu_sensor import ImuSensor
 from .sensor_components import GnssReceiver, TrajectoryImu
 from .ukf_components import CtfaUkf, ImmUkf, Ukf
@@ -26,6 +27,7 @@ REGISTRY = {cls.model_name: cls for cls in (
     Kf, SageHusaFading, Iakf, NewtonRobustKf, Igg3RobustKf, InsOnly,
     Ukf, CtfaUkf, ImmUkf,
     ImuGnssReplay,
+    GuidedUav,
     UkfAhrs, FuzzyUkfAhrs)}
 
 __all__ = ["REGISTRY", *REGISTRY]

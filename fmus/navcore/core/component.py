@@ -153,6 +153,9 @@ class Component(ABC):
     #: String parameters that name a file or folder (an FMU resolves a relative one against
     #: its resources folder first, where ``navfmu package`` puts the files a scenario names)
     file_parameters: ClassVar[Tuple[str, ...]] = ()
+    #: False for a component whose outputs at t never depend on its inputs at t (the model
+    #: description then declares no output dependency: an algebraic loop breaks there)
+    outputs_depend_on_inputs: ClassVar[bool] = True
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
