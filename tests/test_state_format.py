@@ -39,6 +39,7 @@ PARAMS["FuzzyUkfAhrs"] = dict(PARAMS["UkfAhrs"], fuzzy_window=5)
 #: the replay plays the shipped 80 s gnss-ins-sim log (100 Hz, from t = 0)
 PARAMS["ImuSensor"] = {"gyro_arw_dpsh": 0.05, "gyro_bias_instability_dph": 1.0,
                        "gyro_bias_tau_s": 100.0, "mag_field_T": 5e-5, "seed": 7}
+PARAMS["GuidedUav"] = {"turbulence_w20": 7.7, "wind_e": 3.0, "seed": 4}
 PARAMS["ImuGnssReplay"] = {
     "log": str(Path(__file__).resolve().parent.parent / "models/replay_gnss_ins_sim/log")}
 
@@ -57,6 +58,11 @@ def inputs_at(cls, k):
         return dict({p.name: p.default() for p in cls.inputs}, truth_time=t0,
                     truth_lat=LAT + t0 / 6.36e6, truth_lon=2.0, truth_h=100.0, truth_vn=1.0,
                     truth_roll=1e-4 * math.sin(k), truth_yaw=0.3)
+    if cls.model_name == "GuidedUav":   # a solution flying north along the first leg
+        t0 = k * H
+        return {"nav_time": t0, "nav_lat": 0.6998770300497261 + 25.0 * t0 / 6.36e6,
+                "nav_lon": 2.069960492865275, "nav_h": 150.0, "nav_vn": 25.0, "nav_ve": 0.0,
+                "nav_vd": 0.0, "nav_yaw": 0.0}
     if cls.model_name == "GnssReceiver":
         return {"truth_time": t1, "truth_lat": 0.7 + 1e-7 * t1, "truth_lon": 2.0,
                 "truth_h": 100.0, "truth_vn": 1.0, "truth_ve": 0.0, "truth_vd": 0.0}

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
-from ..results import outputs
+from ..results import mission_metrics, outputs
 from ..running import prechecks, scenarios
 from .cli_options import DEFAULT_OUT, parse_sets, parse_window
 from ..running.comparison import paper_comparison, report_table
@@ -73,6 +73,19 @@ def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, r
     return runs
 
 
+def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm, echo):
+    """The mission's baseline run (its ``mission.json``), reported under its label (kept in
+    memory, also under ``--format parquet``)."""
+    with progress_bars() as progress_bar:
+        run = scenarios.simulate_scenario(
+            model, backend=backend, stop_time=stop,
+            parameters={**baseline["parameters"], **(parameters or {})}, window=window,
+            progress=progress_bar(baseline["label"]), algorithm=algorithm,
+            log=lambda m: echo(m, err=True))
+    run.label = baseline["label"]
+    return run
+
+
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
                   fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
                   replay=None, log_sensors=None) -> None:
@@ -86,6 +99,10 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
                          log_sensors, algorithm, echo)
+    baseline = scenarios.mission_baseline(model) if replay is None else None
+    if baseline is not None:
+        runs.append(_baseline_run(model, baseline, stop, backend, window, parameters,
+                                  algorithm, echo))
     if log_sensors:
         from ..running.replay import write_sensor_log
 
@@ -103,6 +120,11 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     for run in runs:
         for m in run.metrics.values():
             echo(_consistency_line(run, m))
+    missions = [(run.label, run.metrics[scenarios.FILTER_COMPONENT]["mission"]) for run in runs
+                if "mission" in run.metrics.get(scenarios.FILTER_COMPONENT, {})]
+    if missions:
+        echo(f"\n{model.name}: the true path against the route (outage: no valid GNSS fix)")
+        echo(mission_metrics.mission_table(missions))
     names = [f for f in filters if f]
     if len(names) < 2:  # a single run: suggest timing the paper's filters against each other
         names = list((reference or {}).get("time_per_cycle_ms") or {}) or names

@@ -19,6 +19,7 @@ from typing import Any, Dict, List, Optional
 from ..building import build as fmu_build
 from ..building.build import ensure_fmus
 from ..results import metrics as nav_metrics
+from ..results import mission_metrics
 from . import prechecks
 from ..results import recorder
 from ..results import windows as paper_windows
@@ -83,6 +84,22 @@ def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
         raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
 
 
+def mission_baseline(model: SystemModel) -> Optional[Dict[str, Any]]:
+    """The baseline run a mission scenario declares in its ``mission.json``: ``{"label": ...,
+    "parameters": {"component.parameter": value}}`` (e.g. the vehicle guided on its truth),
+    or None."""
+    ref = Path(model.path).parent / "mission.json"
+    if not ref.is_file():
+        return None
+    try:
+        baseline = json.loads(ref.read_text(encoding="utf-8"))["baseline"]
+        label, parameters = str(baseline["label"]), dict(baseline["parameters"])
+    except (OSError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        raise NavfmuError(f"{ref}: cannot read the mission baseline ('baseline' with 'label' "
+                          f"and 'parameters'): {exc!r}") from None
+    return {"label": label, "parameters": parameters}
+
+
 def has_truth(results: Results) -> bool:
     return any(results.has(c, "truth_time") for c in results.components)
 
@@ -145,8 +162,12 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     run = Run(label, model, results)
     if not has_truth(results):
         return run
+    vehicle = mission_metrics.find_vehicle(results)
     for f in nav_metrics.filters_of(results):
         run.metrics[f] = nav_metrics.filter_metrics(results, f, window=window)
+        if vehicle is not None:
+            run.metrics[f]["mission"] = mission_metrics.mission_metrics(results, f, window,
+                                                                        vehicle)
     return run
 
 
