@@ -44,6 +44,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from ..building import build as fmu_build
 from ..cosim import interrupts
 from ..results import metrics as nav_metrics
+from ..results import mission_metrics
 from ..results import recorder
 from ..errors import NavfmuError
 from .executor import Executor, Task
@@ -227,9 +228,14 @@ def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
         path.parent.mkdir(parents=True, exist_ok=True)
         series_sink = (recorder.ParquetSink(path) if job["series"] == "parquet"
                        else recorder.CsvSink(path))
-    header = sim.run(stop_time=job["stop_time"], sink=recorder.Tee([metrics_sink, series_sink]))
+    mission_sink = mission_metrics.MissionSink(window=job["window"])
+    header = sim.run(stop_time=job["stop_time"],
+                     sink=recorder.Tee([metrics_sink, series_sink, mission_sink]))
+    metrics = dict(metrics_sink.metrics.get(FILTER_COMPONENT, {}))
+    if FILTER_COMPONENT in mission_sink.metrics:
+        metrics["mission"] = mission_sink.metrics[FILTER_COMPONENT]
     record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
-              "metrics": metrics_sink.metrics.get(FILTER_COMPONENT, {}),
+              "metrics": metrics,
               "stop_time": header.metadata["stop_time"], "wall_time_s": time.perf_counter() - t0,
               "pid": os.getpid(), "commit": job.get("commit", "")}
     if visible:

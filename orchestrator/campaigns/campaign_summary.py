@@ -13,6 +13,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence
 
 from ..results import metric_comparisons
 from ..results import metrics as nav_metrics
+from ..results import mission_metrics
 from . import statistics as st
 
 #: (key, metrics group, metrics axis, label, unit), in the papers' table order
@@ -21,7 +22,10 @@ AXES = tuple(
      for a, k in zip("enu", nav_metrics.ENU)]
     + [(f"vel_{a}", "velocity_rms_mps", k, f"vel {a.upper()}", "m/s")
        for a, k in zip("enu", nav_metrics.ENU)]
-    + [(f"att_{a}", "attitude_rms_deg", a, a, "deg") for a in nav_metrics.ATTITUDE])
+    + [(f"att_{a}", "attitude_rms_deg", a, a, "deg") for a in nav_metrics.ATTITUDE]
+    # the mission metrics of a guided vehicle (orchestrator.results.mission_metrics), when
+    # the runs have them
+    + [(key, "mission", key, label, "m") for key, label in mission_metrics.SHORT_LABELS.items()])
 _PAPER_KEYS = {"position_rms_m": "position_enu_m", "velocity_rms_mps": "velocity_enu_mps",
                "attitude_rms_deg": "attitude_deg"}
 
@@ -33,7 +37,9 @@ def recorded_axes(records: Mapping[str, Sequence[Mapping[str, Any]]]) -> List[tu
 
 
 def per_run_values(records: Sequence[Mapping[str, Any]], group: str, axis: str) -> List[float]:
-    return [float(r["metrics"][group][axis]) for r in records]
+    """One value per run (a metric a run could not measure, stored as null: NaN)."""
+    values = [r["metrics"][group][axis] for r in records]
+    return [math.nan if v is None else float(v) for v in values]
 
 
 def paper_values(reference: Optional[Mapping[str, Any]]) -> Dict[str, Dict[str, float]]:
@@ -42,6 +48,8 @@ def paper_values(reference: Optional[Mapping[str, Any]]) -> Dict[str, Dict[str, 
     for row in (reference or {}).get("table", ()):
         name = row.get("filter")
         for key, group, axis, _, _ in AXES:
+            if group not in _PAPER_KEYS:
+                continue
             values = row.get(_PAPER_KEYS[group])
             if name and values is not None:
                 i = (nav_metrics.ATTITUDE if group == "attitude_rms_deg"

@@ -94,6 +94,12 @@ COLUMNS = (("cross_track_rms_m", "xtrack RMS", "[m]"), ("cross_track_max_m", "xt
            ("waypoint_miss_max_m", "wp miss max", "[m]"))
 
 
+#: the campaign's short names of the metrics (orchestrator.campaigns.campaign_summary)
+SHORT_LABELS = {"cross_track_rms_m": "xtrack RMS", "cross_track_max_m": "xtrack max",
+                "outage_cross_track_max_m": "out xtrack", "outage_position_error_max_m":
+                "out poserr", "waypoint_miss_max_m": "wp miss"}
+
+
 def mission_table(rows):
     """Text table of ``rows`` = [(label, mission metrics), ...]."""
     width = max([len("mission")] + [len(label) for label, _ in rows]) + 2
@@ -107,3 +113,42 @@ def mission_table(rows):
             values.append((f"{v:d}" if isinstance(v, int) else f"{v:.2f}").rjust(c))
         lines.append(label.ljust(width) + "".join(values))
     return "\n".join(lines)
+
+
+class MissionSink:
+    """The mission metrics of a run whose rows stream in chunks (a campaign's): the chunks
+    are kept (a mission is minutes long) and measured at ``close``; :attr:`metrics` maps
+    filter component -> mission metrics (empty without a vehicle or a truth)."""
+
+    def __init__(self, window=None):
+        self.window = window
+        self.metrics = {}
+        self._chunks = []
+        self._vehicle = None      # decided at the first chunk: no vehicle, nothing is kept
+
+    def write(self, chunk) -> None:
+        if self._vehicle is None:
+            self._vehicle = find_vehicle(chunk) or ""
+        if self._vehicle:         # a copy: the recorder may reuse its buffers
+            self._chunks.append(type(chunk)(time=chunk.time.copy(),
+                                            data={k: a.copy() for k, a in chunk.data.items()},
+                                            columns=chunk.columns, units=chunk.units,
+                                            metadata=chunk.metadata))
+
+    def close(self, header):
+        if not self._chunks:
+            return self.metrics
+        first = self._chunks[0]
+        joined = type(first)(time=np.concatenate([c.time for c in self._chunks]),
+                             data={k: np.concatenate([c.data[k] for c in self._chunks])
+                                   for k in first.data},
+                             columns=first.columns, units=first.units, metadata=header.metadata)
+        self._chunks = []
+        truth = any(joined.has(c, "truth_time") for c in joined.components)
+        if truth:
+            self.metrics = {f: mission_metrics(joined, f, self.window, self._vehicle)
+                            for f in nav_metrics.filters_of(joined)}
+        return self.metrics
+
+    def abort(self) -> None:
+        self._chunks = []
