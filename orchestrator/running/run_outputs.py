@@ -9,6 +9,7 @@ from typing import List, Sequence
 
 from ..cosim import interrupts
 from ..results import metrics as nav_metrics
+from ..results import mission_metrics
 from ..results import outputs
 from ..results import phases as scenario_phases
 from ..results import recorder
@@ -116,6 +117,11 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
     first = shown[0][1] if shown else runs[0].results
     truth = nav_metrics.find_component(first, "truth_", ("time", "lat", "lon", "h"))
     written.add(plots.plot_trajectory(first, truth, out / "trajectory.png", title))
+    missions = [(run.label, run.results, FILTER_COMPONENT) for run in runs
+                if run.series_file is None and FILTER_COMPONENT in run.results.components]
+    vehicle = mission_metrics.find_vehicle(runs[0].results) if missions else None
+    if vehicle is not None:
+        written.add(plots.plot_mission(missions, vehicle, out / "mission.png", title))
 
 
 def _navigation_plots(entries, out: Path, title, reference, written: _Written) -> None:
