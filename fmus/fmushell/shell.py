@@ -40,6 +40,7 @@ def setup(slave, component_class):
     slave._units = {}
     slave._input_names = tuple(p.name for p in cls.inputs)
     slave._component = None
+    slave._entered = None      # (parameters, component) started in initialization mode
     slave._start_time = 0.0
     slave._stop_time = None
     slave._failed = None
@@ -95,20 +96,47 @@ def setup_experiment(slave, start_time, stop_time=None, tolerance=None):
     slave._stop_time = None if stop_time is None else float(stop_time)
 
 
+def _parameters(slave):
+    """The parameter values, relative file parameters found in the resources made absolute."""
+    return resolved_file_parameters(
+        slave, {p.name: slave._values[p.name] for p in slave.component_class.parameters})
+
+
+def enter_initialization_mode(slave):
+    """Start the component already, so its outputs are valid in initialization mode (a host
+    may read them then to set the inputs of others: a sensor takes its vehicle's start
+    sample from them).  Nothing is reported here: exit_initialization_mode starts it again,
+    with its errors, if this failed or a parameter changed since."""
+    slave._entered = None
+    if slave._start_error is not None:   # reported by exit_initialization_mode
+        return
+    params = _parameters(slave)
+    try:
+        component = slave.component_class(**params)
+        outputs = component.start(slave._start_time)
+    except Exception:  # reported by exit_initialization_mode
+        return
+    slave._entered = (params, component)
+    slave._values.update(outputs)
+
+
 def exit_initialization_mode(slave):
     values = slave._values
     if slave._start_error is not None:
         _fail(slave, slave._start_error, refuse=True)
         return
-    params = resolved_file_parameters(
-        slave, {p.name: slave._values[p.name] for p in slave.component_class.parameters})
+    params = _parameters(slave)
     slave._values.update(params)  # a state's parameters are those the component was built with
     inputs = set(slave._input_names)
     slave._settable = {t: {vr: n for vr, n in names.items() if n in inputs}
                        for t, names in slave._settable.items()}
+    entered, slave._entered = getattr(slave, "_entered", None), None
     try:
-        slave._component = slave.component_class(**params)
-        slave._values.update(slave._component.start(slave._start_time))
+        if entered is not None and entered[0] == params:
+            slave._component = entered[1]
+        else:
+            slave._component = slave.component_class(**params)
+            slave._values.update(slave._component.start(slave._start_time))
         started = slave._component.initial_inputs({n: values[n] for n in slave._input_names})
         if started is not None:
             slave._values.update(started)
@@ -249,6 +277,7 @@ def bind_methods(slave_class):
     the class statement in every script)."""
     balance_loader_decref(sys._getframe(1))
     slave_class.setup_experiment = setup_experiment
+    slave_class.enter_initialization_mode = enter_initialization_mode
     slave_class.exit_initialization_mode = exit_initialization_mode
     slave_class._get_fmu_state = get_fmu_state
     slave_class._set_fmu_state = set_fmu_state
