@@ -29,9 +29,10 @@ from ..results import metrics as nav_metrics
 from ..results import plots
 from ..results import recorder
 from ..campaigns import statistics as st
-from ..campaigns.campaign_summary import AXES
+from ..campaigns.campaign_summary import AXES, per_run_values
 from ..campaigns.executor import Executor
 from ..errors import NavfmuError, SkippedParametersWarning, WiringError
+from ..results import mission_metrics
 from ..results.metric_comparisons import (GROUP_KEYS, improvement_percent, per_axis_enu, rms_3d,
     rms_ratio)
 from ..results.run_results import atomic_write
@@ -305,6 +306,38 @@ def _orderings(plan) -> List[str]:
     return lines + [""]
 
 
+#: the mission metrics of the report, the first one ordering the filters
+_MISSION_KEYS = ("cross_track_rms_m", "outage_cross_track_max_m", "outage_position_error_max_m",
+                 "cross_track_max_m", "waypoint_miss_max_m")
+
+
+def _mission(plan) -> List[str]:
+    """A guided vehicle's mission metrics (orchestrator.results.mission_metrics): the filters
+    ordered by their mean cross-track error, each metric with its interval, and the orderings
+    the paired intervals support."""
+    records = plan["records"]
+    if not records or not all("mission" in r["metrics"] for rows in records.values()
+                              for r in rows):
+        return []
+    values = {k: {f: per_run_values(rows, "mission", k) for f, rows in records.items()}
+              for k in _MISSION_KEYS}
+    order = sorted(records, key=lambda f: st.t_interval(values[_MISSION_KEYS[0]][f])["mean"])
+    labels = mission_metrics.SHORT_LABELS
+    lines = ["**Mission**: the true path against the route, per filter ordered by its mean "
+             "cross-track RMS (mean [95 % CI] over the runs; `out`: during the GNSS outage; "
+             "`orchestrator/results/mission_metrics.py`).", "",
+             "| filter | " + " | ".join(f"{labels[k]} [m]" for k in _MISSION_KEYS) + " |",
+             "|---|" + "---|" * len(_MISSION_KEYS)]
+    for f in order:
+        lines.append(f"| {f} | " + " | ".join(_ci(st.t_interval(values[k][f]), 2)
+                                             for k in _MISSION_KEYS) + " |")
+    if len(records) > 1:
+        lines += ["", "Orderings the paired intervals support:", ""]
+        lines += [f"- {labels[k]}: {st.supported_orderings(values[k])['chain']}"
+                  for k in _MISSION_KEYS[:3]]
+    return lines + [""]
+
+
 def _improvement(plan) -> List[str]:
     imp = (plan["reference"] or {}).get("improvement_percent")
     if not isinstance(imp, dict) or imp.get("baseline") not in plan["records"] or \
@@ -455,6 +488,7 @@ def _markdown(sections, command, seconds, workers, scheduler, local_cluster) -> 
                                                  if ref else ""), ""]
         if ref:
             lines += [ref.get("paper", ""), ""] + _paper_table(plan)
+        lines += _mission(plan)
         figs = plan["figures"]
         lines += [f"![RMS of every filter on {plan['model'].name}](figures/{figs['rms'].name})",
                   ""]
