@@ -35,6 +35,10 @@ N_STEPS = 5
 RUNS_DEFAULT = 10
 RUNS_SLOW = 100
 WORKERS = max(2, min(4, os.cpu_count() or 1))
+#: input values an FMU cannot run on the generic constants with (a guided vehicle refuses a
+#: navigation solution far from its route): name -> value
+INPUT_VALUES = {"GuidedUav": {"nav_lat": 0.6998770300497261, "nav_lon": 2.069960492865275,
+                              "nav_h": 150.0, "nav_vn": 25.0}}
 #: String parameters an FMU cannot run without
 STRING_PARAMETERS = {"ImuGnssReplay": {"log": str(ROOT / "models" / "replay_gnss_ins_sim" / "log")}}
 
@@ -95,7 +99,7 @@ def _prepare(name, folder):
             outputs.append(v.valueReference)
         elif v.causality == "input":
             kind = "t" if v.name.endswith("_time") else "h" if v.name.endswith("_dt") else \
-                repr(1e-3 * (len(inputs) + 1))
+                repr(INPUT_VALUES.get(name, {}).get(v.name, 1e-3 * (len(inputs) + 1)))
             inputs.append((v.valueReference, kind))
             input_args.append(f"{v.valueReference}={kind}")
     slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,

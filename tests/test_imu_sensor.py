@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from imu_sensor_models import through_imu_sensor
+from navcore.components.imu_sensor import RATE_NAMES, TRUTH_NAMES
 from navcore.components.registry import ImuSensor, TrajectoryImu
 from navcore.core import signals
 from navcore.errors import InputError, ParameterError
@@ -144,11 +145,17 @@ def test_a_repeated_sample_holds_and_a_missing_start_is_named():
     first = dict(trajectory.advance(0.0, 0.01, {}))
     out = dict(sensor.advance(0.0, 0.01, first))
     assert sensor.advance(0.01, 0.01, first) == out      # the same truth_time again: hold
+    # no start sample (a host setting no inputs in initialization mode): the first truth
+    # starts the sensor, with a warning, and the next one closes the first interval
     fresh = ImuSensor()
     fresh.start(0.0)
-    with pytest.raises(InputError, match=r"'truth_time' = 0.01 s at the first step is not the "
-                                         r"start time 0.0 s"):
-        fresh.advance(0.0, 0.01, first)
+    assert fresh.initial_inputs({n: 0.0 for n in TRUTH_NAMES + RATE_NAMES}) is None
+    held = dict(fresh.advance(0.0, 0.01, first))
+    assert held["imu_dt"] == 0.0
+    assert "no truth at the start time 0.0 s" in fresh.take_notices()[0]
+    second = dict(trajectory.advance(0.01, 0.01, {}))
+    out = fresh.advance(0.01, 0.01, second)
+    assert out["imu_time"] == second["truth_time"] and out["imu_dt"] == 0.01
 
 
 def test_an_unknown_input_form_is_refused():

@@ -27,8 +27,8 @@ latest waypoint at the moment guidance switched past it, less the switching dist
 guidance meant (the fly-by lead or the acceptance radius; so 0 for a vehicle that knows
 where it is, positive when it switched too far out, negative too close).
 
-Refusals: a non-finite navigation input; a solution older than ``max_nav_age`` or from the
-future; a solution more than :data:`MAX_ROUTE_DISTANCE` from every waypoint (an unconnected
+Refusals: a non-finite navigation input; a solution more than ``max_nav_age`` older or
+newer than the sample's start; a solution more than :data:`MAX_ROUTE_DISTANCE` from every waypoint (an unconnected
 or diverged filter).
 """
 from __future__ import annotations
@@ -105,8 +105,8 @@ _PARAMETERS = (
     integer("seed", "seed of the turbulence", 3, SEED_LIMITS),
     real("sample_period", "s", "sampling interval of the truth (the IMU period of ImuSensor)",
          0.01, Limits(0.0, 1.0, low_open=True)),
-    real("max_nav_age", "s", "a navigation solution older than this (or from the future) is "
-         "refused", 1.0, Limits(0.0, 3600.0, low_open=True)),
+    real("max_nav_age", "s", "a navigation solution older (or newer) than this is refused",
+         1.0, Limits(0.0, 3600.0, low_open=True)),
 )
 
 
@@ -190,7 +190,7 @@ class GuidedUav(Component):
         age = t_sample - inputs["nav_time"]
         tol = time_tolerance(self.dt, t_sample)
         limit = self.params["max_nav_age"]
-        if not -tol <= age <= limit + tol:
+        if not abs(age) <= limit + tol:   # a host may tag inputs with the step's end
             raise InputError(
                 f"{self.model_name}: input 'nav_time' = {inputs['nav_time']!r} s is "
                 f"{age:.6g} s {'old' if age > 0 else 'ahead'} at t = {t_sample!r} s (parameter "

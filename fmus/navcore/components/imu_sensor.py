@@ -27,8 +27,9 @@ magnetometer.
 
 Sampling: the truth at the start time is the input values at the end of initialization mode
 (the FMI rule: inputs set in initialization mode hold at the start), or, when they are all
-still 0 there (a host that sets none), the inputs of the first step (right under a Jacobi
-master, which passes the start sample; refused otherwise); then every new truth
+still 0 there (a host that sets none), the first truth received: under a Jacobi master that
+is the start sample; a later one starts the sensor there, with a warning (its first IMU
+interval ends one period after it, so a filter started at the start time refuses it); then every new truth
 sample (``truth_time`` later than the previous one) closes one IMU interval, whose outputs are
 tagged ``imu_time`` = ``truth_time``, ``imu_dt`` = ``imu_period``.  A step that brings the
 same ``truth_time`` again (a Jacobi master, a sensor stepped faster than the vehicle) holds
@@ -76,7 +77,6 @@ RATES = (
 )
 RATE_NAMES = tuple(p.name for p in RATES)
 INPUT_FORMS = ("truth", "rates")
-_FIRST_STEP = "at the first step"
 
 
 def position_tolerance(dv_norm, dt):
@@ -129,23 +129,41 @@ class ImuSensor(ImuMeasurement, Component):
     def _names(self):
         return TRUTH_NAMES + RATE_NAMES if self.rates_form else TRUTH_NAMES
 
-    def initial_inputs(self, inputs, when="at the end of initialization mode"):
+    def initial_inputs(self, inputs):
         """The truth at the start time: the inputs at the end of initialization mode.  Inputs
         still at their start values (all 0: a host that sets no inputs in initialization
-        mode) are not a sample: the first step's inputs are taken as the start instead."""
-        if all(inputs[n] == 0.0 for n in self._names()) and when != _FIRST_STEP:
+        mode) are not a sample: the first step's inputs start the sensor instead."""
+        if all(inputs[n] == 0.0 for n in self._names()):
             return None
         self.check_inputs(inputs, self._names())
         t = inputs["truth_time"]
         if not same_time(t, self.start_time, self.dt):
             raise InputError(
-                f"{self.model_name}: input 'truth_time' = {t!r} s {when} is not the start time "
+                f"{self.model_name}: input 'truth_time' = {t!r} s at the end of initialization "
+                f"mode is not the start time "
                 f"{self.start_time!r} s: the sensor needs the vehicle's truth at the start "
                 "time, set as its inputs in initialization mode")
         self._take(inputs)
         self.started = True
         self.start_magnetometer(self.out, self.start_time, _attitude(inputs))
         return dict(self.out)
+
+    def _first_sample(self, inputs):
+        """Without a start sample, the first truth received starts the sensor: at the start
+        time (a Jacobi master) as if given in initialization mode; later, with a warning,
+        the first IMU interval then ending one imu_period after it."""
+        self.check_inputs(inputs, self._names())
+        t = inputs["truth_time"]
+        if not same_time(t, self.start_time, self.dt):
+            self.notify(f"{self.model_name}: no truth at the start time {self.start_time!r} s "
+                        "(the inputs were not set in initialization mode): the sample at "
+                        f"truth_time = {t!r} s starts the sensor; its first IMU interval ends "
+                        f"at {t + self.dt!r} s")
+            self.last_time = t
+        self._take(inputs)
+        self.started = True
+        self.start_magnetometer(self.out, t, _attitude(inputs))
+        return self.out
 
     def _take(self, inputs):
         v = (inputs["truth_vn"], inputs["truth_ve"], inputs["truth_vd"])
@@ -155,8 +173,8 @@ class ImuSensor(ImuMeasurement, Component):
             self.last_rates = tuple(inputs[n] for n in RATE_NAMES)
 
     def step(self, t, h, inputs):
-        if not self.started:   # a caller that does not pass the inputs of initialization
-            self.initial_inputs(inputs, _FIRST_STEP)
+        if not self.started:   # no start sample from initialization mode
+            return self._first_sample(inputs)
         self.check_inputs(inputs, self._names())
         t_new = inputs["truth_time"]
         t_last = self.last_time
