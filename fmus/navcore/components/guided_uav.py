@@ -28,8 +28,8 @@ guidance meant (the fly-by lead or the acceptance radius; so 0 for a vehicle tha
 where it is, positive when it switched too far out, negative too close).
 
 Refusals: a non-finite navigation input; a solution more than ``max_nav_age`` older or
-newer than the sample's start; a solution more than :data:`MAX_ROUTE_DISTANCE` from every waypoint (an unconnected
-or diverged filter).
+newer than the sample's start; a solution more than :data:`MAX_ROUTE_DISTANCE` from every
+waypoint (an unconnected or diverged filter).
 """
 from __future__ import annotations
 
