@@ -31,8 +31,8 @@ still 0 there (a host that sets none), the first truth received: under a Jacobi 
 is the start sample; a later one starts the sensor there, with a warning (its first IMU
 interval ends one period after it, so a filter started at the start time refuses it); then
 every new truth sample (``truth_time`` later than the previous one) closes one IMU interval,
-whose outputs are tagged ``imu_time`` = ``truth_time``, ``imu_dt`` = ``imu_period``.  A step that brings the
-same ``truth_time`` again (a Jacobi master, a sensor stepped faster than the vehicle) holds
+whose outputs are tagged ``imu_time`` = ``truth_time``, ``imu_dt`` = ``imu_period``.  A step
+that brings the same ``truth_time`` again (a Jacobi master, a sensor stepped faster than the vehicle) holds
 the outputs.  So the sensor follows the time tags under any master; it is stepped at least as
 often as the vehicle outputs.
 
