@@ -32,9 +32,9 @@ is the start sample; a later one starts the sensor there, with a warning (its fi
 interval ends one period after it, so a filter started at the start time refuses it); then
 every new truth sample (``truth_time`` later than the previous one) closes one IMU interval,
 whose outputs are tagged ``imu_time`` = ``truth_time``, ``imu_dt`` = ``imu_period``.  A step
-that brings the same ``truth_time`` again (a Jacobi master, a sensor stepped faster than the vehicle) holds
-the outputs.  So the sensor follows the time tags under any master; it is stepped at least as
-often as the vehicle outputs.
+that brings the same ``truth_time`` again (a Jacobi master, a sensor stepped faster than the
+vehicle) holds the outputs.  So the sensor follows the time tags under any master; it is
+stepped at least as often as the vehicle outputs.
 
 Refusals (an :class:`InputError` naming the input and the time; nothing is resampled): a
 non-finite or out-of-range input; ``truth_time`` going back; a sample interval that is not
