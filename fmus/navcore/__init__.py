@@ -1,16 +1,20 @@
 """navcore: the navigation algorithms of navfmu as plain numpy/scipy code (no FMI).
 
-Modules are named for what they compute: ``constants`` (G0, WGS-84, unit factors), ``earth``
-(WGS-84 earth model), ``rotations``, ``strapdown`` (mechanization), ``trajectory`` (truth and
-ideal IMU from a motion profile; ``motion_profiles`` the profiles, ``profile_segments`` their
-kinematics), ``imu_errors`` and ``gnss_errors`` (sensor error models), ``error_model``
-(15-state INS error dynamics), ``ins_gnss_kf`` (error-state Kalman filter),
-``innovation_stats`` (NIS, chi-square quantiles and gates), ``adaptive_laws`` (paper 001),
-``robust_laws`` (paper 004), ``unscented``/``ctfa``/``imm`` (paper 000), the engines
-``adaptive_filters``, ``ukf_filters`` and ``ahrs``, the step-wise models wrapped by the FMUs
-(``component`` the contract, ``sensor_components``, ``replay``, ``filter_component``,
-``kf_components``, ``ukf_components``, ``ahrs_components``, registered in ``components``),
-``errors`` (the one error hierarchy), ``signals`` (the variable contracts), ``timing`` (sample
-grids and the one time tolerance) and ``latency`` (the history that applies a late GNSS fix at its
-time).
+Wings, lowest first; a wing imports only the ones before it (``tests/test_layout.py``):
+
+* ``core``: the step-wise ``Component`` contract, declared state and its byte format, the
+  signal contracts, limits and times on a sample grid;
+* ``ins``: constants, the WGS-84 earth model, rotations and MRP, the strapdown mechanization and
+  its exact inverse, the 15-state error model, motion profiles, the truth trajectory, the lever
+  arm;
+* ``sensors``: IMU, GNSS (white and time-correlated) and magnetometer error models, the
+  sensor-log format, its times and the converters of other tools' data;
+* ``filters``: innovation statistics, the adaptive and robust laws of papers 001 and 004, the
+  Kalman, unscented, IMM, CTFA and AHRS engines, the recovery guards, the initial state from
+  the data, the NIS monitor and the late-fix history;
+* ``vehicles``: the guided UAV's point-mass dynamics, route guidance and turbulence;
+* ``components``: the components the FMUs wrap, and their registry
+  (``navcore.components.registry``).
+
+``errors`` is the one error hierarchy, for navcore and the master.
 """
