@@ -97,7 +97,16 @@ def _common_run_options(f):
     f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
     f = click.option("--replay", "replay", type=click.Path(), callback=nonempty_path,
                      help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
-                     "receiver) by ImuGnssReplay playing this sensor-log folder.")(f)
+                     "receiver) by ImuGnssReplay playing this sensor-log folder (--stop is "
+                     "then in the log's time).")(f)
+    f = click.option("--start", "start", type=float, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("start_time", v),
+                     help="With --replay: start at the first IMU interval beginning at or "
+                     "after this time of the log [s].")(f)
+    f = click.option("--max-dt-jitter", "max_dt_jitter", type=float, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("max_dt_jitter", v),
+                     help="With --replay: largest relative deviation of an IMU interval from "
+                     "the log's median interval (default 0.75).")(f)
     f = click.option("--algorithm", type=click.Choice(ALGORITHMS), default=ALGORITHMS[0],
                      show_default=True, expose_value=False,
                      callback=lambda ctx, _, v: ctx.meta.__setitem__("algorithm", v),
@@ -109,10 +118,12 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
              replay=None, log_sensors=None):
     from .run_command import run_scenarios
 
+    meta = click.get_current_context().meta
     run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
                   echo=click.echo,
-                  algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
-                  replay=replay, log_sensors=log_sensors)
+                  algorithm=meta.get("algorithm", ALGORITHMS[0]),
+                  replay=replay, log_sensors=log_sensors,
+                  replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")})
 
 
 @cli.command()
