@@ -17,13 +17,13 @@ is replaced, the run's time span becomes the log's, and the base step its IMU pe
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from navcore.sensors.log_time import DEFAULT_MAX_DT_JITTER, check_max_dt_jitter
+from navcore.sensors.log_time import (DEFAULT_MAX_DT_JITTER, absolute_text,
+                                     check_max_dt_jitter, steps_to_reach)
 from navcore.sensors.sensorlog import LogError, SensorLog, read_log, write_log
 
 from ..building import build as fmu_build
@@ -137,10 +137,6 @@ def replaceable_components(model: SystemModel) -> List[str]:
             if c.name in used and used[c.name] <= outputs]
 
 
-def _multiple(duration: float, step: float) -> int:
-    return int(math.floor(duration / step + 1e-9))
-
-
 def _log_span(log: SensorLog, folder, start_time, stop_time) -> Tuple[float, float]:
     """The run's span in the log's relative time: from the first interval starting at or
     after ``start_time`` to ``stop_time`` (both in the log's time, origin included)."""
@@ -151,7 +147,8 @@ def _log_span(log: SensorLog, folder, start_time, stop_time) -> Tuple[float, flo
         k = int(np.searchsorted(begins, float(start_time) - origin - 1e-9 * log.imu_period))
         if k >= len(begins):
             raise NavfmuError(f"--start {start_time}: after the last IMU interval of the log "
-                              f"{folder}, which ends at {origin + log.stop_time:.10g} s")
+                              f"{folder}, which ends at "
+                              f"{absolute_text(log.stop_time, origin)} s")
         start = float(begins[k])
     end = log.stop_time if stop_time is None else min(float(stop_time) - origin, log.stop_time)
     return start, end
@@ -187,11 +184,11 @@ def replay_model(model: SystemModel, log_dir, source: Optional[Path] = None,
     new = ComponentSpec(name=REPLAY_COMPONENT, source=source, parameters=parameters)
     step = log.replay_step
     start, end = _log_span(log, folder, start_time, stop_time)
-    n = _multiple(end - start, step)
+    n = steps_to_reach(start, end, step)
     if n < 1:
         raise NavfmuError(f"--replay: the log {folder} holds less than one IMU interval "
-                          f"between {log.time_origin + start:.10g} s and the stop time "
-                          f"{log.time_origin + end:.10g} s")
+                          f"between {absolute_text(start, log.time_origin)} s and the stop "
+                          f"time {absolute_text(end, log.time_origin)} s")
     changes = {"start_time": start, "stop_time": start + n * step, "base_step": step}
     for c in model.components:
         if c.name not in names and c.step_hint is not None:

@@ -70,10 +70,10 @@ def relative_seconds(path, texts: Sequence[str], numbers: Sequence[int],
 
 def absolute_text(t: float, origin: float) -> str:
     """The text of the relative time ``t`` plus ``origin``, exact: what
-    :func:`relative_seconds` reads back as ``t``."""
+    :func:`relative_seconds` reads back as ``t`` (the shortest text of ``t`` that does)."""
     if origin == 0.0:
-        return "%.17g" % t
-    return str(Decimal(int(origin)) + Decimal("%.17g" % t))
+        return repr(float(t))
+    return str(Decimal(int(origin)) + Decimal(repr(float(t))))
 
 
 def nominal_interval(dt: np.ndarray) -> float:
@@ -109,9 +109,11 @@ def check_intervals(path, dt, line_of, max_dt_jitter=DEFAULT_MAX_DT_JITTER) -> N
                        "(raise it to integrate such intervals as recorded)")
 
 
-def _steps_reached(ends, start, step) -> np.ndarray:
-    tol = np.array([time_tolerance(step, t) for t in (ends[0], ends[-1])]).max()
-    return np.floor((ends - start + tol) / step)
+def _reaching_step(ends, start, step) -> np.ndarray:
+    """Number n of the communication step ``(start + (n-1) step, start + n step]`` that
+    reaches each of ``ends`` (within the time tolerance)."""
+    tol = max(time_tolerance(step, float(ends[0])), time_tolerance(step, float(ends[-1])))
+    return np.ceil((ends - start - tol) / step)
 
 
 def replay_step(ends: np.ndarray, dt: np.ndarray) -> float:
@@ -119,10 +121,19 @@ def replay_step(ends: np.ndarray, dt: np.ndarray) -> float:
     lengths ``dt`` (module docstring)."""
     start = float(ends[0] - dt[0])
     first = float(dt[0])
-    index = _steps_reached(ends, start, first)
+    index = _reaching_step(ends, start, first)
     if index[0] == 1 and (np.diff(index) == 1).all():
         return first
     step = float(dt.min())
-    while not (np.diff(_steps_reached(ends, start, step)) >= 1).all():
+    while not (np.diff(_reaching_step(ends, start, step)) >= 1).all():
         step *= 0.5    # only at the tolerance's edge: a step a little shorter reaches one
     return step
+
+
+def steps_to_reach(start: float, end: float, step: float) -> int:
+    """The number of steps of ``step`` from ``start`` whose last reaches ``end`` (within the
+    time tolerance), at least 0."""
+    n = int(math.floor((end - start) / step + 1e-9))
+    if start + n * step + time_tolerance(step, end) < end:
+        n += 1                 # a shortest-interval step does not divide the span
+    return max(n, 0)

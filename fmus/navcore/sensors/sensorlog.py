@@ -301,8 +301,8 @@ def check_truth(path, truth) -> None:
 _CHECKS = {IMU_FILE: check_imu, GNSS_FILE: check_gnss, TRUTH_FILE: check_truth}
 
 
-def _span(t, origin) -> str:
-    return f"{origin + float(t[0]):.10g} to {origin + float(t[-1]):.10g} s"
+def _span(t0, t1, origin) -> str:
+    return f"{absolute_text(t0, origin)} to {absolute_text(t1, origin)} s"
 
 
 def check_overlap(log: SensorLog, paths) -> None:
@@ -315,9 +315,9 @@ def check_overlap(log: SensorLog, paths) -> None:
         t = data["time"]
         if t[0] > stop or t[-1] < start:
             raise LogError(
-                f"{paths[name]}: times {_span(t, log.time_origin)} do not overlap the IMU's "
-                f"{log.time_origin + start:.10g} to {log.time_origin + stop:.10g} s "
-                f"({paths[IMU_FILE]}); the files must share one time scale")
+                f"{paths[name]}: times {_span(t[0], t[-1], log.time_origin)} do not overlap "
+                f"the IMU's {_span(start, stop, log.time_origin)} ({paths[IMU_FILE]}); the "
+                "files must share one time scale")
 
 
 def read_log(folder, max_dt_jitter=DEFAULT_MAX_DT_JITTER) -> SensorLog:
