@@ -130,8 +130,12 @@ _DIAGNOSTICS = (
             "max_fix_age from nav_time, or before the epoch of a fix already applied"),
 )
 
+#: the filter has its initial state (an AHRS its attitude; an INS/GNSS filter with init_mode
+#: 'gnss' or 'align' its start from the data): the metrics skip the samples before
+ALIGNED = boolean("aligned", "the filter has a solution (false until its initialization)")
+
 #: outputs every INS/GNSS filter has (filters may add their own diagnostics)
-FILTER_OUTPUTS = _NAV + _STD + _DIAGNOSTICS
+FILTER_OUTPUTS = _NAV + _STD + _DIAGNOSTICS + (ALIGNED,)
 
 
 #: inputs of every attitude (AHRS) filter: IMU increments and the magnetometer
@@ -142,7 +146,7 @@ _BY_NAME = {p.name: p for p in _NAV + _DIAGNOSTICS}
 #: outputs every AHRS filter has: attitude, its 1-sigma, gyro bias, innovation statistics
 AHRS_OUTPUTS = (
     _BY_NAME["nav_time"],
-    boolean("aligned", "the filter has an attitude solution (false until its initialization)"),
+    ALIGNED,
     *(_BY_NAME[f"nav_{a}"] for a in ("roll", "pitch", "yaw")),
     *(real(f"std_{a}", "rad", f"1-sigma of the {a} error") for a in ("roll", "pitch", "yaw")),
     *(_BY_NAME[f"nav_bg_{a}"] for a in AXES_BODY),
