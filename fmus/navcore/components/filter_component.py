@@ -27,6 +27,8 @@ from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from ..filters.latency import SolutionHistory
 from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
 from ..filters.recovery import RECOVERY_PARAMETERS
+from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
+from ..ins.rotations import euler_to_dcm
 from ..ins.strapdown import Strapdown
 from ..core.timing import same_time, time_tolerance
 
@@ -90,6 +92,7 @@ _FILTER_PARAMETERS = (
          "filter's nav_time is not applied (counted in n_stale_fixes); a later one is applied "
          "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
     *INIT_PARAMETERS,
+    *LEVER_ARM_PARAMETERS,
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -149,7 +152,7 @@ class InsGnssFilter(Component):
             accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
             accel_bias_tau=p["q_accel_bias_tau_s"],
             r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
-            measurement=p["measurement"])
+            measurement=p["measurement"], lever_arm=lever_arm_of(p))
 
     def engine_options(self):
         """Validated keyword arguments of the engine beyond (config, nav); subclasses extend."""
@@ -275,6 +278,9 @@ class InsGnssFilter(Component):
         config.p0 = self.initializer.start_sigmas(
             config.p0, r if self.initializer.use_fix_velocity else r[:3],
             max(math.hypot(v[0], v[1]), p["init_speed_min"]))
+        if config.lever_arm is not None:   # the fix is the antenna's: back to the IMU
+            lat, lon, h, _ = antenna_fix(lat, lon, h, v, euler_to_dcm(roll, pitch, yaw),
+                                         -config.lever_arm, np.zeros(3))
         nav = Strapdown.from_euler(lat, lon, h, np.asarray(v, dtype=float), roll, pitch, yaw)
         self.engine = self.make_engine(config, nav)
         self.history = SolutionHistory(self.nav_time, self.engine)
