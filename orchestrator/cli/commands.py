@@ -164,27 +164,52 @@ def convert():
 @click.argument("dst", type=click.Path(file_okay=False), callback=nonempty_path)
 @click.option("--run", "run_index", type=int, default=0, show_default=True,
               help="Which simulation run (the R of gyro-R.csv).")
-def convert_gnss_ins_sim(src_dir, dst, run_index):
-    """A gnss-ins-sim output folder SRC_DIR (rates at the sample instants; increments by the
-    trapezoid rule) into the sensor-log folder DST."""
+@click.option("--force", is_flag=True, help="Replace DST if it exists.")
+def convert_gnss_ins_sim(src_dir, dst, run_index, force):
+    """A gnss-ins-sim output folder SRC_DIR (ref_frame=0; rates at the sample instants;
+    increments by the trapezoid rule) into the sensor-log folder DST."""
     from . import convert as conv
 
-    click.echo(conv.describe(conv.convert_gnss_ins_sim(src_dir, dst, run=run_index), dst))
+    click.echo(conv.describe(conv.convert_gnss_ins_sim(src_dir, dst, run=run_index,
+                                                       force=force), dst))
 
 
 @convert.command("kf-gins")
+<<<<<<< HEAD
 @click.argument("imu_file", type=click.Path(), callback=nonempty_path)
 @click.argument("gnss_file", type=click.Path(), callback=nonempty_path)
 @click.argument("rest", nargs=-1, type=click.Path(), callback=nonempty_path)
 def convert_kf_gins(imu_file, gnss_file, rest):
     """KF-GINS IMU_FILE and GNSS_FILE text (and optionally a .nav TRUTH_FILE) into the
     sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
+=======
+@click.argument("imu_file", type=click.Path())
+@click.argument("gnss_file", type=click.Path())
+@click.argument("rest", nargs=-1, type=click.Path())
+@click.option("--force", is_flag=True, help="Replace DST (and the --config .ssv) if they exist.")
+@click.option("--config", "config", type=click.Path(dir_okay=False),
+              help="KF-GINS's YAML configuration: also write its initial state, noise, lever "
+              "arm and start time as DST/filter.ssv.")
+def convert_kf_gins(imu_file, gnss_file, rest, force, config):
+    """KF-GINS IMU_FILE and GNSS_FILE text (7 or 13 columns; and optionally a .nav
+    TRUTH_FILE) into the sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
+>>>>>>> 292105b (Receiver sigmas and KF-GINS: r_from_receiver on every INS/GNSS filter (the fix's gnss_std_n/e/d as the position R; the replay outputs the log's std_n/e/d and connects them to our filters); KF-GINS 7- and 13-column GNSS files; convert kf-gins --config writes the YAML's initial state, noise and lever arm as DST/filter.ssv and prints the start time; gnss-ins-sim ref_frame=1 refused by name; convert refuses an existing destination unless --force; docs/guide/kf_gins.md)
     from . import convert as conv
 
     if len(rest) not in (1, 2):
         raise NavfmuError("convert kf-gins: expected IMU_FILE GNSS_FILE [TRUTH_FILE] DST")
     truth, dst = (rest[0], rest[1]) if len(rest) == 2 else (None, rest[0])
-    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst), dst))
+    settings = None
+    if config is not None:
+        from .kf_gins_config import read_config
+
+        settings = read_config(config)        # a bad configuration is refused first
+    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst,
+                                                  force=force), dst))
+    if settings is not None:
+        from .kf_gins_config import write_filter_ssv
+
+        click.echo(write_filter_ssv(settings, dst))
 
 
 @cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "

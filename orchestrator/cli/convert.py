@@ -16,11 +16,19 @@ from ..errors import NavfmuError
 from ..results.outputs import check_writable
 
 
+def refuse_existing(destination, force: bool) -> None:
+    """An existing destination is replaced only with ``force`` (``--force``)."""
+    if Path(destination).exists() and not force:
+        raise NavfmuError(f"convert: the destination {destination} exists; give --force to "
+                          "replace it")
+
+
 def _write(log: SensorLog, destination) -> SensorLog:
     write_log(destination, log)
     return log
 
 
+<<<<<<< HEAD
 def _check_destination(destination) -> None:
     check_writable(destination, "convert: destination", folder=True)
 
@@ -28,15 +36,25 @@ def _check_destination(destination) -> None:
 def convert_gnss_ins_sim(source_dir, destination, run: int = 0) -> SensorLog:
     """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
     _check_destination(destination)
+=======
+def convert_gnss_ins_sim(source_dir, destination, run: int = 0, force=False) -> SensorLog:
+    """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
+    refuse_existing(destination, force)
+>>>>>>> 292105b (Receiver sigmas and KF-GINS: r_from_receiver on every INS/GNSS filter (the fix's gnss_std_n/e/d as the position R; the replay outputs the log's std_n/e/d and connects them to our filters); KF-GINS 7- and 13-column GNSS files; convert kf-gins --config writes the YAML's initial state, noise and lever arm as DST/filter.ssv and prints the start time; gnss-ins-sim ref_frame=1 refused by name; convert refuses an existing destination unless --force; docs/guide/kf_gins.md)
     try:
         return _write(read_gnss_ins_sim(source_dir, run=run), destination)
     except LogError as exc:
         raise NavfmuError(str(exc)) from None
 
 
-def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination) -> SensorLog:
+def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination,
+                    force=False) -> SensorLog:
     """Convert KF-GINS IMU and GNSS text files (and a ``.nav`` reference) into a sensor log."""
+<<<<<<< HEAD
     _check_destination(destination)
+=======
+    refuse_existing(destination, force)
+>>>>>>> 292105b (Receiver sigmas and KF-GINS: r_from_receiver on every INS/GNSS filter (the fix's gnss_std_n/e/d as the position R; the replay outputs the log's std_n/e/d and connects them to our filters); KF-GINS 7- and 13-column GNSS files; convert kf-gins --config writes the YAML's initial state, noise and lever arm as DST/filter.ssv and prints the start time; gnss-ins-sim ref_frame=1 refused by name; convert refuses an existing destination unless --force; docs/guide/kf_gins.md)
     try:
         return _write(read_kf_gins(imu_file, gnss_file, truth_file), destination)
     except LogError as exc:

@@ -197,10 +197,39 @@ def replay_model(model: SystemModel, log_dir, source: Optional[Path] = None,
                 raise NavfmuError(f"--replay: component '{c.name}' steps every {c.step_hint} s, "
                                   f"not a multiple of the log's replay step {step} s")
     new_model = replace_components(model, names, new, **changes)
+    if "std_n" in log.gnss:
+        new_model = connect_receiver_sigmas(new_model)
     notes = {"replaced": names, "log": str(folder), "has_truth": log.truth is not None,
              "has_gnss_velocity": log.has_gnss_velocity, "time_origin": log.time_origin,
              **changes}
     return new_model, notes
+
+
+def connect_receiver_sigmas(model: SystemModel) -> SystemModel:
+    """The replay's ``gnss_std_*`` connected to every component fed its ``gnss_lat`` whose
+    model (one of ours, by the FMU's name) has the inputs ``gnss_std_*``; a foreign FMU is
+    left as it is (it may not have them)."""
+    from navcore.components.registry import REGISTRY
+    from navcore.core.signals import GNSS_STD
+
+    names = [p.name for p in GNSS_STD]
+    fed = {c.end_component for c in model.connections
+           if c.start_component == REPLAY_COMPONENT and c.start_connector == "gnss_lat"}
+    components, connections = [], list(model.connections)
+    for c in model.components:
+        cls = REGISTRY.get(Path(c.source).stem)
+        has = cls is not None and all(n in {p.name for p in cls.inputs} for n in names)
+        if c.name in fed and has and not any(n in c.connectors for n in names):
+            c = dataclasses.replace(c, connectors={**c.connectors,
+                                                   **{n: ("input", "Real") for n in names}},
+                                    units={**c.units, **{n: "m" for n in names}})
+            connections += [Connection(REPLAY_COMPONENT, n, c.name, n) for n in names]
+        elif c.name == REPLAY_COMPONENT:
+            c = dataclasses.replace(c, connectors={**c.connectors,
+                                                   **{n: ("output", "Real") for n in names}},
+                                    units={**c.units, **{n: "m" for n in names}})
+        components.append(c)
+    return dataclasses.replace(model, components=components, connections=connections)
 
 
 def resolve_log_parameters(model: SystemModel) -> SystemModel:

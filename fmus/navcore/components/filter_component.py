@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core import signals
 from ..core import state as _state
-from ..core.component import Component, Limits, real, string
+from ..core.component import Component, InputError, Limits, boolean, real, string
 from ..errors import DivergenceError, StepSizeError
 from ..sensors.gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS
 from ..ins.constants import DPH, DPSH, UG
@@ -93,6 +93,9 @@ _FILTER_PARAMETERS = (
          "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
     *INIT_PARAMETERS,
     *LEVER_ARM_PARAMETERS,
+    boolean("r_from_receiver", "take the receiver's own per-fix position sigmas (inputs "
+            "gnss_std_n/e/d, a replayed log's std_n/e/d) as the position part of R instead "
+            "of r_pos_*", False),
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -100,6 +103,7 @@ _GNSS_VALUE_NAMES = ("gnss_time", "gnss_lat", "gnss_lon", "gnss_h", "gnss_vn", "
                      "gnss_vd")
 
 _STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
+_STD_INPUT_NAMES = tuple(p.name for p in signals.GNSS_STD)
 
 
 class InsGnssFilter(Component):
@@ -296,7 +300,7 @@ class InsGnssFilter(Component):
         self.check_inputs(inputs, _GNSS_VALUE_NAMES)
         fix = _fix_of(inputs)
         engine = self.engine
-        z = engine.measurement(*fix[1:], self.nav_time - fix[0])
+        z = engine.measurement(*fix[1:5], self.nav_time - fix[0])
         p = self.params
         sigmas, axis, metres = disagreement(z, engine.covariance_diagonal()[:3],
                                             [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"]])
@@ -369,8 +373,10 @@ class InsGnssFilter(Component):
     def _apply(self, fix):
         """Measurement update with ``fix`` at the current IMU epoch (its gnss_time within
         half an interval); the history restarts here."""
-        gnss_time, lat, lon, h, v = fix
+        gnss_time, lat, lon, h, v, std = fix
         engine = self.engine
+        if self.params["r_from_receiver"]:
+            self._receiver_r(engine, std, gnss_time)
         z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
         if self.out["nis_dof"] == 0:   # the first fix applied
             self._check_first_fix(gnss_time, float(np.linalg.norm(z[:3])))
@@ -399,6 +405,21 @@ class InsGnssFilter(Component):
                         "such as the trajectory's 'profile', by a host that does not apply it?); "
                         "the solution is off until the filter converges to the fixes")
 
+    def _receiver_r(self, engine, std, gnss_time):
+        """The receiver's sigmas of this fix as the position part of the engine's nominal R
+        (``r_from_receiver``; the velocity part stays r_vel_*)."""
+        bad = np.flatnonzero(~(std > 0))
+        if bad.size:
+            name = _STD_INPUT_NAMES[int(bad[0])]
+            raise InputError(f"{self.model_name}: input '{name}' = {float(std[bad[0]])!r} m "
+                             f"for the fix at gnss_time = {gnss_time!r} s with parameter "
+                             "'r_from_receiver' "
+                             "= true: the receiver gives no sigma (a log without std_n/e/d "
+                             "columns, or the input is not connected)")
+        R = engine.R0.copy()
+        R[[0, 1, 2], [0, 1, 2]] = std ** 2
+        engine.R0 = R
+
     def write_diagnostics(self, result):
         """The extra outputs, after every update (``result``) and once at initialization
         (``result`` None): each name in ``engine_diagnostics`` copied from the engine's
@@ -426,6 +447,7 @@ class InsGnssFilter(Component):
 
 
 def _fix_of(inputs):
-    """The fix of the GNSS inputs: (gnss_time, lat, lon, h, v_ned)."""
+    """The fix of the GNSS inputs: (gnss_time, lat, lon, h, v_ned, receiver sigmas NED)."""
     return (inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
-            np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]))
+            np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]),
+            np.array([inputs.get(name, 0.0) for name in _STD_INPUT_NAMES]))

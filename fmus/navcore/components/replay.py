@@ -5,13 +5,15 @@ Stepping rule (time tags decide, never call order): a step ``(t, t + h]`` output
 
 * the IMU interval of the log that ends in ``(t, t + h]`` (``imu_time``, ``imu_dt`` and the
   increments exactly as logged; ``imu_gyro_*``/``imu_accel_*`` = increment / dt); the
-  component must be stepped at the log's replay step (:func:`navcore.sensors.log_time.replay_step`:
-  its IMU period, or the shortest interval of a jittered log), so each step holds at most
+  component must be stepped at the log's replay step
+  (:func:`navcore.sensors.log_time.replay_step`: its IMU period, or the shortest interval of
+  a jittered log), so each step holds at most
   one interval, and a step past the end of the log is an error;
 * the latest GNSS line with ``time <= t + h``: its values, ``gnss_valid`` from the log's
   ``valid``, and ``gnss_epoch`` = the number of GNSS lines reached so far (a filter updates
   when it changes); a log without velocity columns outputs velocity 0 (run such a log with
-  a filter's ``measurement`` = ``position``);
+  a filter's ``measurement`` = ``position``), and the log's ``std_n/e/d`` as
+  ``gnss_std_*`` (0 without them);
 * the latest truth line with ``time <= t + h`` (``truth_*``), when the log has a truth file
   and ``t + h`` lies within the truth's span; before its first sample and after its last
   every truth output (``truth_time`` too) is NaN: no truth, never a zero a metric would
@@ -45,6 +47,8 @@ from ..sensors.sensorlog import read_log
 
 _TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
+_GNSS_STD = ("std_n", "std_e", "std_d")
+_GNSS_STD_NAMES = tuple(p.name for p in signals.GNSS_STD)
 # output names, built once: the step writes them per IMU line
 _TRUTH_OUTPUTS = tuple("truth_" + name for name in _TRUTH_NAMES)
 _GNSS_NAMES = tuple("gnss_" + name for name in _GNSS_VALUES)
@@ -67,7 +71,8 @@ class ImuGnssReplay(Component):
              "or an overlap", DEFAULT_MAX_DT_JITTER, Limits(0.0, MAX_DT_JITTER_LIMIT)),
     )
     inputs = ()
-    outputs = signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
+    outputs = (signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
+               + signals.GNSS_STD)
     default_experiment = (0.0, 10.0, 0.01)
     # the log's arrays are re-read from the `log` parameter on restore; only the read
     # positions and the held outputs change while stepping (navcore.core.state)
@@ -88,7 +93,8 @@ class ImuGnssReplay(Component):
         g = log.gnss
         zeros = np.zeros_like(g["time"])
         self.gnss = np.column_stack([g["time"]] + [g.get(k, zeros) for k in _GNSS_VALUES]
-                                    + [g["valid"], g.get("outlier", zeros)])
+                                    + [g["valid"], g.get("outlier", zeros)]
+                                    + [g.get(k, zeros) for k in _GNSS_STD])
         self.truth = (None if log.truth is None else
                       np.column_stack([log.truth["time"]] + [log.truth[k] for k in _TRUTH_NAMES]))
         self.start_time = float(start_time)
@@ -124,6 +130,8 @@ class ImuGnssReplay(Component):
             out["gnss_valid"] = row[7] == 1.0
             out["gnss_outlier"] = row[8] == 1.0
             out["gnss_epoch"] = n
+            for name, value in zip(_GNSS_STD_NAMES, row[9:12]):
+                out[name] = value
         if self.truth is not None:
             n = int(np.searchsorted(self.truth[:, 0], limit, side="right"))
             if limit - 2.0 * time_tolerance(self.period, limit) > self.truth_end:

@@ -87,13 +87,19 @@ GNSS = (
     integer("gnss_epoch", "counter of fixes; a filter updates when it changes"),
 )
 
+#: the receiver's own 1-sigma of the latest fix's position (a replayed log's std_n/e/d; 0:
+#: none): a filter with ``r_from_receiver`` takes them as its R
+GNSS_STD = tuple(real(f"gnss_std_{a}", "m", f"receiver's 1-sigma of the latest fix, {axis} "
+                      "(0: not given)", 0.0, Limits(0.0, 1e4))
+                 for a, axis in zip(AXES_NED, ("north", "east", "down")))
+
 #: diagnostic output of the receiver model, for evaluation only (a filter never reads it)
 GNSS_INJECTED = (
     boolean("gnss_outlier", "an outlier was injected into the latest fix (evaluation only)"),
 )
 
 #: inputs of every INS/GNSS filter (a filter never reads truth)
-FILTER_INPUTS = IMU[:8] + GNSS
+FILTER_INPUTS = IMU[:8] + GNSS + GNSS_STD
 
 _NAV = (
     real("nav_time", "s", "time the navigation solution is valid for"),

@@ -146,7 +146,7 @@ class Initializer:
     # -- fixes -----------------------------------------------------------------------------
     def _velocity(self, fix):
         """The velocity at the fix [m/s, NED], or None when it is not known yet."""
-        t, lat, lon, h, v = fix
+        t, lat, lon, h, v = fix[:5]
         if self.use_fix_velocity:
             return np.array(v, dtype=float)
         previous, self.previous_fix = self.previous_fix, (t, lat, lon, h)
@@ -159,8 +159,8 @@ class Initializer:
 
     def state_from_fix(self, fix, nav_time):
         """(lat, lon, h, v_ned, roll, pitch, yaw) at ``nav_time`` from a valid ``fix``
-        (time, lat, lon, h, v) in mode ``gnss``, or None while the vehicle is not moving."""
-        t, lat, lon, h, _ = fix
+        (time, lat, lon, h, v, ...) in mode ``gnss``, or None while the vehicle is not moving."""
+        t, lat, lon, h = fix[:4]
         if self.first_position is None:
             self.first_position = (lat, lon, h)
         v = self._velocity(fix)
