@@ -17,6 +17,7 @@ from navcore.ins import earth
 from navcore.ins.constants import DPH
 from navcore.ins.rotations import euler_to_dcm, wrap_angle
 from orchestrator.building import build as fmu_build
+from orchestrator.results import metrics
 from orchestrator.running import scenarios
 
 GIS_MODEL = fmu_build.ROOT / "models" / "replay_gnss_ins_sim"
@@ -142,3 +143,29 @@ def test_unknown_init_mode_is_a_parameter_error():
 
     with pytest.raises(ParameterError, match=r"parameter 'init_mode' = 'fix' is not one of"):
         components.Kf(init_mode="fix").initialize(0.0)
+
+
+INS_GNSS_FILTERS = ["Kf", "SageHusaFading", "Iakf", "NewtonRobustKf", "Igg3RobustKf", "Ukf",
+                    "CtfaUkf", "ImmUkf", "InsOnly"]
+
+
+@pytest.mark.parametrize("name", INS_GNSS_FILTERS)
+def test_every_filter_starts_from_the_first_fix(name):
+    """init_mode 'gnss' in every INS/GNSS filter (the shell's, whatever the engine): on the
+    gnss-ins-sim log with a given state 2000 km off, each starts at 12 s (the first fix
+    above 2 m/s) at that fix (within 3 GPS sigmas); the GNSS-aided ones then stay within 1.5
+    GPS sigmas to 40 s (InsOnly, free inertial after its start on a MEMS IMU, drifts)."""
+    model = scenarios.load_scenario(GIS_MODEL)
+    params = {"filter.init_mode": "gnss", "filter.init_lat": 0.3, "filter.init_lon": 1.8}
+    run = scenarios.simulate_scenario(model, filter=name, backend="direct", parameters=params,
+                                      stop_time=40.0, log=None)
+    r = run.results
+    aligned = r.column("filter", "aligned") > 0.5
+    assert r.time[aligned][0] == pytest.approx(12.0)
+    e = metrics.navigation_errors(r, "filter")
+    first = int(np.flatnonzero(aligned)[0])
+    for a, sigma in GPS_SIGMA.items():
+        assert abs(e[f"pos_{a}"][first]) < 3.0 * sigma, (a, e[f"pos_{a}"][first])
+    if name != "InsOnly":
+        m = run.metrics["filter"]
+        assert max(m["position_max_m"].values()) < 1.5 * max(GPS_SIGMA.values())
