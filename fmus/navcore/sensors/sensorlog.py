@@ -15,8 +15,8 @@ every title must be one of the file's columns below, with exactly that unit.
     ``time [s]`` time the fix was taken, ``lat [rad]``, ``lon [rad]``, ``h [m]`` (above the
     WGS-84 ellipsoid), ``valid`` (1 usable, 0 during an outage); optional, all three or
     none: ``vn/ve/vd [m/s]`` NED velocity; optional: ``std_n/e/d [m]`` the receiver's own
-    1-sigma of the position (kept, not used by the filters), ``outlier`` (1 where an outlier
-    was injected, for evaluation only).
+    1-sigma of the position (a filter with ``r_from_receiver`` takes it as R), ``outlier``
+    (1 where an outlier was injected, for evaluation only).
 ``truth.csv`` (optional; reference trajectory for the metrics)
     ``time [s]``, ``lat [rad]``, ``lon [rad]``, ``h [m]``, ``vn/ve/vd [m/s]``,
     ``roll/pitch/yaw [rad]`` (ZYX Euler angles).
