@@ -175,17 +175,9 @@ def convert_gnss_ins_sim(src_dir, dst, run_index, force):
 
 
 @convert.command("kf-gins")
-<<<<<<< HEAD
 @click.argument("imu_file", type=click.Path(), callback=nonempty_path)
 @click.argument("gnss_file", type=click.Path(), callback=nonempty_path)
 @click.argument("rest", nargs=-1, type=click.Path(), callback=nonempty_path)
-def convert_kf_gins(imu_file, gnss_file, rest):
-    """KF-GINS IMU_FILE and GNSS_FILE text (and optionally a .nav TRUTH_FILE) into the
-    sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
-=======
-@click.argument("imu_file", type=click.Path())
-@click.argument("gnss_file", type=click.Path())
-@click.argument("rest", nargs=-1, type=click.Path())
 @click.option("--force", is_flag=True, help="Replace DST (and the --config .ssv) if they exist.")
 @click.option("--config", "config", type=click.Path(dir_okay=False),
               help="KF-GINS's YAML configuration: also write its initial state, noise, lever "
@@ -193,7 +185,6 @@ def convert_kf_gins(imu_file, gnss_file, rest):
 def convert_kf_gins(imu_file, gnss_file, rest, force, config):
     """KF-GINS IMU_FILE and GNSS_FILE text (7 or 13 columns; and optionally a .nav
     TRUTH_FILE) into the sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
->>>>>>> 292105b (Receiver sigmas and KF-GINS: r_from_receiver on every INS/GNSS filter (the fix's gnss_std_n/e/d as the position R; the replay outputs the log's std_n/e/d and connects them to our filters); KF-GINS 7- and 13-column GNSS files; convert kf-gins --config writes the YAML's initial state, noise and lever arm as DST/filter.ssv and prints the start time; gnss-ins-sim ref_frame=1 refused by name; convert refuses an existing destination unless --force; docs/guide/kf_gins.md)
     from . import convert as conv
 
     if len(rest) not in (1, 2):

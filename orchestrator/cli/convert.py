@@ -28,19 +28,15 @@ def _write(log: SensorLog, destination) -> SensorLog:
     return log
 
 
-<<<<<<< HEAD
-def _check_destination(destination) -> None:
+def _check_destination(destination, force: bool) -> None:
+    """A writable destination; an existing one is replaced only with ``force``."""
+    refuse_existing(destination, force)
     check_writable(destination, "convert: destination", folder=True)
 
 
-def convert_gnss_ins_sim(source_dir, destination, run: int = 0) -> SensorLog:
-    """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
-    _check_destination(destination)
-=======
 def convert_gnss_ins_sim(source_dir, destination, run: int = 0, force=False) -> SensorLog:
     """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
-    refuse_existing(destination, force)
->>>>>>> 292105b (Receiver sigmas and KF-GINS: r_from_receiver on every INS/GNSS filter (the fix's gnss_std_n/e/d as the position R; the replay outputs the log's std_n/e/d and connects them to our filters); KF-GINS 7- and 13-column GNSS files; convert kf-gins --config writes the YAML's initial state, noise and lever arm as DST/filter.ssv and prints the start time; gnss-ins-sim ref_frame=1 refused by name; convert refuses an existing destination unless --force; docs/guide/kf_gins.md)
+    _check_destination(destination, force)
     try:
         return _write(read_gnss_ins_sim(source_dir, run=run), destination)
     except LogError as exc:
@@ -50,11 +46,7 @@ def convert_gnss_ins_sim(source_dir, destination, run: int = 0, force=False) -> 
 def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination,
                     force=False) -> SensorLog:
     """Convert KF-GINS IMU and GNSS text files (and a ``.nav`` reference) into a sensor log."""
-<<<<<<< HEAD
-    _check_destination(destination)
-=======
-    refuse_existing(destination, force)
->>>>>>> 292105b (Receiver sigmas and KF-GINS: r_from_receiver on every INS/GNSS filter (the fix's gnss_std_n/e/d as the position R; the replay outputs the log's std_n/e/d and connects them to our filters); KF-GINS 7- and 13-column GNSS files; convert kf-gins --config writes the YAML's initial state, noise and lever arm as DST/filter.ssv and prints the start time; gnss-ins-sim ref_frame=1 refused by name; convert refuses an existing destination unless --force; docs/guide/kf_gins.md)
+    _check_destination(destination, force)
     try:
         return _write(read_kf_gins(imu_file, gnss_file, truth_file), destination)
     except LogError as exc:
