@@ -112,7 +112,7 @@ class Initializer:
     docstring); ``done`` from the start for ``given``."""
 
     state_fields = ("done", "elapsed", "rest_dvel", "rest_dtheta", "rest_time", "all_dvel",
-                    "all_dtheta", "previous_fix", "first_position", "checked")
+                    "all_dtheta", "previous_fix", "first_position", "checked", "warned")
     derived_fields = ("mode", "speed_min", "align_time", "use_fix_velocity")
 
     def __init__(self, mode, speed_min=DEFAULT_INIT_SPEED, align_time=DEFAULT_ALIGN_TIME,
@@ -121,6 +121,7 @@ class Initializer:
         self.use_fix_velocity = use_fix_velocity
         self.done = mode == "given"
         self.checked = False          # given: the first fix was compared with the state
+        self.warned = False           # ... and found too far from it (warned once)
         self.elapsed = 0.0
         self.rest_dvel, self.rest_dtheta, self.rest_time = np.zeros(3), np.zeros(3), 0.0
         self.all_dvel, self.all_dtheta = np.zeros(3), np.zeros(3)
