@@ -126,15 +126,21 @@ def _first_fix_notices(**parameters):
 
 
 def test_given_state_far_from_the_first_fix_is_warned_of():
-    """Given state 1 deg of latitude (111 km) off: one notice naming the axis, the distance
-    and init_mode; the scenario's own (correct) state gives none."""
+    """Given state 300 m north of the truth (an inconsistent state, not another trajectory):
+    one notice naming the axis, the distance in sigmas and init_mode; 1 deg (111 km) off:
+    only the first-fix distance warning (another trajectory); the scenario's own state: none."""
     lat, lon = 0.5585053606381855, 2.0943951023931953   # the scenario's filter.ssv
-    notices = _first_fix_notices(init_lat=lat + math.radians(1.0), init_lon=lon,
+    rn = earth.radii(lat)[0]
+    notices = _first_fix_notices(init_lat=lat + 300.0 / rn, init_lon=lon,
                                  measurement="position")
     assert len(notices) == 1, notices
     text = notices[0]
-    assert "given initial state is 1.109e+05 m off the first fix" in text and " along N" in text
-    assert f"(more than {INIT_CHECK_SIGMAS:g})" in text and "init_mode = 'gnss'" in text
+    assert "given initial state is 304.9 m off the first fix" in text, text   # + GPS error
+    assert " along N" in text and f"(more than {INIT_CHECK_SIGMAS:g})" in text
+    assert "init_mode = 'gnss'" in text
+    far = _first_fix_notices(init_lat=lat + math.radians(1.0), init_lon=lon,
+                             measurement="position")
+    assert len(far) == 1 and "km from the filter's position" in far[0], far
     assert _first_fix_notices(init_lat=lat, init_lon=lon, measurement="position") == []
 
 

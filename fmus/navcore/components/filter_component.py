@@ -304,8 +304,10 @@ class InsGnssFilter(Component):
         p = self.params
         sigmas, axis, metres = disagreement(z, engine.covariance_diagonal()[:3],
                                             [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"]])
-        if sigmas > INIT_CHECK_SIGMAS:
-            self.initializer.warned = True     # the first-fix distance check stays silent
+        gross = float(np.linalg.norm(z[:3])) > max(FIRST_FIX_DISTANCE_M,
+                                                   FIRST_FIX_SIGMAS * p["p0_pos"])
+        if sigmas > INIT_CHECK_SIGMAS and not gross:    # gross: _check_first_fix says it
+            self.initializer.warned = True
             self.notify(f"{self.model_name}: the given initial state is {metres:.4g} m off the "
                         f"first fix (gnss_time = {fix[0]:.6g} s) along {'NED'[axis]}, "
                         f"{sigmas:.3g} sigmas of sqrt(P + R) (more than {INIT_CHECK_SIGMAS:g}): "
@@ -397,8 +399,6 @@ class InsGnssFilter(Component):
             self.notify(f"{self.model_name}: {warning}")
 
     def _check_first_fix(self, gnss_time, distance):
-        if self.initializer.warned:    # the given-state check said it already, in sigmas
-            return
         bound = max(FIRST_FIX_DISTANCE_M, FIRST_FIX_SIGMAS * self.params["p0_pos"])
         if distance > bound:
             self.notify(f"{self.model_name}: the first fix (gnss_time = {gnss_time:.6g} s) is "
