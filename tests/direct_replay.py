@@ -44,6 +44,7 @@ MODELS = Path(__file__).resolve().parents[1] / "models"
 SENSOR_COMPONENTS = ("trajectory", "gnss")
 
 FILTER_INPUT_NAMES = tuple(p.name for p in signals.FILTER_INPUTS)
+FILTER_INPUT_STARTS = tuple((p.name, float(p.default())) for p in signals.FILTER_INPUTS)
 TRUTH_NAMES = tuple(p.name for p in signals.TRUTH)
 
 
@@ -104,7 +105,9 @@ def simulate_sensors(folder, stop_time: Optional[float] = None,
     # start + (k + 1) h, a rounding apart)
     time = np.arange(len(epoch)) * h + h
     return SensorRecord(model, params, time,
-                        np.column_stack([merged[n] for n in FILTER_INPUT_NAMES]),
+                        # an input no sensor drives keeps its start value, as in the master
+                        np.column_stack([merged.get(n, np.full(len(epoch), start))
+                                         for n, start in FILTER_INPUT_STARTS]),
                         np.column_stack([merged[n] for n in TRUTH_NAMES]),
                         merged["gnss_outlier"] > 0.5, np.flatnonzero(new_fix), h)
 

@@ -195,9 +195,9 @@ PRE_RUN = {
         ["--stop", "-5"],
         "navfmu: error: --stop: the stop time -5 s must be " "after the start time 0 s",
     ),
-    "recording_too_large": (
+    "recording_too_large": (      # 79: the filter's outputs include 'aligned'
         ["--stop", "1e7"],
-        "navfmu: error: --stop: the run would record " "1000000001 rows x 78 variables",
+        "navfmu: error: --stop: the run would record " "1000000001 rows x 79 variables",
     ),
     "stop_beyond_the_profile": (
         ["--stop", "600"],

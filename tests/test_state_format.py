@@ -65,7 +65,8 @@ def inputs_at(cls, k):
                 "nav_vd": 0.0, "nav_yaw": 0.0}
     if cls.model_name == "GnssReceiver":
         return {"truth_time": t1, "truth_lat": 0.7 + 1e-7 * t1, "truth_lon": 2.0,
-                "truth_h": 100.0, "truth_vn": 1.0, "truth_ve": 0.0, "truth_vd": 0.0}
+                "truth_h": 100.0, "truth_vn": 1.0, "truth_ve": 0.0, "truth_vd": 0.0,
+                "truth_roll": 0.0, "truth_pitch": 0.0, "truth_yaw": 0.01 * t1}
     inputs = {p.name: p.default() for p in cls.inputs}
     if not inputs:
         return inputs

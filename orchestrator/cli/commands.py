@@ -97,7 +97,16 @@ def _common_run_options(f):
     f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
     f = click.option("--replay", "replay", type=click.Path(), callback=nonempty_path,
                      help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
-                     "receiver) by ImuGnssReplay playing this sensor-log folder.")(f)
+                     "receiver) by ImuGnssReplay playing this sensor-log folder (--stop is "
+                     "then in the log's time).")(f)
+    f = click.option("--start", "start", type=float, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("start_time", v),
+                     help="With --replay: start at the first IMU interval beginning at or "
+                     "after this time of the log [s].")(f)
+    f = click.option("--max-dt-jitter", "max_dt_jitter", type=float, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("max_dt_jitter", v),
+                     help="With --replay: largest relative deviation of an IMU interval from "
+                     "the log's median interval (default 0.75).")(f)
     f = click.option("--algorithm", type=click.Choice(ALGORITHMS), default=ALGORITHMS[0],
                      show_default=True, expose_value=False,
                      callback=lambda ctx, _, v: ctx.meta.__setitem__("algorithm", v),
@@ -109,10 +118,12 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
              replay=None, log_sensors=None):
     from .run_command import run_scenarios
 
+    meta = click.get_current_context().meta
     run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
                   echo=click.echo,
-                  algorithm=click.get_current_context().meta.get("algorithm", ALGORITHMS[0]),
-                  replay=replay, log_sensors=log_sensors)
+                  algorithm=meta.get("algorithm", ALGORITHMS[0]),
+                  replay=replay, log_sensors=log_sensors,
+                  replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")})
 
 
 @cli.command()
@@ -153,27 +164,43 @@ def convert():
 @click.argument("dst", type=click.Path(file_okay=False), callback=nonempty_path)
 @click.option("--run", "run_index", type=int, default=0, show_default=True,
               help="Which simulation run (the R of gyro-R.csv).")
-def convert_gnss_ins_sim(src_dir, dst, run_index):
-    """A gnss-ins-sim output folder SRC_DIR (rates at the sample instants; increments by the
-    trapezoid rule) into the sensor-log folder DST."""
+@click.option("--force", is_flag=True, help="Replace DST if it exists.")
+def convert_gnss_ins_sim(src_dir, dst, run_index, force):
+    """A gnss-ins-sim output folder SRC_DIR (ref_frame=0; rates at the sample instants;
+    increments by the trapezoid rule) into the sensor-log folder DST."""
     from . import convert as conv
 
-    click.echo(conv.describe(conv.convert_gnss_ins_sim(src_dir, dst, run=run_index), dst))
+    click.echo(conv.describe(conv.convert_gnss_ins_sim(src_dir, dst, run=run_index,
+                                                       force=force), dst))
 
 
 @convert.command("kf-gins")
 @click.argument("imu_file", type=click.Path(), callback=nonempty_path)
 @click.argument("gnss_file", type=click.Path(), callback=nonempty_path)
 @click.argument("rest", nargs=-1, type=click.Path(), callback=nonempty_path)
-def convert_kf_gins(imu_file, gnss_file, rest):
-    """KF-GINS IMU_FILE and GNSS_FILE text (and optionally a .nav TRUTH_FILE) into the
-    sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
+@click.option("--force", is_flag=True, help="Replace DST (and the --config .ssv) if they exist.")
+@click.option("--config", "config", type=click.Path(dir_okay=False),
+              help="KF-GINS's YAML configuration: also write its initial state, noise, lever "
+              "arm and start time as DST/filter.ssv.")
+def convert_kf_gins(imu_file, gnss_file, rest, force, config):
+    """KF-GINS IMU_FILE and GNSS_FILE text (7 or 13 columns; and optionally a .nav
+    TRUTH_FILE) into the sensor-log folder DST: IMU_FILE GNSS_FILE [TRUTH_FILE] DST."""
     from . import convert as conv
 
     if len(rest) not in (1, 2):
         raise NavfmuError("convert kf-gins: expected IMU_FILE GNSS_FILE [TRUTH_FILE] DST")
     truth, dst = (rest[0], rest[1]) if len(rest) == 2 else (None, rest[0])
-    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst), dst))
+    settings = None
+    if config is not None:
+        from .kf_gins_config import read_config
+
+        settings = read_config(config)        # a bad configuration is refused first
+    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst,
+                                                  force=force), dst))
+    if settings is not None:
+        from .kf_gins_config import write_filter_ssv
+
+        click.echo(write_filter_ssv(settings, dst))
 
 
 @cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "

@@ -16,27 +16,37 @@ from ..errors import NavfmuError
 from ..results.outputs import check_writable
 
 
+def refuse_existing(destination, force: bool) -> None:
+    """An existing destination is replaced only with ``force`` (``--force``)."""
+    if Path(destination).exists() and not force:
+        raise NavfmuError(f"convert: the destination {destination} exists; give --force to "
+                          "replace it")
+
+
 def _write(log: SensorLog, destination) -> SensorLog:
     write_log(destination, log)
     return log
 
 
-def _check_destination(destination) -> None:
+def _check_destination(destination, force: bool) -> None:
+    """A writable destination; an existing one is replaced only with ``force``."""
+    refuse_existing(destination, force)
     check_writable(destination, "convert: destination", folder=True)
 
 
-def convert_gnss_ins_sim(source_dir, destination, run: int = 0) -> SensorLog:
+def convert_gnss_ins_sim(source_dir, destination, run: int = 0, force=False) -> SensorLog:
     """Convert run ``run`` of a gnss-ins-sim output folder into a sensor log."""
-    _check_destination(destination)
+    _check_destination(destination, force)
     try:
         return _write(read_gnss_ins_sim(source_dir, run=run), destination)
     except LogError as exc:
         raise NavfmuError(str(exc)) from None
 
 
-def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination) -> SensorLog:
+def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination,
+                    force=False) -> SensorLog:
     """Convert KF-GINS IMU and GNSS text files (and a ``.nav`` reference) into a sensor log."""
-    _check_destination(destination)
+    _check_destination(destination, force)
     try:
         return _write(read_kf_gins(imu_file, gnss_file, truth_file), destination)
     except LogError as exc:

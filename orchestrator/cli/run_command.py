@@ -51,8 +51,17 @@ def _comparable_reference(model, stop, replay, echo):
     return reference
 
 
+#: replay_model's keyword arguments -> the command-line options that set them
+_REPLAY_OPTIONS = {"start_time": "--start", "max_dt_jitter": "--max-dt-jitter"}
+
+
+def _time_origin_note(run) -> str:
+    """Where the run's times start in a replayed log's time scale (when not at 0)."""
+    return f"; times after the log's {run.time_origin:.10g} s" if run.time_origin else ""
+
+
 def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
-                  log_sensors, algorithm, echo):
+                  log_sensors, algorithm, echo, replay_options=None):
     stream_dir = None
     if fmt == "parquet":
         if log_sensors:
@@ -69,7 +78,8 @@ def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, r
             runs.append(scenarios.simulate_scenario(
                 model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
                 window=window, progress=progress_bar(f or "scenario"), algorithm=algorithm,
-                log=lambda m: echo(m, err=True), replay=replay, stream_to=stream_to))
+                log=lambda m: echo(m, err=True), replay=replay, stream_to=stream_to,
+                replay_options=replay_options))
     return runs
 
 
@@ -88,17 +98,23 @@ def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm,
 
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
                   fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
-                  replay=None, log_sensors=None) -> None:
+                  replay=None, log_sensors=None, replay_options=None) -> None:
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
-    ``navfmu-results/<model>``), each run with its progress bar."""
+    ``navfmu-results/<model>``), each run with its progress bar.  ``replay_options``: the
+    keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
+    ``--max-dt-jitter``), only with ``replay``."""
+    replay_options = {k: v for k, v in (replay_options or {}).items() if v is not None}
+    if replay_options and replay is None:
+        raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
+                          "applies to a sensor log)")
     model = scenarios.load_scenario(scenario)
     window = parse_window(window)
     parameters = parse_sets(sets)
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
-                         log_sensors, algorithm, echo)
+                         log_sensors, algorithm, echo, replay_options)
     baseline = scenarios.mission_baseline(model) if replay is None else None
     if baseline is not None:
         runs.append(_baseline_run(model, baseline, stop, backend, window, parameters,
@@ -114,8 +130,9 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
         return
     reference = _comparable_reference(model, stop, replay, echo)
-    echo(f"\n{model.name}: RMS errors over "
-         f"{runs[0].metrics and next(iter(runs[0].metrics.values()))['window_s']} s")
+    first = next(iter(runs[0].metrics.values()))
+    echo(f"\n{model.name}: RMS errors over {first['window_s']} s (the truth spans "
+         f"{first['truth_span_s']} s)" + _time_origin_note(runs[0]))
     echo(report_table(runs, reference))
     for run in runs:
         for m in run.metrics.values():

@@ -24,6 +24,9 @@ Definitions (errors are estimate - truth):
 * Inside +-3 sigma: per group and axis, the percentage of the window's samples with
   |e_i| <= 3 sigma_i (99.73 % for a consistent Gaussian error); samples without a sigma
   (sigma <= 0) are not counted.
+* Only samples within the truth's span count: the first to the last finite ``truth_time``
+  recorded (a replayed log's truth source outputs NaN outside its truth file's span); the
+  result states that span (``truth_span_s``) next to the samples' ``window_s``.
 * A filter with an ``aligned`` output counts only the samples where it is true (an AHRS
   before its initialization has no solution).
 * An attitude-only (AHRS) filter has no nav_lat/nav_v*: only the attitude errors exist; its
@@ -81,16 +84,36 @@ def find_component(results, prefix, required):
                       "metrics need a truth source and a filter with the navigation contract")
 
 
+def truth_rows(t_truth):
+    """Rows holding a truth sample: the first row of each distinct ``truth_time`` (held
+    outputs repeat), never a NaN one (a source outside its truth's span outputs NaN)."""
+    keep = np.isfinite(t_truth)
+    rows = np.flatnonzero(keep)
+    keep[rows[1:]] = np.diff(t_truth[rows]) > 0
+    return keep
+
+
+def truth_span(results, truth_name=None):
+    """First and last truth time recorded [s], or None when every row is NaN."""
+    truth_name = truth_name or find_component(results, "truth_", ("time", "lat", "lon", "h"))
+    t = results.column(truth_name, "truth_time")
+    t = t[np.isfinite(t)]
+    return (float(t[0]), float(t[-1])) if len(t) else None
+
+
 def navigation_errors(results, filter_name, truth_name=None):
     """Aligned errors of ``filter_name`` against the truth; a dict of arrays over nav_time."""
     truth_name = truth_name or find_component(results, "truth_", ("time", "lat", "lon", "h"))
     col = results.column
     t_nav = col(filter_name, "nav_time")
-    t_truth = col(truth_name, "truth_time")
-    # keep the first sample of each distinct truth time (held outputs repeat)
-    keep = np.concatenate([[True], np.diff(t_truth) > 0])
-    t_truth = t_truth[keep]
-    inside = (t_nav >= t_truth[0] - 1e-9) & (t_nav <= t_truth[-1] + 1e-9)
+    keep = truth_rows(col(truth_name, "truth_time"))
+    if not keep.any():                 # no truth in these rows: nothing to score
+        keep[0] = True
+        t_truth = np.array([np.nan])
+        inside = np.zeros(len(t_nav), dtype=bool)
+    else:
+        t_truth = col(truth_name, "truth_time")[keep]
+        inside = (t_nav >= t_truth[0] - 1e-9) & (t_nav <= t_truth[-1] + 1e-9)
     if results.has(filter_name, "aligned"):
         inside &= col(filter_name, "aligned") > 0.5
 
@@ -189,6 +212,7 @@ class MetricAccumulator:
         self.has_nis = "nis" in names and "updated" in names
         self.n = 0
         self.t_first = self.t_last = None
+        self.truth_first = self.truth_last = None
         self.sq = {}
         self.peak = {}
         self.nees_sum = {g: 0.0 for g in _NEES_GROUPS}
@@ -198,7 +222,15 @@ class MetricAccumulator:
         self.nis_sum, self.nis_n, self.dof_counts = 0.0, 0, {}
         self.epochs = {"injected": [], "n_rejected": [], "dof": []}
 
+    def _add_truth_span(self, results, first_row):
+        t = results.column(self.truth_name, "truth_time")[first_row:]
+        t = t[np.isfinite(t)]
+        if len(t):
+            self.truth_first = float(t[0]) if self.truth_first is None else self.truth_first
+            self.truth_last = float(t[-1])
+
     def add(self, results, first_row=0):
+        self._add_truth_span(results, first_row)
         e = navigation_errors(results, self.filter_name, self.truth_name)
         mask = _sample_mask(results, e, self.window, self.samples)
         mask[:first_row] = False
@@ -252,9 +284,13 @@ class MetricAccumulator:
 
     def result(self, header=None):
         if self.n == 0:
+            span = ("no truth sample at all" if self.truth_first is None else
+                    f"the truth spans {self.truth_first:.10g} to {self.truth_last:.10g} s")
             raise NavfmuError(f"the metric window {self.window} contains no sample of the "
-                              f"filter output ({self.filter_name}, samples '{self.samples}')")
-        out = {"window_s": [self.t_first, self.t_last], "samples": self.n}
+                              f"filter output ({self.filter_name}, samples '{self.samples}') "
+                              f"within the truth's span ({span})")
+        out = {"window_s": [self.t_first, self.t_last], "samples": self.n,
+               "truth_span_s": [self.truth_first, self.truth_last]}
         if self.samples != "all":
             out["sampled_at"] = self.samples
         if "pos" in self.groups:

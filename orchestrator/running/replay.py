@@ -17,12 +17,13 @@ is replaced, the run's time span becomes the log's, and the base step its IMU pe
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from navcore.sensors.log_time import (DEFAULT_MAX_DT_JITTER, absolute_text,
+                                     check_max_dt_jitter, steps_to_reach)
 from navcore.sensors.sensorlog import LogError, SensorLog, read_log, write_log
 
 from ..building import build as fmu_build
@@ -136,19 +137,40 @@ def replaceable_components(model: SystemModel) -> List[str]:
             if c.name in used and used[c.name] <= outputs]
 
 
-def _multiple(duration: float, step: float) -> int:
-    return int(math.floor(duration / step + 1e-9))
+def _log_span(log: SensorLog, folder, start_time, stop_time) -> Tuple[float, float]:
+    """The run's span in the log's relative time: from the first interval starting at or
+    after ``start_time`` to ``stop_time`` (both in the log's time, origin included)."""
+    origin = log.time_origin
+    begins = log.imu["time"] - log.imu["dt"]
+    start = log.start_time
+    if start_time is not None:
+        k = int(np.searchsorted(begins, float(start_time) - origin - 1e-9 * log.imu_period))
+        if k >= len(begins):
+            raise NavfmuError(f"--start {start_time}: after the last IMU interval of the log "
+                              f"{folder}, which ends at "
+                              f"{absolute_text(log.stop_time, origin)} s")
+        start = float(begins[k])
+    end = log.stop_time if stop_time is None else min(float(stop_time) - origin, log.stop_time)
+    return start, end
 
 
 def replay_model(model: SystemModel, log_dir, source: Optional[Path] = None,
-                 stop_time: Optional[float] = None) -> Tuple[SystemModel, Dict[str, object]]:
+                 stop_time: Optional[float] = None, start_time: Optional[float] = None,
+                 max_dt_jitter: Optional[float] = None,
+                 ) -> Tuple[SystemModel, Dict[str, object]]:
     """``model`` with its sensor components replaced by ImuGnssReplay playing ``log_dir``;
     returns the new model and notes (``replaced``, ``log``, ``has_truth``,
-    ``has_gnss_velocity``, ``start_time``, ``stop_time``, ``base_step``).  The run spans the
-    log's IMU intervals (up to ``stop_time`` when given), at the log's IMU period."""
+    ``has_gnss_velocity``, ``time_origin``, ``start_time``, ``stop_time``, ``base_step``).
+    The run spans the log's IMU intervals (from the first one starting at or after
+    ``start_time``, up to ``stop_time``, both in the log's time), stepped at the log's replay
+    step (:func:`navcore.sensors.log_time.replay_step`); the run's times are the log's minus its
+    ``time_origin``.  ``max_dt_jitter``: the bound on the IMU intervals (default the
+    format's)."""
     folder = Path(log_dir).expanduser().resolve()
+    jitter = DEFAULT_MAX_DT_JITTER if max_dt_jitter is None else max_dt_jitter
     try:
-        log = read_log(folder)
+        jitter = check_max_dt_jitter(jitter, "--max-dt-jitter")
+        log = read_log(folder, jitter)
     except LogError as exc:
         raise NavfmuError(f"--replay: {exc}") from None
     names = replaceable_components(model)
@@ -156,26 +178,58 @@ def replay_model(model: SystemModel, log_dir, source: Optional[Path] = None,
         raise NavfmuError(f"{model.path}: no component whose outputs the replay provides "
                           "(a trajectory/IMU or GNSS receiver component)")
     source = Path(source) if source else fmu_build.fmu_path(REPLAY_MODEL)
-    new = ComponentSpec(name=REPLAY_COMPONENT, source=source,
-                        parameters={"log": ("String", str(folder))})
-    step = log.imu_period
-    start = log.start_time
-    end = log.stop_time if stop_time is None else min(float(stop_time), log.stop_time)
-    n = _multiple(end - start, step)
+    parameters = {"log": ("String", str(folder))}
+    if jitter != DEFAULT_MAX_DT_JITTER:
+        parameters["max_dt_jitter"] = ("Real", jitter)
+    new = ComponentSpec(name=REPLAY_COMPONENT, source=source, parameters=parameters)
+    step = log.replay_step
+    start, end = _log_span(log, folder, start_time, stop_time)
+    n = steps_to_reach(start, end, step)
     if n < 1:
-        raise NavfmuError(f"--replay: the log {folder} holds less than one IMU interval before "
-                          f"the stop time {end} s")
+        raise NavfmuError(f"--replay: the log {folder} holds less than one IMU interval "
+                          f"between {absolute_text(start, log.time_origin)} s and the stop "
+                          f"time {absolute_text(end, log.time_origin)} s")
     changes = {"start_time": start, "stop_time": start + n * step, "base_step": step}
     for c in model.components:
         if c.name not in names and c.step_hint is not None:
             ratio = c.step_hint / step
             if abs(ratio - round(ratio)) > 1e-9 * ratio:
                 raise NavfmuError(f"--replay: component '{c.name}' steps every {c.step_hint} s, "
-                                  f"not a multiple of the log's IMU period {step} s")
+                                  f"not a multiple of the log's replay step {step} s")
     new_model = replace_components(model, names, new, **changes)
+    if "std_n" in log.gnss:
+        new_model = connect_receiver_sigmas(new_model)
     notes = {"replaced": names, "log": str(folder), "has_truth": log.truth is not None,
-             "has_gnss_velocity": log.has_gnss_velocity, **changes}
+             "has_gnss_velocity": log.has_gnss_velocity, "time_origin": log.time_origin,
+             **changes}
     return new_model, notes
+
+
+def connect_receiver_sigmas(model: SystemModel) -> SystemModel:
+    """The replay's ``gnss_std_*`` connected to every component fed its ``gnss_lat`` whose
+    model (one of ours, by the FMU's name) has the inputs ``gnss_std_*``; a foreign FMU is
+    left as it is (it may not have them)."""
+    from navcore.components.registry import REGISTRY
+    from navcore.core.signals import GNSS_STD
+
+    names = [p.name for p in GNSS_STD]
+    fed = {c.end_component for c in model.connections
+           if c.start_component == REPLAY_COMPONENT and c.start_connector == "gnss_lat"}
+    components, connections = [], list(model.connections)
+    for c in model.components:
+        cls = REGISTRY.get(Path(c.source).stem)
+        has = cls is not None and all(n in {p.name for p in cls.inputs} for n in names)
+        if c.name in fed and has and not any(n in c.connectors for n in names):
+            c = dataclasses.replace(c, connectors={**c.connectors,
+                                                   **{n: ("input", "Real") for n in names}},
+                                    units={**c.units, **{n: "m" for n in names}})
+            connections += [Connection(REPLAY_COMPONENT, n, c.name, n) for n in names]
+        elif c.name == REPLAY_COMPONENT:
+            c = dataclasses.replace(c, connectors={**c.connectors,
+                                                   **{n: ("output", "Real") for n in names}},
+                                    units={**c.units, **{n: "m" for n in names}})
+        components.append(c)
+    return dataclasses.replace(model, components=components, connections=connections)
 
 
 def resolve_log_parameters(model: SystemModel) -> SystemModel:

@@ -116,6 +116,8 @@ class Run:
     series_file: Optional[Path] = None
     #: of a streamed run: paper.json window name -> filter component -> metrics
     window_metrics: Dict[str, Dict[str, Dict[str, Any]]] = field(default_factory=dict)
+    #: of a replay: the log's time of the run's time 0 [s] (its time origin)
+    time_origin: float = 0.0
 
 
 def filter_label(model: SystemModel, filter: Optional[str] = None) -> str:
@@ -130,10 +132,12 @@ def filter_label(model: SystemModel, filter: Optional[str] = None) -> str:
 def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend: str = "fmu",
                       stop_time: Optional[float] = None, parameters=None, window=None,
                       progress=None, build=True, log=print, replay=None,
-                      algorithm="gauss-seidel", stream_to=None) -> Run:
+                      algorithm="gauss-seidel", stream_to=None, replay_options=None) -> Run:
     """Run one scenario (optionally with the filter component swapped, and with its sensor
     components replaced by a replay of the sensor log in folder ``replay``, see
-    :func:`orchestrator.running.replay.replay_model`) and compute metrics (not without a truth).
+    :func:`orchestrator.running.replay.replay_model`, with its keyword arguments
+    ``replay_options``: ``start_time``, ``max_dt_jitter``) and compute metrics (not without a
+    truth).
 
     ``stream_to``: a ``.parquet`` path; the rows then go to that file and to the metrics in
     chunks (memory flat in the flight length) instead of staying in ``results``."""
@@ -141,13 +145,16 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     if filter:
         model = swap_filter(model, filter)
     record = None
+    origin = 0.0
     if replay is not None:
         from . import replay as log_replay
 
-        model, notes = log_replay.replay_model(model, replay, stop_time=stop_time)
+        model, notes = log_replay.replay_model(model, replay, stop_time=stop_time,
+                                               **(replay_options or {}))
         stop_time = None
         parameters = {**log_replay.parameter_overrides(model, notes), **(parameters or {})}
         record = log_replay.recorded_signals(model, notes)
+        origin = notes["time_origin"]
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
@@ -156,10 +163,11 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     if stream_to is not None:
         run = _streamed_run(label, model, sim, stop_time, progress, window, stream_to)
         report_warnings(run.results)
+        run.time_origin = origin
         return run
     results = sim.run(stop_time=stop_time, progress=progress)
     report_warnings(results)
-    run = Run(label, model, results)
+    run = Run(label, model, results, time_origin=origin)
     if not has_truth(results):
         return run
     vehicle = mission_metrics.find_vehicle(results)

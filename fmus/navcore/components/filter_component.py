@@ -15,16 +15,20 @@ import numpy as np
 
 from ..core import signals
 from ..core import state as _state
-from ..core.component import Component, Limits, real, string
+from ..core.component import Component, InputError, Limits, boolean, real, string
 from ..errors import DivergenceError, StepSizeError
 from ..sensors.gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS
 from ..ins.constants import DPH, DPSH, UG
 from ..sensors.imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_LIMITS,
     GYRO_BIAS_LIMITS)
+from ..filters.initial_state import (INIT_CHECK_SIGMAS, INIT_MODES, INIT_PARAMETERS,
+                                     Initializer, disagreement)
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from ..filters.latency import SolutionHistory
 from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
 from ..filters.recovery import RECOVERY_PARAMETERS
+from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
+from ..ins.rotations import euler_to_dcm
 from ..ins.strapdown import Strapdown
 from ..core.timing import same_time, time_tolerance
 
@@ -87,6 +91,11 @@ _FILTER_PARAMETERS = (
     real("max_fix_age", "s", "latency bound: a fix whose gnss_time is more than this from the "
          "filter's nav_time is not applied (counted in n_stale_fixes); a later one is applied "
          "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
+    *INIT_PARAMETERS,
+    *LEVER_ARM_PARAMETERS,
+    boolean("r_from_receiver", "take the receiver's own per-fix position sigmas (inputs "
+            "gnss_std_n/e/d, a replayed log's std_n/e/d) as the position part of R instead "
+            "of r_pos_*", False),
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -94,6 +103,7 @@ _GNSS_VALUE_NAMES = ("gnss_time", "gnss_lat", "gnss_lon", "gnss_h", "gnss_vn", "
                      "gnss_vd")
 
 _STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
+_STD_INPUT_NAMES = tuple(p.name for p in signals.GNSS_STD)
 
 
 class InsGnssFilter(Component):
@@ -120,7 +130,7 @@ class InsGnssFilter(Component):
     inputs = signals.FILTER_INPUTS
     default_experiment = (0.0, 500.0, 0.01)
     state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
-                    "n_stale", "late_fixes", "nis_monitor")
+                    "n_stale", "late_fixes", "nis_monitor", "initializer")
     derived_fields = ("max_fix_age",)
 
     def __init_subclass__(cls, **kwargs):
@@ -146,7 +156,7 @@ class InsGnssFilter(Component):
             accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
             accel_bias_tau=p["q_accel_bias_tau_s"],
             r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
-            measurement=p["measurement"])
+            measurement=p["measurement"], lever_arm=lever_arm_of(p))
 
     def engine_options(self):
         """Validated keyword arguments of the engine beyond (config, nav); subclasses extend."""
@@ -178,6 +188,10 @@ class InsGnssFilter(Component):
         self.late_fixes = False      # a fix was applied in the past: dense checkpoints
         self.nis_monitor = NisMonitor(p["nis_warning_s"])
         self.out = {q.name: q.default() for q in self.outputs}
+        self.require("init_mode", p["init_mode"] in INIT_MODES, f"is not one of {INIT_MODES}")
+        self.initializer = Initializer(p["init_mode"], p["init_speed_min"], p["align_time"],
+                                       p["measurement"] == "position_velocity")
+        self.out["aligned"] = self.initializer.done
         self._write_solution()
         self.write_diagnostics(None)  # extra outputs start from the engine's initial state
         return dict(self.out)
@@ -186,12 +200,33 @@ class InsGnssFilter(Component):
         """Integrate the new IMU interval (if any), then apply the fixes due (module
         :mod:`navcore.filters.latency`: at the IMU epoch nearest their gnss_time)."""
         self.check_inputs(inputs, _IMU_INPUT_NAMES)
-        imu_dt = inputs["imu_dt"]
-        imu_time = inputs["imu_time"]
         out = self.out
         out["updated"] = False
+        if not self.initializer.done:
+            return self._step_before_start(inputs)
         integrated = False
-        # a new IMU interval ends after the one already integrated: mechanize it
+        increment = self._new_interval(inputs)
+        if increment is not None:
+            self._integrate(increment)
+            integrated = True
+            while self.pending and self.pending[0][0] <= self.nav_time + self._half_interval():
+                self._apply(self.pending.pop(0))
+        epoch = inputs["gnss_epoch"]
+        if epoch != self.last_epoch:
+            self.last_epoch = epoch
+            if inputs["gnss_valid"]:
+                if not self.initializer.checked:
+                    self._check_given_state(inputs)
+                self._receive_fix(inputs)
+        if integrated or out["updated"]:   # otherwise the engine, so the solution, is unchanged
+            self._write_solution()
+        return out
+
+    def _new_interval(self, inputs):
+        """The increment (imu_time, dtheta, dvel, imu_dt) of a new IMU interval, one that
+        ends after the one already integrated and starts where it ended; None without one."""
+        imu_dt = inputs["imu_dt"]
+        imu_time = inputs["imu_time"]
         if imu_time > self.nav_time + 0.5 * imu_dt and imu_dt > 0:
             begin = imu_time - imu_dt
             if not same_time(begin, self.nav_time, imu_dt):
@@ -206,18 +241,77 @@ class InsGnssFilter(Component):
             dtheta = np.array([inputs["imu_dtheta_x"], inputs["imu_dtheta_y"],
                                inputs["imu_dtheta_z"]])
             dvel = np.array([inputs["imu_dvel_x"], inputs["imu_dvel_y"], inputs["imu_dvel_z"]])
-            self._integrate((imu_time, dtheta, dvel, imu_dt))
-            integrated = True
-            while self.pending and self.pending[0][0] <= self.nav_time + self._half_interval():
-                self._apply(self.pending.pop(0))
+            return imu_time, dtheta, dvel, imu_dt
+        return None
+
+    # -- the start from the data (navcore.initial_state) -----------------------------------
+    def _step_before_start(self, inputs):
+        """Before the initial state is known: the IMU intervals and fixes go to the
+        initializer; nav_time follows the IMU; nothing is integrated or updated."""
+        init = self.initializer
+        increment = self._new_interval(inputs)
+        if increment is not None:
+            imu_time, dtheta, dvel, imu_dt = increment
+            nav = self.engine.nav
+            init.add_interval(dtheta, dvel, imu_dt, nav.lat, nav.h)
+            self.nav_time = self.out["nav_time"] = imu_time
+        state = None
         epoch = inputs["gnss_epoch"]
         if epoch != self.last_epoch:
             self.last_epoch = epoch
             if inputs["gnss_valid"]:
-                self._receive_fix(inputs)
-        if integrated or out["updated"]:   # otherwise the engine, so the solution, is unchanged
-            self._write_solution()
-        return out
+                self.check_inputs(inputs, _GNSS_VALUE_NAMES)
+                fix = _fix_of(inputs)
+                if init.mode == "gnss":
+                    state = init.state_from_fix(fix, self.nav_time)
+                else:
+                    init.note_fix(fix)
+        if init.alignment_ready():
+            p = self.params
+            state = init.state_from_alignment((p["init_lat"], p["init_lon"], p["init_h"]))
+        if state is not None:
+            self._start_from(state)
+        return self.out
+
+    def _start_from(self, state):
+        """Build the engine at ``state`` (lat, lon, h, v_ned, roll, pitch, yaw) now."""
+        lat, lon, h, v, roll, pitch, yaw = state
+        p = self.params
+        config = self.make_config()
+        r = np.array([p[f"r_{q}_{a}"] for q in ("pos", "vel") for a in "ned"])
+        config.p0 = self.initializer.start_sigmas(
+            config.p0, r if self.initializer.use_fix_velocity else r[:3],
+            max(math.hypot(v[0], v[1]), p["init_speed_min"]))
+        if config.lever_arm is not None:   # the fix is the antenna's: back to the IMU
+            lat, lon, h, _ = antenna_fix(lat, lon, h, v, euler_to_dcm(roll, pitch, yaw),
+                                         -config.lever_arm, np.zeros(3))
+        nav = Strapdown.from_euler(lat, lon, h, np.asarray(v, dtype=float), roll, pitch, yaw)
+        self.engine = self.make_engine(config, nav)
+        self.history = SolutionHistory(self.nav_time, self.engine)
+        self.initializer.done = True
+        self.out["aligned"] = True
+        self._write_solution()
+        self.write_diagnostics(None)
+
+    def _check_given_state(self, inputs):
+        """At the first valid fix of a given initial state: warn when the state is more than
+        INIT_CHECK_SIGMAS sigmas off the fix (navcore.initial_state)."""
+        self.initializer.checked = True
+        self.check_inputs(inputs, _GNSS_VALUE_NAMES)
+        fix = _fix_of(inputs)
+        engine = self.engine
+        z = engine.measurement(*fix[1:5], self.nav_time - fix[0])
+        p = self.params
+        sigmas, axis, metres = disagreement(z, engine.covariance_diagonal()[:3],
+                                            [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"]])
+        gross = float(np.linalg.norm(z[:3])) > max(FIRST_FIX_DISTANCE_M,
+                                                   FIRST_FIX_SIGMAS * p["p0_pos"])
+        if sigmas > INIT_CHECK_SIGMAS and not gross:    # gross: _check_first_fix says it
+            self.initializer.warned = True
+            self.notify(f"{self.model_name}: the given initial state is {metres:.4g} m off the "
+                        f"first fix (gnss_time = {fix[0]:.6g} s) along {'NED'[axis]}, "
+                        f"{sigmas:.3g} sigmas of sqrt(P + R) (more than {INIT_CHECK_SIGMAS:g}): "
+                        "check init_lat/init_lon (rad) and init_h, or set init_mode = 'gnss'")
 
     def _integrate(self, increment):
         imu_time, dtheta, dvel, imu_dt = increment
@@ -235,8 +329,7 @@ class InsGnssFilter(Component):
         """A new valid fix: apply it now, later (from the future) or in the past (rollback),
         or count it as stale when it is outside the latency bound."""
         self.check_inputs(inputs, _GNSS_VALUE_NAMES)
-        fix = (inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
-               np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]))
+        fix = _fix_of(inputs)
         age = self.nav_time - fix[0]
         self.out["fix_age"] = age
         half = self._half_interval()
@@ -283,8 +376,10 @@ class InsGnssFilter(Component):
     def _apply(self, fix):
         """Measurement update with ``fix`` at the current IMU epoch (its gnss_time within
         half an interval); the history restarts here."""
-        gnss_time, lat, lon, h, v = fix
+        gnss_time, lat, lon, h, v, std = fix
         engine = self.engine
+        if self.params["r_from_receiver"]:
+            self._receiver_r(engine, std, gnss_time)
         z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
         if self.out["nis_dof"] == 0:   # the first fix applied
             self._check_first_fix(gnss_time, float(np.linalg.norm(z[:3])))
@@ -313,6 +408,21 @@ class InsGnssFilter(Component):
                         "such as the trajectory's 'profile', by a host that does not apply it?); "
                         "the solution is off until the filter converges to the fixes")
 
+    def _receiver_r(self, engine, std, gnss_time):
+        """The receiver's sigmas of this fix as the position part of the engine's nominal R
+        (``r_from_receiver``; the velocity part stays r_vel_*)."""
+        bad = np.flatnonzero(~(std > 0))
+        if bad.size:
+            name = _STD_INPUT_NAMES[int(bad[0])]
+            raise InputError(f"{self.model_name}: input '{name}' = {float(std[bad[0]])!r} m "
+                             f"for the fix at gnss_time = {gnss_time!r} s with parameter "
+                             "'r_from_receiver' "
+                             "= true: the receiver gives no sigma (a log without std_n/e/d "
+                             "columns, or the input is not connected)")
+        R = engine.R0.copy()
+        R[[0, 1, 2], [0, 1, 2]] = std ** 2
+        engine.R0 = R
+
     def write_diagnostics(self, result):
         """The extra outputs, after every update (``result``) and once at initialization
         (``result`` None): each name in ``engine_diagnostics`` copied from the engine's
@@ -337,3 +447,10 @@ class InsGnssFilter(Component):
             raise DivergenceError(f"{self.model_name}: output '{bad}' became non-finite at "
                                   f"t = {self.nav_time} s (the filter diverged)")
 
+
+
+def _fix_of(inputs):
+    """The fix of the GNSS inputs: (gnss_time, lat, lon, h, v_ned, receiver sigmas NED)."""
+    return (inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],
+            np.array([inputs["gnss_vn"], inputs["gnss_ve"], inputs["gnss_vd"]]),
+            np.array([inputs.get(name, 0.0) for name in _STD_INPUT_NAMES]))

@@ -5,14 +5,24 @@ Stepping rule (time tags decide, never call order): a step ``(t, t + h]`` output
 
 * the IMU interval of the log that ends in ``(t, t + h]`` (``imu_time``, ``imu_dt`` and the
   increments exactly as logged; ``imu_gyro_*``/``imu_accel_*`` = increment / dt); the
-  component must be stepped at the log's IMU period, so each step holds exactly one
-  interval, and a step past the end of the log is an error;
+  component must be stepped at the log's replay step
+  (:func:`navcore.sensors.log_time.replay_step`: its IMU period, or the shortest interval of
+  a jittered log), so each step holds at most
+  one interval, and a step past the end of the log is an error;
 * the latest GNSS line with ``time <= t + h``: its values, ``gnss_valid`` from the log's
   ``valid``, and ``gnss_epoch`` = the number of GNSS lines reached so far (a filter updates
   when it changes); a log without velocity columns outputs velocity 0 (run such a log with
-  a filter's ``measurement`` = ``position``);
-* the latest truth line with ``time <= t + h`` (``truth_*``), when the log has a truth file;
-  without one the truth outputs stay 0 and ``truth_time`` stays at the start time.
+  a filter's ``measurement`` = ``position``), and the log's ``std_n/e/d`` as
+  ``gnss_std_*`` (0 without them);
+* the latest truth line with ``time <= t + h`` (``truth_*``), when the log has a truth file
+  and ``t + h`` lies within the truth's span; before its first sample and after its last
+  every truth output (``truth_time`` too) is NaN: no truth, never a zero a metric would
+  score; without a truth file the truth outputs stay 0 and ``truth_time`` stays at the start
+  time (a run then records no truth).
+
+Times are the log's relative to its origin (:attr:`navcore.sensors.sensorlog.SensorLog.time_origin`,
+the whole second at or below its first IMU stamp), so the run's time axis starts near 0
+whatever the log's stamps.
 
 Any communication step works: a step reaching several IMU lines outputs the last of them
 (a filter downstream then sees the skipped intervals and stops with an error naming
@@ -24,17 +34,21 @@ initialization the outputs are the log's state at the start time (no IMU interva
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 
 from ..core import signals
-from ..core.component import Component, InputError, ParameterError, string
-from ..sensors.sensorlog import read_log
+from ..core.component import Component, InputError, Limits, ParameterError, real, string
 from ..core.timing import time_tolerance
+from ..sensors.log_time import DEFAULT_MAX_DT_JITTER, MAX_DT_JITTER_LIMIT
+from ..sensors.sensorlog import read_log
 
 _TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
+_GNSS_STD = ("std_n", "std_e", "std_d")
+_GNSS_STD_NAMES = tuple(p.name for p in signals.GNSS_STD)
 # output names, built once: the step writes them per IMU line
 _TRUTH_OUTPUTS = tuple("truth_" + name for name in _TRUTH_NAMES)
 _GNSS_NAMES = tuple("gnss_" + name for name in _GNSS_VALUES)
@@ -52,14 +66,19 @@ class ImuGnssReplay(Component):
                    "GnssReceiver, so any INS/GNSS filter runs on recorded or foreign data.")
     parameters = (
         string("log", "folder of the sensor log (imu.csv, gnss.csv, optional truth.csv)", ""),
+        real("max_dt_jitter", "", "largest relative deviation of an IMU interval from the "
+             "log's nominal (median) interval; beyond it the log is refused as having a gap "
+             "or an overlap", DEFAULT_MAX_DT_JITTER, Limits(0.0, MAX_DT_JITTER_LIMIT)),
     )
     inputs = ()
-    outputs = signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
+    outputs = (signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
+               + signals.GNSS_STD)
     default_experiment = (0.0, 10.0, 0.01)
     # the log's arrays are re-read from the `log` parameter on restore; only the read
     # positions and the held outputs change while stepping (navcore.core.state)
     state_fields = ("next_imu", "n_gnss", "n_truth", "out")
-    derived_fields = ("log_folder", "imu", "gnss", "truth", "period", "start_time")
+    derived_fields = ("log_folder", "imu", "gnss", "truth", "period", "start_time",
+                      "truth_end")
 
     def initialize(self, start_time):
         folder = self.params["log"]
@@ -67,18 +86,20 @@ class ImuGnssReplay(Component):
             raise ParameterError(f"{self.model_name}: parameter 'log' is empty (give the folder "
                                  "of a sensor log)")
         self.log_folder = str(Path(folder).resolve())
-        log = read_log(self.log_folder)
+        log = read_log(self.log_folder, self.params["max_dt_jitter"])
         self.imu = np.column_stack([log.imu[k] for k in
                                     ("time", "dt", "dtheta_x", "dtheta_y", "dtheta_z",
                                      "dvel_x", "dvel_y", "dvel_z")])
         g = log.gnss
         zeros = np.zeros_like(g["time"])
         self.gnss = np.column_stack([g["time"]] + [g.get(k, zeros) for k in _GNSS_VALUES]
-                                    + [g["valid"], g.get("outlier", zeros)])
+                                    + [g["valid"], g.get("outlier", zeros)]
+                                    + [g.get(k, zeros) for k in _GNSS_STD])
         self.truth = (None if log.truth is None else
                       np.column_stack([log.truth["time"]] + [log.truth[k] for k in _TRUTH_NAMES]))
         self.start_time = float(start_time)
-        self.period = float(self.imu[0, 1])
+        self.period = log.replay_step
+        self.truth_end = None if self.truth is None else float(self.truth[-1, 0])
         # first IMU interval ending after the start
         limit = self._limit(self.start_time)
         self.next_imu = int(np.searchsorted(self.imu[:, 0], limit, side="right"))
@@ -88,6 +109,8 @@ class ImuGnssReplay(Component):
         self.out["imu_time"] = self.start_time
         self.out["gnss_time"] = self.start_time
         self.out["truth_time"] = self.start_time
+        if self.truth is not None:
+            self._no_truth()
         self._advance(limit)
         return dict(self.out)
 
@@ -107,14 +130,24 @@ class ImuGnssReplay(Component):
             out["gnss_valid"] = row[7] == 1.0
             out["gnss_outlier"] = row[8] == 1.0
             out["gnss_epoch"] = n
+            for name, value in zip(_GNSS_STD_NAMES, row[9:12]):
+                out[name] = value
         if self.truth is not None:
             n = int(np.searchsorted(self.truth[:, 0], limit, side="right"))
-            if n != self.n_truth and n > 0:
+            if limit - 2.0 * time_tolerance(self.period, limit) > self.truth_end:
+                if self.n_truth <= len(self.truth):
+                    self.n_truth = len(self.truth) + 1     # past the truth's span
+                    self._no_truth()
+            elif n != self.n_truth and n > 0:
                 self.n_truth = n
                 row = self.truth[n - 1].tolist()
                 out["truth_time"] = row[0]
                 for name, value in zip(_TRUTH_OUTPUTS, row[1:]):
                     out[name] = value
+
+    def _no_truth(self):
+        for name in ("truth_time",) + _TRUTH_OUTPUTS:
+            self.out[name] = math.nan
 
     def step(self, t, h, inputs):
         t_end = t + h

@@ -15,6 +15,8 @@ import numpy as np
 from ..core import signals
 from ..core.component import Component, Limits, ParameterError, boolean, integer, real, string
 from ..sensors.gnss_errors import GnssErrorModel
+from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
+from ..ins.rotations import dcm_to_rotvec, euler_to_dcm
 from .imu_measurement import ERROR_PARAMETERS, SEED_LIMITS, ImuMeasurement, ports_from_table
 from ..core.timing import samples_reached, time_tolerance
 from ..ins.trajectory import TrajectoryGenerator
@@ -104,6 +106,12 @@ class GnssReceiver(Component):
     communication step works.  ``output_delay`` > 0 publishes each fix at the first
     communication point at least that long after ``gnss_time`` (which keeps the time the
     fix was taken): the latency of a real receiver's solution.
+
+    ``lever_arm_x/y/z`` (body frame, from the truth's reference point to the antenna) moves
+    the fixes to the antenna (:mod:`navcore.ins.lever_arm`): that needs the truth attitude
+    inputs ``truth_roll/pitch/yaw`` connected; the antenna velocity's rotation term uses the
+    body's turn rate from the attitude change between two steps of the receiver (exact for
+    a constant rate, first order otherwise).
     """
 
     description = ("GNSS receiver: position and velocity fixes from the truth at its own rate "
@@ -115,12 +123,13 @@ class GnssReceiver(Component):
              "long after it was taken, with its gnss_time unchanged (0 = at once)", 0.0,
              Limits(0.0, 3600.0)),
         *ports_from_table(GnssErrorModel.PARAMETERS),
+        *LEVER_ARM_PARAMETERS,
     )
-    inputs = signals.TRUTH[:7]
+    inputs = signals.TRUTH
     outputs = signals.GNSS + signals.GNSS_INJECTED
     default_experiment = (0.0, 500.0, 1.0)
-    state_fields = ("model", "next_fix", "n_fix", "out", "queue")
-    derived_fields = ("interval", "delay", "start_time")
+    state_fields = ("model", "next_fix", "n_fix", "out", "queue", "attitude_prev")
+    derived_fields = ("interval", "delay", "start_time", "lever")
 
     def initialize(self, start_time):
         self.delay = self.params["output_delay"]
@@ -128,6 +137,8 @@ class GnssReceiver(Component):
         self.model = GnssErrorModel({k: self.params[k] for k in GnssErrorModel.PARAMETERS},
                                     self.params["seed"])
         self.interval = self.params["fix_interval"]
+        self.lever = lever_arm_of(self.params)
+        self.attitude_prev = None     # (truth_time, C_bn rows) of the last step, lever arm only
         self.next_fix = float(start_time) + self.interval
         self.n_fix = 0
         self.start_time = float(start_time)
@@ -139,8 +150,9 @@ class GnssReceiver(Component):
         self.check_inputs(inputs, ("truth_time", "truth_lat", "truth_lon", "truth_h",
                                           "truth_vn", "truth_ve", "truth_vd"))
         t_truth = inputs["truth_time"]
+        attitude = None if self.lever is None else self._attitude(t_truth, inputs)
         if t_truth + time_tolerance(self.interval, t_truth) >= self.next_fix:
-            fix = self._fix(t_truth, inputs)
+            fix = self._fix(t_truth, inputs, attitude)
             if self.delay == 0.0:
                 self.out = fix
             else:
@@ -152,14 +164,27 @@ class GnssReceiver(Component):
                 self.out = self.queue.pop(0)
         return self.out
 
-    def _fix(self, t_truth, inputs):
+    def _attitude(self, t_truth, inputs):
+        """(C_bn, rate of the body against NED [rad/s]) from the truth attitude now and at the
+        previous step (zero rate at the first step)."""
+        self.check_inputs(inputs, ("truth_roll", "truth_pitch", "truth_yaw"))
+        C_bn = euler_to_dcm(inputs["truth_roll"], inputs["truth_pitch"], inputs["truth_yaw"])
+        rate = np.zeros(3)
+        if self.attitude_prev is not None and t_truth > self.attitude_prev[0]:
+            t0, rows = self.attitude_prev
+            rate = dcm_to_rotvec(C_bn @ np.array(rows).T) / (t_truth - t0)
+        self.attitude_prev = (t_truth, C_bn.tolist())
+        return C_bn, rate
+
+    def _fix(self, t_truth, inputs, attitude=None):
         # one fix per due epoch; epochs missed by a coarse step are skipped, not queued
         k = samples_reached(self.start_time, self.interval, t_truth)
         self.next_fix = self.start_time + (k + 1) * self.interval
-        fix = self.model.measure(t_truth, inputs["truth_lat"], inputs["truth_lon"],
-                                 inputs["truth_h"],
-                                 np.array([inputs["truth_vn"], inputs["truth_ve"],
-                                           inputs["truth_vd"]]))
+        position = (inputs["truth_lat"], inputs["truth_lon"], inputs["truth_h"],
+                    np.array([inputs["truth_vn"], inputs["truth_ve"], inputs["truth_vd"]]))
+        if attitude is not None:
+            position = antenna_fix(*position, attitude[0], self.lever, attitude[1])
+        fix = self.model.measure(t_truth, *position)
         self.n_fix += 1
         return {"gnss_time": t_truth, "gnss_lat": fix["lat"], "gnss_lon": fix["lon"],
                 "gnss_h": fix["h"], "gnss_vn": fix["vn"], "gnss_ve": fix["ve"],

@@ -87,13 +87,19 @@ GNSS = (
     integer("gnss_epoch", "counter of fixes; a filter updates when it changes"),
 )
 
+#: the receiver's own 1-sigma of the latest fix's position (a replayed log's std_n/e/d; 0:
+#: none): a filter with ``r_from_receiver`` takes them as its R
+GNSS_STD = tuple(real(f"gnss_std_{a}", "m", f"receiver's 1-sigma of the latest fix, {axis} "
+                      "(0: not given)", 0.0, Limits(0.0, 1e4))
+                 for a, axis in zip(AXES_NED, ("north", "east", "down")))
+
 #: diagnostic output of the receiver model, for evaluation only (a filter never reads it)
 GNSS_INJECTED = (
     boolean("gnss_outlier", "an outlier was injected into the latest fix (evaluation only)"),
 )
 
 #: inputs of every INS/GNSS filter (a filter never reads truth)
-FILTER_INPUTS = IMU[:8] + GNSS
+FILTER_INPUTS = IMU[:8] + GNSS + GNSS_STD
 
 _NAV = (
     real("nav_time", "s", "time the navigation solution is valid for"),
@@ -130,8 +136,12 @@ _DIAGNOSTICS = (
             "max_fix_age from nav_time, or before the epoch of a fix already applied"),
 )
 
+#: the filter has its initial state (an AHRS its attitude; an INS/GNSS filter with init_mode
+#: 'gnss' or 'align' its start from the data): the metrics skip the samples before
+ALIGNED = boolean("aligned", "the filter has a solution (false until its initialization)")
+
 #: outputs every INS/GNSS filter has (filters may add their own diagnostics)
-FILTER_OUTPUTS = _NAV + _STD + _DIAGNOSTICS
+FILTER_OUTPUTS = _NAV + _STD + _DIAGNOSTICS + (ALIGNED,)
 
 
 #: inputs of every attitude (AHRS) filter: IMU increments and the magnetometer
@@ -142,7 +152,7 @@ _BY_NAME = {p.name: p for p in _NAV + _DIAGNOSTICS}
 #: outputs every AHRS filter has: attitude, its 1-sigma, gyro bias, innovation statistics
 AHRS_OUTPUTS = (
     _BY_NAME["nav_time"],
-    boolean("aligned", "the filter has an attitude solution (false until its initialization)"),
+    ALIGNED,
     *(_BY_NAME[f"nav_{a}"] for a in ("roll", "pitch", "yaw")),
     *(real(f"std_{a}", "rad", f"1-sigma of the {a} error") for a in ("roll", "pitch", "yaw")),
     *(_BY_NAME[f"nav_bg_{a}"] for a in AXES_BODY),

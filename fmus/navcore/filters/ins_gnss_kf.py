@@ -21,6 +21,7 @@ The measurement is ``z = INS - GNSS`` of position in NED metres and, optionally,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from ..ins import earth
 from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
     transition_matrix)
 from .innovation_stats import nis
+from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
 from ..ins.strapdown import Strapdown
 
 #: measurement modes and their dimension
@@ -48,6 +50,7 @@ class KfConfig:
     accel_bias_tau: float          # s
     r_sigma: np.ndarray            # (3,) or (6,) measurement 1-sigma, pos NED [m] (+ vel [m/s])
     measurement: str = "position_velocity"
+    lever_arm: Optional[np.ndarray] = None   # (3,) body [m], IMU to antenna; None = zero
 
 
 @dataclass
@@ -67,7 +70,7 @@ class KfEngine:
     """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
 
     state_fields = ("nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates",
-                    "last")
+                    "last", "rate_ib")
     derived_fields = ("config", "q_density", "R0", "m", "H")
 
     def __init__(self, config: KfConfig, nav: Strapdown):
@@ -87,12 +90,14 @@ class KfEngine:
         self.q_acc = np.zeros((N_STATES, N_STATES))
         self.n_updates = 0
         self.last = None  # UpdateResult of the latest update
+        self.rate_ib = np.zeros(3)  # body rate of the latest interval (lever-arm velocity)
 
     # -- time update -------------------------------------------------------------------
     def propagate(self, dtheta, dvel, dt):
         """Mechanize one IMU interval with bias-compensated increments and propagate P."""
         dtheta_c = dtheta - self.gyro_bias * dt
         dvel_c = dvel - self.accel_bias * dt
+        self.rate_ib = dtheta_c / dt
         nav = self.nav
         C_prev = nav.C_bn
         nav.update(dtheta_c, dvel_c, dt)
@@ -135,7 +140,8 @@ class KfEngine:
     # -- measurement -------------------------------------------------------------------
     def measurement(self, fix_lat, fix_lon, fix_h, fix_v_ned, age):
         """z = INS - GNSS in NED metres (and m/s); the INS position is taken back to the fix
-        time ``age`` seconds ago with its velocity (first order)."""
+        time ``age`` seconds ago with its velocity (first order), and carried to the antenna
+        with the configured lever arm (:mod:`navcore.filters.lever_arm`)."""
         nav = self.nav
         rn, re = earth.radii(nav.lat)
         v = nav.v_ned
@@ -145,6 +151,11 @@ class KfEngine:
         z[2] = -(nav.h - fix_h) - v[2] * age
         if self.m == 6:
             z[3:6] = v - fix_v_ned
+        lever = self.config.lever_arm
+        if lever is not None:
+            z[:3] += antenna_position_offset(nav.C_bn, lever)
+            if self.m == 6:
+                z[3:6] += antenna_velocity_offset(nav.C_bn, lever, self.rate_ib, nav.lat)
         return z
 
     def kalman_update(self, P_pred, z, R):

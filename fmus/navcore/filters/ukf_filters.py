@@ -277,6 +277,7 @@ class UkfEngine(KfEngine):
         means and run the UKF prediction when ``predict_interval`` is complete."""
         dtheta_c = dtheta - self.gyro_bias * dt
         dvel_c = dvel - self.accel_bias * dt
+        self.rate_ib = dtheta_c / dt
         nav = self.nav
         C_prev = nav.C_bn
         lat0, h0, v0 = nav.lat, nav.h, nav.v_ned

@@ -5,8 +5,8 @@ parameter) and turns it into plain-number segment records; :func:`evaluate` give
 kinematic quantities of :mod:`navcore.ins.trajectory` (speed, heading, its rate, flight-path angle,
 attitude offsets) at any time into a segment, in closed form.
 
-Profile format
---------------
+Profile format (user documentation and an example: docs/guide/motion_profiles.md)
+--------------------------------------------------------------------------------
 ``{"start": {"lat_deg", "lon_deg", "h", "speed" (0), "yaw_deg" (0), "pitch_deg" (0),
 "roll_deg" (0)}, "segments": [{"type": ..., "duration": s, ...}, ...]}``; the start pitch and
 roll are attitude offsets (the start flight-path angle is zero).  Segment types and their

@@ -1,6 +1,8 @@
 """Readers of other tools' sensor data, returning a :class:`~navcore.sensors.sensorlog.SensorLog`.
 
-gnss-ins-sim (Aceinna, MIT licence) writes one CSV per quantity with ``name (unit)`` titles:
+gnss-ins-sim (Aceinna, MIT licence; run with ``ref_frame=0``, the NED frame with latitude and
+longitude: the local frame of ``ref_frame=1`` is refused) writes one CSV per quantity with
+``name (unit)`` titles:
 ``time.csv`` (sec), ``gyro-R.csv`` (deg/s), ``accel-R.csv`` (m/s^2) for run ``R`` at the IMU
 sample instants; ``gps_time.csv`` (sec), ``gps-R.csv`` (lat deg, lon deg, alt m, vN/vE/vD
 m/s) and ``gps_visibility.csv`` (1 with a fix) at the GPS instants; and, when present, the
@@ -10,7 +12,10 @@ reference ``ref_pos.csv`` (lat, lon deg, alt m), ``ref_vel.csv`` (NED m/s) and
 KF-GINS (i2Nav, Wuhan University) reads whitespace- (or comma-) separated text without titles:
 the IMU file ``time [s], dtheta_x/y/z [rad], dvel_x/y/z [m/s]`` (increments over the interval
 ending at ``time``, body forward-right-down), the GNSS file ``time [s], lat [deg], lon [deg],
-h [m], std_n/e/d [m]`` (positions only, every line a valid fix), and writes its solution and
+h [m], std_n/e/d [m]`` (7 columns: positions only) or ``time, lat, lon, h, vn/ve/vd [m/s],
+std_n/e/d, std_vn/ve/vd [m/s]`` (13 columns, with velocity: KF-GINS's loader reads the
+position sigmas from columns 8-10 of such a file; the velocity sigmas have no column in the
+sensor-log format and are not kept), every line a valid fix, and writes its solution and
 reference as ``.nav`` text ``week, sow [s], lat [deg], lon [deg], h [m], vn/ve/vd [m/s],
 roll/pitch/yaw [deg]``.
 
@@ -61,25 +66,30 @@ def read_titled_csv(path, expected: Sequence[tuple]) -> np.ndarray:
     return parse_rows(path, lines, names)[0]
 
 
-def read_plain_text(path, names: Sequence[str]) -> np.ndarray:
+def read_plain_text(path, names: Sequence[str], *layouts: Sequence[str]):
     """A KF-GINS text file: no titles, ``len(names)`` numbers per line separated by
-    whitespace or commas; ``#`` starts a comment.  Returns an (n, len(names)) array and the
-    line number of each row."""
+    whitespace or commas; ``#`` starts a comment.  Further ``layouts`` (other column lists)
+    are accepted too, chosen by the number of values on the first line.  Returns an (n,
+    columns) array, the line number of each row and the column names."""
     path = Path(path)
     rows, numbers = [], []
+    accepted = {len(c): c for c in (names, *layouts)}
     for number, line in enumerate(read_lines(path), start=1):
         text = line.split("#", 1)[0].replace(",", " ")
         fields = text.split()
         if not fields:
             continue
+        if not rows and len(fields) in accepted:
+            names = accepted[len(fields)]
         if len(fields) != len(names):
-            raise LogError(f"{path}, line {number}: {len(fields)} values, expected "
-                           f"{len(names)} ({', '.join(names)})")
+            expected = (f"{len(names)} ({', '.join(names)})" if not layouts or rows else
+                        " or ".join(f"{len(c)} ({', '.join(c)})" for c in accepted.values()))
+            raise LogError(f"{path}, line {number}: {len(fields)} values, expected {expected}")
         rows.append(parse_numbers(path, number, fields, names))
         numbers.append(number)
     if not rows:
         raise LogError(f"{path}: no samples")
-    return np.array(rows, dtype=np.float64), np.array(numbers)
+    return np.array(rows, dtype=np.float64), np.array(numbers), tuple(names)
 
 
 # -- rates to increments ---------------------------------------------------------------------
@@ -97,6 +107,18 @@ def _same_length(path_a, a, path_b, b):
     if len(a) != len(b):
         raise LogError(f"{path_b}: {len(b)} samples, but {path_a} has {len(a)} (one line per "
                        "sample time)")
+
+
+def _refuse_local_frame(path) -> None:
+    """gnss-ins-sim's ``ref_frame=1`` writes positions in a local frame (``gps_x (m)``...):
+    refused, naming the setting (only ``ref_frame=0``, NED with latitude/longitude, is read)."""
+    lines = read_lines(path) if Path(path).is_file() else []
+    first = lines[0].split(",")[0].strip() if lines else ""
+    if first.startswith("gps_x"):
+        raise LogError(f"{path}, line 1: column '{first}': this gnss-ins-sim run used "
+                       "ref_frame=1 (positions in a local frame, in metres); only ref_frame=0 "
+                       "(NED, latitude and longitude in degrees) is read: run the simulation "
+                       "with ref_frame=0")
 
 
 def read_gnss_ins_sim(folder, run: int = 0) -> SensorLog:
@@ -119,6 +141,7 @@ def read_gnss_ins_sim(folder, run: int = 0) -> SensorLog:
         imu[f"dtheta_{a}"] = dtheta[:, i]
         imu[f"dvel_{a}"] = dvel[:, i]
 
+    _refuse_local_frame(d / f"gps-{run}.csv")
     gps_time = read_titled_csv(d / "gps_time.csv", [("gps_time", "sec")])[:, 0]
     gps = read_titled_csv(d / f"gps-{run}.csv", [
         ("gps_lat", "deg"), ("gps_lon", "deg"), ("gps_alt", "m"), ("gps_vN", "m/s"),
@@ -162,6 +185,8 @@ def read_gnss_ins_sim(folder, run: int = 0) -> SensorLog:
 # -- KF-GINS ---------------------------------------------------------------------------------
 KF_GINS_IMU = ("time", "dtheta_x", "dtheta_y", "dtheta_z", "dvel_x", "dvel_y", "dvel_z")
 KF_GINS_GNSS = ("time", "lat", "lon", "h", "std_n", "std_e", "std_d")
+KF_GINS_GNSS_VELOCITY = ("time", "lat", "lon", "h", "vn", "ve", "vd", "std_n", "std_e", "std_d",
+                         "std_vn", "std_ve", "std_vd")
 KF_GINS_NAV = ("week", "sow", "lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 
 
@@ -187,7 +212,7 @@ def read_kf_gins(imu_file, gnss_file, truth_file=None) -> SensorLog:
     """The log of KF-GINS's IMU and GNSS text files and, optionally, a ``.nav`` reference
     (module docstring).  Times are the seconds of the GPS week; a ``.nav`` file must stay in
     one week."""
-    raw, raw_lines = read_plain_text(imu_file, KF_GINS_IMU)
+    raw, raw_lines, _ = read_plain_text(imu_file, KF_GINS_IMU)
     if len(raw) < 2:
         raise LogError(f"{imu_file}: at least two lines are needed (the first only marks the "
                        "start)")
@@ -195,14 +220,16 @@ def read_kf_gins(imu_file, gnss_file, truth_file=None) -> SensorLog:
     for j, name in enumerate(KF_GINS_IMU[1:], start=1):
         imu[name] = raw[1:, j]
     imu["_line"] = raw_lines[1:]
-    g, g_lines = read_plain_text(gnss_file, KF_GINS_GNSS)
-    gnss = {"time": g[:, 0], "lat": g[:, 1] * _D2R, "lon": g[:, 2] * _D2R, "h": g[:, 3],
-            "valid": np.ones(len(g)), "std_n": g[:, 4], "std_e": g[:, 5], "std_d": g[:, 6],
-            "_line": g_lines}
+    g, g_lines, columns = read_plain_text(gnss_file, KF_GINS_GNSS, KF_GINS_GNSS_VELOCITY)
+    column = {name: g[:, j] for j, name in enumerate(columns)}
+    gnss = {"time": column["time"], "lat": column["lat"] * _D2R, "lon": column["lon"] * _D2R,
+            "valid": np.ones(len(g)), "_line": g_lines,
+            **{k: column[k] for k in ("h", "std_n", "std_e", "std_d", "vn", "ve", "vd")
+               if k in column}}
     _check_kf_gins_pair(imu_file, imu, gnss_file, gnss)
     truth: Optional[Dict[str, np.ndarray]] = None
     if truth_file is not None:
-        nav, nav_lines = read_plain_text(truth_file, KF_GINS_NAV)
+        nav, nav_lines, _ = read_plain_text(truth_file, KF_GINS_NAV)
         weeks = np.flatnonzero(nav[:, 0] != nav[0, 0])
         if weeks.size:
             raise LogError(f"{truth_file}, line {nav_lines[weeks[0]]}: the GPS week changes "

@@ -15,8 +15,8 @@ every title must be one of the file's columns below, with exactly that unit.
     ``time [s]`` time the fix was taken, ``lat [rad]``, ``lon [rad]``, ``h [m]`` (above the
     WGS-84 ellipsoid), ``valid`` (1 usable, 0 during an outage); optional, all three or
     none: ``vn/ve/vd [m/s]`` NED velocity; optional: ``std_n/e/d [m]`` the receiver's own
-    1-sigma of the position (kept, not used by the filters), ``outlier`` (1 where an outlier
-    was injected, for evaluation only).
+    1-sigma of the position (a filter with ``r_from_receiver`` takes it as R), ``outlier``
+    (1 where an outlier was injected, for evaluation only).
 ``truth.csv`` (optional; reference trajectory for the metrics)
     ``time [s]``, ``lat [rad]``, ``lon [rad]``, ``h [m]``, ``vn/ve/vd [m/s]``,
     ``roll/pitch/yaw [rad]`` (ZYX Euler angles).
@@ -27,13 +27,20 @@ Rules a log must satisfy (:func:`read_log` checks them and names file and line):
   is a finite decimal number (no NaN, no inf); flags are 0 or 1;
 * times strictly increasing in every file (an equal time is "duplicated", a smaller one
   "non-monotonic");
-* IMU: ``dt > 0``, every ``dt`` equal to the first within :data:`RATE_TOLERANCE` (relative:
-  a filter integrates one interval per step of one length), and the intervals tile time:
-  the gap ``time[k] - dt[k] - time[k-1]`` between an interval and the previous one at most
+* IMU: ``dt > 0``; each interval has its own ``dt`` (:mod:`navcore.sensors.log_time`), refused on
+  reading only beyond ``max_dt_jitter`` relative to the nominal (median) interval, as a gap
+  or an overlap naming the line; and the intervals tile time: the gap
+  ``time[k] - dt[k] - time[k-1]`` between an interval and the previous one at most
   :data:`IMU_GAP_TOLERANCE` times ``dt`` in magnitude (a hole would lose motion);
 * GNSS: at least one valid fix; ``|lat| < pi/2``;
 * truth: consecutive samples at most :data:`TRUTH_MAX_GAP` apart (the metrics interpolate
-  the truth linearly between samples).
+  the truth linearly between samples);
+* GNSS and truth times overlap the IMU's span (a file of another day or another time scale
+  is refused naming both spans).
+
+Times: every time is held relative to the log's origin, the whole second at or below the
+first IMU line's time (:attr:`SensorLog.time_origin`, :mod:`navcore.sensors.log_time`), so epoch
+and UNIX stamps cost no precision; writing adds the origin back exactly.
 
 The file contents are parsed as numbers, never evaluated.  :func:`write_log` checks the same
 rules before writing anything and writes the folder atomically (see its docstring).
@@ -51,11 +58,11 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from ..errors import LogError
+from .log_time import (DEFAULT_MAX_DT_JITTER, absolute_text, check_intervals, nominal_interval,
+                       relative_seconds, replay_step, time_origin)
 
 #: largest accepted log file [bytes] (about 10 h of 200 Hz IMU data)
 MAX_FILE_BYTES = 1 << 30
-#: relative tolerance on the IMU interval length (every dt vs the first)
-RATE_TOLERANCE = 1e-6
 #: largest gap or overlap between consecutive IMU intervals, as a fraction of dt
 IMU_GAP_TOLERANCE = 1e-6
 #: largest spacing of truth samples [s]
@@ -84,15 +91,24 @@ FLAGS = ("valid", "outlier")
 @dataclass
 class SensorLog:
     """The columns of a log as float64 arrays: ``imu``, ``gnss``, ``truth`` (None without a
-    truth file) map column names (module docstring) to arrays of equal length."""
+    truth file) map column names (module docstring) to arrays of equal length; every
+    ``time`` is relative to ``time_origin`` [s] (a whole second: the log's time of a
+    relative time ``t`` is ``time_origin + t``)."""
 
     imu: Dict[str, np.ndarray]
     gnss: Dict[str, np.ndarray]
     truth: Optional[Dict[str, np.ndarray]] = None
+    time_origin: float = 0.0
 
     @property
     def imu_period(self) -> float:
-        return float(self.imu["dt"][0])
+        """The nominal IMU interval (median dt) [s]."""
+        return nominal_interval(self.imu["dt"])
+
+    @property
+    def replay_step(self) -> float:
+        """The communication step that gives a filter every interval (navcore.sensors.log_time)."""
+        return replay_step(self.imu["time"], self.imu["dt"])
 
     @property
     def start_time(self) -> float:
@@ -158,8 +174,10 @@ def parse_numbers(path, number, fields, names) -> list:
     return row
 
 
-def _read_table(path: Path) -> Dict[str, np.ndarray]:
-    """Titles checked against the file's columns, values as arrays; errors name the line."""
+def _read_table(path: Path, origin: Optional[float]) -> Tuple[Dict[str, np.ndarray], float]:
+    """Titles checked against the file's columns, values as arrays, times relative to
+    ``origin`` (None: the origin of this file's first time); errors name the line.  Returns
+    the table and the origin."""
     columns = COLUMNS[path.name]
     lines = read_lines(path)
     if not lines or not lines[0].strip():
@@ -172,7 +190,13 @@ def _read_table(path: Path) -> Dict[str, np.ndarray]:
     table, numbers = parse_rows(path, lines, titles)
     data = {t: np.ascontiguousarray(table[:, j]) for j, t in enumerate(titles)}
     data["_line"] = numbers
-    return data
+    j = titles.index("time")
+    texts = [lines[n - 1].split(",")[j] for n in numbers]
+    if origin is None:
+        origin = time_origin(path, int(numbers[0]), texts[0])
+    if origin != 0.0:
+        data["time"] = relative_seconds(path, texts, numbers, origin)
+    return data, origin
 
 
 def parse_rows(path, lines, titles):
@@ -223,19 +247,16 @@ def _check_times(path, data) -> None:
                        f"{_line(data, k - 1)} has {float(t[k - 1])!r} s; times must increase)")
 
 
-def check_imu(path, imu) -> None:
+def check_imu(path, imu, max_dt_jitter=None) -> None:
+    """The IMU rules; ``max_dt_jitter`` None leaves the interval bound out (writing)."""
     _check_times(path, imu)
     dt = imu["dt"]
     bad = np.flatnonzero(~(dt > 0))
     if bad.size:
         k = int(bad[0])
         raise LogError(f"{path}, line {_line(imu, k)}: dt = {float(dt[k])!r} s must be > 0")
-    bad = np.flatnonzero(np.abs(dt - dt[0]) > RATE_TOLERANCE * dt[0])
-    if bad.size:
-        k = int(bad[0])
-        raise LogError(f"{path}, line {_line(imu, k)}: dt = {float(dt[k])!r} s differs from the "
-                       f"first interval's {float(dt[0])!r} s (the IMU rate must be constant within "
-                       f"{RATE_TOLERANCE:g} relative)")
+    if max_dt_jitter is not None:
+        check_intervals(path, dt, lambda k: _line(imu, k), max_dt_jitter)
     t = imu["time"]
     gap = t[1:] - dt[1:] - t[:-1]
     bad = np.flatnonzero(np.abs(gap) > IMU_GAP_TOLERANCE * dt[1:])
@@ -280,22 +301,49 @@ def check_truth(path, truth) -> None:
 _CHECKS = {IMU_FILE: check_imu, GNSS_FILE: check_gnss, TRUTH_FILE: check_truth}
 
 
-def read_log(folder) -> SensorLog:
-    """Read and check the log in ``folder`` (module docstring); :class:`LogError` otherwise."""
+def _span(t0, t1, origin) -> str:
+    return f"{absolute_text(t0, origin)} to {absolute_text(t1, origin)} s"
+
+
+def check_overlap(log: SensorLog, paths) -> None:
+    """GNSS and truth times overlap the IMU's span (``paths``: file name -> path, for the
+    message; times in the log's time, origin added)."""
+    start, stop = log.start_time, log.stop_time
+    for name, data in ((GNSS_FILE, log.gnss), (TRUTH_FILE, log.truth)):
+        if data is None:
+            continue
+        t = data["time"]
+        if t[0] > stop or t[-1] < start:
+            raise LogError(
+                f"{paths[name]}: times {_span(t[0], t[-1], log.time_origin)} do not overlap "
+                f"the IMU's {_span(start, stop, log.time_origin)} ({paths[IMU_FILE]}); the "
+                "files must share one time scale")
+
+
+def read_log(folder, max_dt_jitter=DEFAULT_MAX_DT_JITTER) -> SensorLog:
+    """Read and check the log in ``folder`` (module docstring), each IMU interval within
+    ``max_dt_jitter`` of the nominal one (:mod:`navcore.sensors.log_time`); :class:`LogError`
+    otherwise."""
     folder = Path(folder)
     if not folder.is_dir():
         raise LogError(f"sensor log folder not found: {folder}")
     tables = {}
+    origin = None
     for name in LOG_FILES:
         path = folder / name
         if name == TRUTH_FILE and not path.exists():
             tables[name] = None
             continue
-        data = _read_table(path)
-        _CHECKS[name](path, data)
+        data, origin = _read_table(path, origin)
+        if name == IMU_FILE:
+            check_imu(path, data, max_dt_jitter)
+        else:
+            _CHECKS[name](path, data)
         data.pop("_line")
         tables[name] = data
-    return SensorLog(tables[IMU_FILE], tables[GNSS_FILE], tables[TRUTH_FILE])
+    log = SensorLog(tables[IMU_FILE], tables[GNSS_FILE], tables[TRUTH_FILE], origin)
+    check_overlap(log, {name: folder / name for name in LOG_FILES})
+    return log
 
 
 def check_log(log: SensorLog, where="sensor log", sources=None) -> None:
@@ -324,14 +372,23 @@ def check_log(log: SensorLog, where="sensor log", sources=None) -> None:
                                f"is {values[bad[0]]} (values must be finite)")
         _CHECKS[name](path, data)
         data.pop("_line", None)
+    check_overlap(log, {name: sources.get(name, f"{where}/{name}") for name in LOG_FILES})
 
 
-def _write_table(path: Path, data) -> None:
+def _write_table(path: Path, data, origin=0.0) -> None:
+    """One file; times written as the log's time (``origin`` added exactly)."""
     columns = [c for c in COLUMNS[path.name] if c in data]
     table = np.column_stack([np.asarray(data[c], dtype=np.float64) for c in columns])
     with open(path, "w", encoding="utf-8", newline="") as f:
         f.write(",".join(header_title(c, COLUMNS[path.name][c]) for c in columns) + "\n")
-        np.savetxt(f, table, fmt="%.17g", delimiter=",")
+        if origin == 0.0:
+            np.savetxt(f, table, fmt="%.17g", delimiter=",")
+            return
+        j = columns.index("time")
+        for row in table.tolist():
+            fields = ["%.17g" % v for v in row]
+            fields[j] = absolute_text(row[j], origin)
+            f.write(",".join(fields) + "\n")
 
 
 def write_log(folder, log: SensorLog) -> Path:
@@ -356,7 +413,7 @@ def write_log(folder, log: SensorLog) -> Path:
         tables = {IMU_FILE: log.imu, GNSS_FILE: log.gnss, TRUTH_FILE: log.truth}
         for name, data in tables.items():
             if data is not None:
-                _write_table(tmp / name, data)
+                _write_table(tmp / name, data, log.time_origin)
         if not folder.exists():
             os.chmod(tmp, 0o777 & ~_umask())
             os.replace(tmp, folder)

@@ -1,0 +1,142 @@
+"""``navfmu convert kf-gins --config``: KF-GINS's YAML configuration as a filter ``.ssv``.
+
+KF-GINS (i2Nav, Wuhan University) configures a run with a YAML file (its
+``dataset/kf-gins.yaml``).  What our INS/GNSS filters can take is written as their parameters
+(SI units and the filters' own conventions, converted here once):
+
+=====================  ========================================================================
+KF-GINS key            filter parameter
+=====================  ========================================================================
+``initpos``            ``init_lat``, ``init_lon`` (deg -> rad), ``init_h`` [m]
+``initvel``            ``init_vn/ve/vd`` [m/s]
+``initatt``            ``init_roll/pitch/yaw`` (deg -> rad, yaw wrapped to (-180, 180] deg)
+``initposstd``         ``p0_pos`` [m]: the largest of the three (one sigma for every axis)
+``initvelstd``         ``p0_vel`` [m/s]: the largest of the three
+``initattstd``         ``p0_att_level`` (the larger of roll, pitch), ``p0_att_yaw`` (deg -> rad)
+``initbgstd``          ``p0_gyro_bias_dph`` (largest; default ``imunoise.gbstd``, as KF-GINS)
+``initbastd``          ``p0_accel_bias_ug`` (mGal -> ug; default ``imunoise.abstd``)
+``imunoise.arw``       ``q_gyro_arw_dpsh`` [deg/sqrt(h)]
+``imunoise.vrw``       ``q_accel_vrw_ugpsHz`` (m/s/sqrt(h) -> ug/sqrt(Hz))
+``imunoise.gbstd``     ``q_gyro_bias_instability_dph`` [deg/h]
+``imunoise.abstd``     ``q_accel_bias_instability_ug`` (mGal -> ug)
+``imunoise.corrtime``  ``q_gyro_bias_tau_s``, ``q_accel_bias_tau_s`` (h -> s)
+``antlever``           ``lever_arm_x/y/z`` [m], body forward-right-down
+``starttime``          not a filter parameter: the replay's ``--start`` (stated in the
+                       ``.ssv`` and printed), with ``endtime`` (-1: the end) as ``--stop``
+=====================  ========================================================================
+
+Not representable, and said so in the ``.ssv`` and on the command's output: scale-factor
+states (``gsstd``, ``asstd``, ``initgyrscale``, ``initaccscale``: the filters have 15 states,
+no scale factors) and a non-zero initial bias (``initgyrbias``, ``initaccbias``: the filters
+start with zero bias).  Per-axis values become the largest of the three (a conservative
+sigma).  KF-GINS weights each fix with the receiver's own sigmas: the ``.ssv`` sets
+``r_from_receiver`` (the log's per-epoch ``std_n/e/d`` as R) and ``measurement`` =
+``position`` (its GNSS file has positions only; a 13-column file has velocity too, whose
+sigmas the sensor-log format does not keep).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Dict, List
+
+from navcore.ins.constants import UG
+
+from ..errors import NavfmuError
+
+#: 1 mGal [m/s^2]
+MGAL = 1e-5
+SSV_NAME = "filter.ssv"
+
+
+def _numbers(path, config, key, n=3) -> List[float]:
+    value = config.get(key)
+    if isinstance(value, (int, float)) and n == 1:
+        value = [value]
+    if (not isinstance(value, list) or len(value) != n
+            or not all(isinstance(x, (int, float)) and math.isfinite(x) for x in value)):
+        raise NavfmuError(f"{path}: key '{key}': expected {n} finite number"
+                          f"{'s' if n > 1 else ''}, got {value!r}")
+    return [float(x) for x in value]
+
+
+def read_config(path) -> Dict[str, Any]:
+    """The parameters of a KF-GINS YAML file (module docstring): ``parameters`` (name ->
+    value), ``start``/``stop`` (or None) and ``notes`` (what was left out)."""
+    import yaml
+
+    path = Path(path)
+    try:
+        config = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise NavfmuError(f"{path}: cannot be read: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise NavfmuError(f"{path}: not YAML: {str(exc).splitlines()[0]}") from None
+    if not isinstance(config, dict):
+        raise NavfmuError(f"{path}: expected a mapping of KF-GINS keys (initpos, imunoise, ...)")
+    noise = config.get("imunoise")
+    if not isinstance(noise, dict):
+        raise NavfmuError(f"{path}: key 'imunoise': expected a mapping (arw, vrw, gbstd, abstd, "
+                          "corrtime)")
+    where = f"{path} imunoise"
+    lat, lon, h = _numbers(path, config, "initpos")
+    roll, pitch, yaw = (math.radians(x) for x in _numbers(path, config, "initatt"))
+    att_std = [math.radians(x) for x in _numbers(path, config, "initattstd")]
+    gb = max(_numbers(where, noise, "gbstd"))
+    ab = max(_numbers(where, noise, "abstd"))
+    tau = _numbers(where, noise, "corrtime", 1)[0] * 3600.0
+    p = {"init_lat": math.radians(lat), "init_lon": math.radians(lon), "init_h": h,
+         **dict(zip(("init_vn", "init_ve", "init_vd"), _numbers(path, config, "initvel"))),
+         "init_roll": roll, "init_pitch": pitch,
+         "init_yaw": math.atan2(math.sin(yaw), math.cos(yaw)),
+         "p0_pos": max(_numbers(path, config, "initposstd")),
+         "p0_vel": max(_numbers(path, config, "initvelstd")),
+         "p0_att_level": max(att_std[:2]), "p0_att_yaw": att_std[2],
+         "p0_gyro_bias_dph": (max(_numbers(path, config, "initbgstd"))
+                              if "initbgstd" in config else gb),
+         "p0_accel_bias_ug": (max(_numbers(path, config, "initbastd"))
+                              if "initbastd" in config else ab) * MGAL / UG,
+         "q_gyro_arw_dpsh": max(_numbers(where, noise, "arw")),
+         "q_accel_vrw_ugpsHz": max(_numbers(where, noise, "vrw")) / 60.0 / UG,
+         "q_gyro_bias_instability_dph": gb, "q_gyro_bias_tau_s": tau,
+         "q_accel_bias_instability_ug": ab * MGAL / UG, "q_accel_bias_tau_s": tau,
+         **dict(zip(("lever_arm_x", "lever_arm_y", "lever_arm_z"),
+                    _numbers(path, config, "antlever"))),
+         "measurement": "position", "r_from_receiver": True}
+    notes = [f"{key} (scale factors are not filter states)" for key in
+             ("gsstd", "asstd") if key in noise]
+    notes += [f"{key} = {config[key]} (the filters start with zero bias)"
+              for key in ("initgyrbias", "initaccbias")
+              if key in config and any(_numbers(path, config, key))]
+    start = config.get("starttime")
+    stop = config.get("endtime")
+    for key, value in (("starttime", start), ("endtime", stop)):
+        if value is not None and not isinstance(value, (int, float)):
+            raise NavfmuError(f"{path}: key '{key}': expected a number, got {value!r}")
+    return {"parameters": p, "notes": notes, "source": str(path),
+            "start": None if start is None else float(start),
+            "stop": None if stop is None or stop < 0 else float(stop)}
+
+
+def write_filter_ssv(settings, destination) -> str:
+    """Write ``destination/filter.ssv`` from :func:`read_config`'s ``settings``; one line
+    saying what was written and how to replay with it."""
+    from ..campaigns.tune import ssv_text
+    from ..results.run_results import atomic_write
+
+    typed = {k: ["String" if isinstance(v, str) else "Boolean" if isinstance(v, bool)
+                 else "Real", v] for k, v in settings["parameters"].items()}
+    text = ssv_text("filter", {}, typed)
+    head, rest = text.split("\n", 1)
+    body = (f"from {settings['source']}; KF-GINS starttime {settings['start']} s and endtime "
+            f"{settings['stop']} s: the replay's start and stop options"
+            + (f"; not representable: {'; '.join(settings['notes'])}"
+               if settings["notes"] else ""))
+    comment = f"<!-- {body.replace('--', '- -')} -->"     # a comment holds no double hyphen
+    ssv = Path(destination) / SSV_NAME
+    atomic_write(ssv, lambda f: f.write(head + "\n" + comment + "\n" + rest))
+    start = "" if settings["start"] is None else f" --start {settings['start']:g}"
+    stop = "" if settings["stop"] is None else f" --stop {settings['stop']:g}"
+    left = (f"; left out: {'; '.join(settings['notes'])}" if settings["notes"] else "")
+    return (f"wrote {ssv}: the filter's initial state, noise and lever arm; bind it to the "
+            f"filter and replay with --replay {destination}{start}{stop}{left}")

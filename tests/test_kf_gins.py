@@ -1,0 +1,175 @@
+"""KF-GINS and gnss-ins-sim coverage of `navfmu convert`: 13-column GNSS files with velocity,
+the YAML configuration as a filter .ssv (units converted by the textbook factors, written
+here independently), ref_frame=1 refused by name, an existing destination kept without
+--force; and the receiver's per-fix sigmas as R (r_from_receiver) against the same R given
+as parameters."""
+from __future__ import annotations
+
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+from navcore.components import registry as components
+from navcore.core.component import InputError
+from navcore.sensors.log_converters import read_kf_gins
+from navcore.sensors.sensorlog import SensorLog, read_log, write_log
+from orchestrator.building import build as fmu_build
+from orchestrator.model.ssp import _read_ssv
+from orchestrator.running import scenarios
+from test_sensorlog import GNSS_INS_SIM, _log, _write_kf_gins
+
+GIS_MODEL = fmu_build.ROOT / "models" / "replay_gnss_ins_sim"
+
+# a KF-GINS configuration in the layout of its dataset/kf-gins.yaml (keys, units, comments)
+CONFIG = """\
+imupath: "./dataset/imu.txt"
+gnsspath: "./dataset/gnss.txt"
+imudatalen: 7
+imudatarate: 200
+starttime: 456300
+endtime: -1
+initpos: [ 30.4447873701, 114.4718632047, 20.899 ]   # deg, deg, m
+initvel: [ 0.0, 0.0, 0.0 ]
+initatt: [ 0.85421502, -2.03480295, 185.70235133 ]   # roll, pitch, yaw deg
+initgyrbias: [ 0, 0, 0 ]
+initaccbias: [ 0, 0, 0 ]
+initposstd: [ 0.005, 0.004, 0.008 ]
+initvelstd: [ 0.003, 0.004, 0.004 ]
+initattstd: [ 0.003, 0.003, 0.023 ]
+imunoise:
+  arw: [0.003, 0.003, 0.003]          # deg/sqrt(hr)
+  vrw: [0.03, 0.03, 0.03]             # m/s/sqrt(hr)
+  gbstd: [0.027, 0.027, 0.027]        # deg/hr
+  abstd: [15.0, 15.0, 15.0]           # mGal
+  gsstd: [300.0, 300.0, 300.0]        # ppm
+  asstd: [300.0, 300.0, 300.0]        # ppm
+  corrtime: 4.0                       # hr
+antlever: [ 0.136, -0.301, -0.184 ]
+"""
+G0 = 9.80665                          # the ug of the datasheets: 1e-6 standard gravity
+
+
+def _kf_gins_files(tmp_path, velocity):
+    log = _log(n=400, dt=0.005, t0=456300.0)
+    log.gnss["valid"][:] = 1.0
+    for k, s in (("std_n", 0.02), ("std_e", 0.03), ("std_d", 0.05)):
+        log.gnss[k] = np.full(len(log.gnss["time"]), s)
+    log.truth["yaw"] = np.clip(log.truth["yaw"], -3.0, 3.0)
+    _write_kf_gins(tmp_path, log)
+    if velocity:       # KF-GINS's 13 columns: velocity after the position, sigmas after
+        g = log.gnss
+        d = 180.0 / math.pi
+        np.savetxt(tmp_path / "gnss.txt", np.column_stack(
+            [g["time"], g["lat"] * d, g["lon"] * d, g["h"], g["vn"], g["ve"], g["vd"],
+             g["std_n"], g["std_e"], g["std_d"], np.full((len(g["time"]), 3), 0.01)]),
+            fmt="%.17g")
+    return log
+
+
+def test_thirteen_column_gnss_file_keeps_the_velocity(tmp_path):
+    log = _kf_gins_files(tmp_path, velocity=True)
+    back = read_kf_gins(tmp_path / "imu.txt", tmp_path / "gnss.txt")
+    assert back.has_gnss_velocity
+    for k in ("vn", "ve", "vd", "std_n", "std_d", "h"):
+        assert np.allclose(back.gnss[k], log.gnss[k], rtol=1e-15, atol=0), k
+    (tmp_path / "gnss.txt").write_text("456300.1 30 114 20 1 2 3 4 5 6 7\n")
+    with pytest.raises(Exception, match=r"gnss.txt, line 1: 11 values, expected 7 \(time, "
+                       r"lat, lon, h, std_n, std_e, std_d\) or 13 \(time, lat, lon, h, vn"):
+        read_kf_gins(tmp_path / "imu.txt", tmp_path / "gnss.txt")
+
+
+def test_convert_keeps_an_existing_destination_without_force(tmp_path, navfmu_cli):
+    _kf_gins_files(tmp_path, velocity=False)
+    (tmp_path / "log").mkdir()
+    (tmp_path / "log" / "mine.txt").write_text("keep me")
+    args = ("convert", "kf-gins", tmp_path / "imu.txt", tmp_path / "gnss.txt", tmp_path / "log")
+    code, _, err = navfmu_cli(*args)
+    assert code == 2 and err.startswith(f"navfmu: error: convert: the destination "
+                                        f"{tmp_path / 'log'} exists; give --force"), err
+    assert sorted(p.name for p in (tmp_path / "log").iterdir()) == ["mine.txt"]
+    code, out, err = navfmu_cli(*args, "--force")
+    assert code == 0, err
+    assert read_log(tmp_path / "log").time_origin == 456300.0
+
+
+def test_config_becomes_a_filter_ssv_in_si_units(tmp_path, navfmu_cli):
+    _kf_gins_files(tmp_path, velocity=False)
+    (tmp_path / "kf-gins.yaml").write_text(CONFIG)
+    code, out, err = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt",
+                                tmp_path / "gnss.txt", tmp_path / "log", "--config",
+                                tmp_path / "kf-gins.yaml")
+    assert code == 0, err
+    assert "--start 456300" in out and "gsstd" in out      # the start, and what is left out
+    values = {k: v for k, (_, v) in _read_ssv(tmp_path / "log" / "filter.ssv").items()}
+    names = {p.name for p in components.Kf.parameters}
+    assert set(values) <= names, set(values) - names
+    d2r = math.pi / 180.0
+    assert values["init_lat"] == pytest.approx(30.4447873701 * d2r, rel=1e-15)
+    assert values["init_yaw"] == pytest.approx((185.70235133 - 360.0) * d2r, rel=1e-14)
+    assert values["p0_pos"] == 0.008 and values["p0_att_yaw"] == pytest.approx(0.023 * d2r)
+    # 0.03 m/s/sqrt(h) = 0.03/60 m/s^2/sqrt(Hz) = 50.99 ug/sqrt(Hz); 15 mGal = 15.30 ug
+    assert values["q_accel_vrw_ugpsHz"] == pytest.approx(0.03 / 60 / (G0 * 1e-6), rel=1e-12)
+    assert values["q_accel_vrw_ugpsHz"] == pytest.approx(50.99, abs=0.01)
+    assert values["q_accel_bias_instability_ug"] == pytest.approx(15.296, abs=1e-3)
+    assert values["q_gyro_bias_tau_s"] == 14400.0 and values["q_gyro_arw_dpsh"] == 0.003
+    assert (values["lever_arm_x"], values["lever_arm_y"], values["lever_arm_z"]) == (
+        0.136, -0.301, -0.184)
+    assert values["r_from_receiver"] is True and values["measurement"] == "position"
+    (tmp_path / "bad.yaml").write_text(CONFIG.replace("initpos: [ 30.4447873701,", "initpos: ["))
+    code, _, err = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt",
+                              tmp_path / "gnss.txt", tmp_path / "log2", "--config",
+                              tmp_path / "bad.yaml")
+    assert code == 2 and "bad.yaml: key 'initpos': expected 3 finite numbers" in err
+    assert not (tmp_path / "log2").exists()
+
+
+def test_gnss_ins_sim_local_frame_is_refused_by_name(tmp_path, navfmu_cli):
+    src = tmp_path / "sim"
+    shutil.copytree(GNSS_INS_SIM, src)
+    lines = (src / "gps-0.csv").read_text().splitlines()
+    lines[0] = "gps_x (m),gps_y (m),gps_z (m),gps_vx (m/s),gps_vy (m/s),gps_vz (m/s)"
+    (src / "gps-0.csv").write_text("\n".join(lines) + "\n")
+    code, _, err = navfmu_cli("convert", "gnss-ins-sim", src, tmp_path / "out")
+    assert code == 2 and "this gnss-ins-sim run used ref_frame=1" in err
+    assert "only ref_frame=0" in err and not (tmp_path / "out").exists()
+
+
+def _gis_with_sigmas(tmp_path, sigmas):
+    log = read_log(GIS_MODEL / "log")
+    n = len(log.gnss["time"])
+    for k, s in zip(("std_n", "std_e", "std_d"), sigmas):
+        log.gnss[k] = np.full(n, s)
+    write_log(tmp_path / "log", SensorLog(log.imu, log.gnss, log.truth))
+    return tmp_path / "log"
+
+
+def test_receiver_sigmas_as_r_equal_the_same_r_given(tmp_path):
+    """The log's std_n/e/d (5, 5, 7 m: the data's stated sigmas) as R with r_pos_* set to
+    50 m: the very numbers of the run with r_pos_* = 5, 5, 7 m (the same R each update);
+    without r_from_receiver the 50 m R halves the mean NIS."""
+    log = _gis_with_sigmas(tmp_path, (5.0, 5.0, 7.0))
+    model = scenarios.load_scenario(GIS_MODEL)
+    wrong = {f"filter.r_pos_{a}": 50.0 for a in "ned"}
+    run = scenarios.simulate_scenario(model, backend="direct", replay=log, log=None,
+                                      parameters={**wrong, "filter.r_from_receiver": True})
+    ref = scenarios.simulate_scenario(model, backend="direct", replay=log, log=None)
+    assert np.array_equal(run.results.column("filter", "nav_lat"),
+                          ref.results.column("filter", "nav_lat"))
+    assert run.metrics["filter"]["nis"] == ref.metrics["filter"]["nis"]
+    ignored = scenarios.simulate_scenario(model, backend="direct", replay=log, log=None,
+                                          parameters=wrong)
+    # (the position part of the NIS shrinks by 100 with R = 50^2; the velocity part stays)
+    assert ignored.metrics["filter"]["nis"]["mean"] < 0.6 * ref.metrics["filter"]["nis"]["mean"]
+
+
+def test_receiver_sigmas_missing_is_an_input_error():
+    kf = components.Kf(r_from_receiver=True, measurement="position")
+    kf.initialize(0.0)
+    inputs = {p.name: p.default() for p in kf.inputs}
+    inputs.update(imu_time=0.01, imu_dt=0.01, imu_dvel_z=-9.8 * 0.01, gnss_time=0.01,
+                  gnss_lat=0.0, gnss_epoch=1, gnss_valid=True)
+    with pytest.raises(InputError, match=r"input 'gnss_std_n' = 0.0 m for the fix at "
+                       r"gnss_time = 0.01 s with parameter 'r_from_receiver' = true"):
+        kf.step(0.0, 0.01, inputs)
