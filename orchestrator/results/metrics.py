@@ -283,8 +283,7 @@ class MetricAccumulator:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n
             out["nis"] = {"mean": self.nis_sum / n, "dof": dof, "updates": n,
-                          "band95": [float(chi2_lower_quantile(0.025, n * dof) / n),
-                                     float(chi2_lower_quantile(0.975, n * dof) / n)]}
+                          "band95": nis_band95(n, dof)}
         if header is not None and self.filter_name in getattr(header, "step_time_s", {}):
             out["time_per_step_ms"] = 1e3 * float(header.step_time_s[self.filter_name])
         if self.epochs["dof"]:
@@ -298,6 +297,14 @@ class MetricAccumulator:
 
 _NEES_GROUPS = {"position": ("pos_", "std_p"), "velocity": ("vel_", "std_v"),
                 "attitude": ("phi_", "std_att_")}
+
+
+def nis_band95(updates, dof):
+    """The two-sided 95 % band of the mean of ``updates`` chi-square(``dof``) samples (the
+    NIS band of the module docstring)."""
+    n = int(updates)
+    return [float(chi2_lower_quantile(0.025, n * dof) / n),
+            float(chi2_lower_quantile(0.975, n * dof) / n)]
 
 
 def _median_of_counts(counts):

@@ -1,0 +1,2 @@
+"""``navfmu verify``: a navigation FMU (ours or not) through the FMI, contract, consistency
+and robustness checks of its role, with a verdict per check."""
