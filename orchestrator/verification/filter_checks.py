@@ -44,6 +44,7 @@ TAIL_S = 10.0
 SHORT_S = 120.0
 #: noiseless closure bounds: position [m], velocity [m/s], attitude [deg] (largest |error|)
 CLOSURE_BOUNDS = {"position_max_m": 0.1, "velocity_max_mps": 0.01, "attitude_max_deg": 0.01}
+_UNITS = {"position_max_m": "m", "velocity_max_mps": "m/s", "attitude_max_deg": "deg"}
 #: mean NEES of a 3-state group over the seeds: RMS(error / sigma) between 0.5 and 1.5,
 #: as the consistency test of Kf judges it (tests/test_kf_consistency.py)
 NEES_BAND = (3 * 0.5 ** 2, 3 * 1.5 ** 2)
@@ -159,7 +160,7 @@ def _failed_run(runs) -> Optional[str]:
 
 def _judge_closure(case, results) -> Check:
     crit = ("perfect IMU and GNSS, filter started at the truth: largest |error| <= "
-            + ", ".join(f"{v:g} {k.split('_')[-1]} ({k.split('_')[0]})"
+            + ", ".join(f"{v:g} {_UNITS[k]} ({k.split('_')[0]})"
                         for k, v in CLOSURE_BOUNDS.items()))
     run = _runs(results, case, "filter")[0]
     failed = _failed_run([run])

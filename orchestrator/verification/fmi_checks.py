@@ -36,7 +36,7 @@ def check_validate(setting: Setting) -> Check:
 
 def check_ports(setting: Setting) -> Check:
     facts, role = setting.facts, setting.role
-    wrong, missing_required, missing_optional = [], [], []
+    wrong, missing_required, missing_optional, no_unit = [], [], [], []
     for port in contract(role):
         var = facts.variables.get(port.name)
         if var is None:
@@ -45,21 +45,27 @@ def check_ports(setting: Setting) -> Check:
         if var.causality != port.causality or var.type != port.type:
             wrong.append(f"{port.name} is a {var.causality} {var.type}, the contract asks "
                          f"for a {port.causality} {port.type}")
+        elif port.type == "Real" and port.unit and not var.unit:
+            no_unit.append(port.name)
         elif port.type == "Real" and var.unit != port.unit:
             wrong.append(f"{port.name} has unit '{var.unit}', the contract's is "
                          f"'{port.unit}'")
     details = {"missing_required": missing_required, "missing_optional": missing_optional,
-               "wrong": wrong}
+               "wrong": wrong, "no_unit": no_unit}
     measured = (f"{len(missing_required)} required missing, {len(wrong)} wrong, "
-                f"{len(missing_optional)} optional missing")
+                f"{len(no_unit)} without unit, {len(missing_optional)} optional missing")
     reasons = []
     if missing_required:
         reasons.append("missing: " + ", ".join(missing_required))
     reasons += wrong
+    if no_unit:
+        reasons.append(f"{len(no_unit)} Reals declare no unit (the contract's are SI), e.g. "
+                       + ", ".join(no_unit[:4]))
     if missing_optional:
         reasons.append("optional outputs absent (checks needing them are skipped): "
                        + ", ".join(missing_optional))
-    verdict = "fail" if missing_required or wrong else ("warn" if missing_optional else "pass")
+    verdict = ("fail" if missing_required or wrong
+               else ("warn" if missing_optional or no_unit else "pass"))
     return Check("fmi.ports", f"contract ports of an {ROLE_TITLES[role]}",
                  "every required port with the contract's causality, type and SI unit",
                  measured, verdict, "; ".join(reasons), details)
