@@ -183,6 +183,9 @@ class MetricAccumulator:
         self.groups = [g for g, first in (("pos", "nav_lat"), ("vel", "nav_vn"))
                        if first in names]
         self.has_std = all(f"std_p{a}" in names for a in AXES)
+        # a filter without some 1-sigma outputs (e.g. no attitude) has NEES of the others only
+        self.nees_groups = [g for g, (_, std) in _NEES_GROUPS.items()
+                            if all(f"{std}{a}" in names for a in AXES)]
         self.has_att_std = all(f"std_{a}" in names for a in ATTITUDE)
         self.normalized_sum = {a: 0.0 for a in ATTITUDE}
         self.normalized_n = {a: 0 for a in ATTITUDE}
@@ -223,7 +226,8 @@ class MetricAccumulator:
                 self.normalized_sum[a] += float(ratio2[finite].sum())
                 self.normalized_n[a] += int(finite.sum())
         if self.has_std:
-            for g, (err, std) in _NEES_GROUPS.items():
+            for g in self.nees_groups:
+                err, std = _NEES_GROUPS[g]
                 sig = np.stack([col(self.filter_name, std + a)[mask] for a in AXES])
                 err_ = np.stack([e[err + a][mask] for a in AXES])
                 with np.errstate(divide="ignore", invalid="ignore"):
@@ -274,11 +278,11 @@ class MetricAccumulator:
                     if self.normalized_n[a] else float("nan")) for a in ATTITUDE}
         if self.has_std:
             out["nees"] = {g: (self.nees_sum[g] / self.nees_n[g] if self.nees_n[g]
-                               else float("nan")) for g in _NEES_GROUPS}
+                               else float("nan")) for g in self.nees_groups}
             out["inside_3sigma_pct"] = {
                 g: {a: (100.0 * float(self.inside_3sigma[g][i] / self.sigma_n[g][i])
                         if self.sigma_n[g][i] else float("nan")) for i, a in enumerate(AXES)}
-                for g in _NEES_GROUPS}
+                for g in self.nees_groups}
         if self.nis_n:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n

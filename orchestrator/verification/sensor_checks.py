@@ -6,8 +6,8 @@ set to ``static`` when it has one; truth inputs, when it has them, held at a sta
 The overlapping Allan deviation (``allantools.oadev``) of each gyro rate and specific force
 (increments over ``imu_dt``) gives:
 
-* ARW / VRW: the slope -1/2 line fitted to the deviation at tau in :data:`WHITE_TAUS`, read at
-  tau = 1 s (white rate noise of density N has sigma(tau) = N / sqrt(tau)), against the
+* ARW / VRW: the slope -1/2 line fitted to the deviation at tau in :data:`WHITE_TAUS` (the
+  declared Gauss-Markov part, below, taken off the Allan variance first), read at tau = 1 s (white rate noise of density N has sigma(tau) = N / sqrt(tau)), against the
   declared ``gyro_arw_dpsh`` [deg/sqrt(h)] / ``accel_vrw_ugpsHz`` [ug/sqrt(Hz)] or a
   datasheet value given with ``--set datasheet.NAME=VALUE``;
 * bias instability: where a Gauss-Markov bias is declared (``*_bias_instability_*`` with
@@ -110,11 +110,24 @@ def allan_curves(samples: Dict[str, List[float]], dt: float):
     return out
 
 
-def white_density(taus, adev) -> float:
-    """N of the slope -1/2 line fitted (in log-log) to the deviation within WHITE_TAUS."""
-    t, a = np.asarray(taus), np.asarray(adev)
-    sel = (t >= WHITE_TAUS[0]) & (t <= WHITE_TAUS[1]) & (a > 0)
-    return float(np.exp(np.mean(np.log(a[sel]) + 0.5 * np.log(t[sel]))))
+def white_density(taus, adev, gm_avar=None) -> float:
+    """N of the slope -1/2 line fitted (in log-log) to the deviation within WHITE_TAUS, the
+    declared Gauss-Markov part's variance ``gm_avar(taus)`` taken off first when given."""
+    t, a2 = np.asarray(taus), np.asarray(adev) ** 2
+    if gm_avar is not None:
+        a2 = a2 - gm_avar(t)
+    sel = (t >= WHITE_TAUS[0]) & (t <= WHITE_TAUS[1]) & (a2 > 0)
+    return float(np.exp(np.mean(0.5 * np.log(a2[sel]) + 0.5 * np.log(t[sel]))))
+
+
+def _declared_gm(setting, triad):
+    """The declared Gauss-Markov bias's AVAR as a function of tau, or None."""
+    _, _, _, bi_par, bi_si, tau_par = TRIADS[triad]
+    sigma, _ = _declared(setting, bi_par)
+    tau_c, _ = _declared(setting, tau_par)
+    if not sigma or not tau_c or tau_c <= 0:
+        return None
+    return lambda taus: gm_allan_variance(taus, sigma * bi_si, tau_c)
 
 
 def gm_allan_variance(taus, sigma, tau_c):
@@ -137,7 +150,8 @@ def _density_check(setting, triad, curves):
         return Check(cid, title, crit, "nothing declared", "skip",
                      f"{par} is neither a parameter of the FMU nor given with --set "
                      f"datasheet.{par}=VALUE" if declared is None else f"{par} declared 0")
-    ratios = {a: white_density(*curves[prefix + a]) / (declared * si) for a in AXES}
+    gm = _declared_gm(setting, triad)
+    ratios = {a: white_density(*curves[prefix + a], gm) / (declared * si) for a in AXES}
     measured = ", ".join(f"{a} {r:.3f}" for a, r in ratios.items())
     bad = [a for a, r in ratios.items() if not DENSITY_BAND[0] <= r <= DENSITY_BAND[1]]
     return Check(cid, title, crit, f"measured/declared {measured}",
@@ -152,11 +166,11 @@ def _gm_check(setting, triad, curves):
     prefix, par, si, bi_par, bi_si, tau_par = TRIADS[triad]
     cid = f"imu.{triad}_bias_instability"
     title = f"{triad} bias instability from the Allan deviation"
-    sigma, _ = _declared(setting, bi_par)
     tau_c, _ = _declared(setting, tau_par)
+    gm = _declared_gm(setting, triad)
     crit = (f"deviation at tau_c/3..3 tau_c over the declared white + Gauss-Markov model's: "
             f"within {GM_BAND[0]:g}-{GM_BAND[1]:g}")
-    if not sigma or not tau_c or tau_c <= 0:
+    if gm is None:
         return Check(cid, title, crit, "no Gauss-Markov bias declared", "skip",
                      f"{bi_par} / {tau_par} declared 0 or absent: no flat part to check")
     density, _ = _declared(setting, par)
@@ -167,8 +181,7 @@ def _gm_check(setting, triad, curves):
         if not sel.any():
             return Check(cid, title, crit, "run too short", "skip",
                          f"the {STATIC_S:g} s run reaches no tau near tau_c = {tau_c:g} s")
-        model = np.sqrt((density or 0.0) ** 2 * si ** 2 / taus[sel]
-                        + gm_allan_variance(taus[sel], sigma * bi_si, tau_c))
+        model = np.sqrt((density or 0.0) ** 2 * si ** 2 / taus[sel] + gm(taus[sel]))
         r = adev[sel] / model
         worst[a] = float(r[np.argmax(np.abs(np.log(r)))])
     bad = [a for a, r in worst.items() if not GM_BAND[0] <= r <= GM_BAND[1]]

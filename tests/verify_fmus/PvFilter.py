@@ -38,14 +38,20 @@ class PvFilter(Fmi2Slave):
             setattr(self, name, 0.0)
             self.register_variable(Real(name, causality=Fmi2Causality.input))
         self.gnss_valid, self.gnss_epoch = False, 0
-        self.register_variable(Boolean("gnss_valid", causality=Fmi2Causality.input))
-        self.register_variable(Integer("gnss_epoch", causality=Fmi2Causality.input))
+        for var in (Boolean("gnss_valid", causality=Fmi2Causality.input,
+                            variability=Fmi2Variability.discrete),
+                    Integer("gnss_epoch", causality=Fmi2Causality.input,
+                            variability=Fmi2Variability.discrete)):
+            self.register_variable(var)
         for name in SOLUTION:
             setattr(self, name, 0.0)
             self.register_variable(Real(name, causality=Fmi2Causality.output))
         self.nis_dof, self.updated = 0, False
-        self.register_variable(Integer("nis_dof", causality=Fmi2Causality.output))
-        self.register_variable(Boolean("updated", causality=Fmi2Causality.output))
+        for var in (Integer("nis_dof", causality=Fmi2Causality.output,
+                            variability=Fmi2Variability.discrete),
+                    Boolean("updated", causality=Fmi2Causality.output,
+                            variability=Fmi2Variability.discrete)):
+            self.register_variable(var)
         self.x = None
 
     def _start(self):
