@@ -2,9 +2,10 @@
 over N seeds, robustness against ``Kf`` on the same seeds, time per step against ``Kf``.
 
 Every case is the scenario with overrides of its sensor components (``gnss``,
-``trajectory``), run to the end of its window plus :data:`TAIL_S` (the closure and the cases
-judged over the whole run to :data:`SHORT_S`, the consistency runs to :data:`STOP_S`); the consistency and robustness cases start from a
-clean receiver (no noise steps, outlier patches or periodic outliers), so each case adds
+``trajectory``), run to the end of its window plus :data:`TAIL_S` (the closure and the
+cases judged over the whole run to :data:`SHORT_S`, the consistency runs to
+:data:`STOP_S`); the consistency and robustness cases start from a clean receiver (no
+noise steps, outlier patches or periodic outliers), so each case adds
 exactly one disturbance:
 
 * ``closure``: IMU and GNSS without any error, one run;
@@ -310,4 +311,5 @@ def judge(case_list: List[Case], results) -> List[Check]:
     return checks
 
 
-__all__ = ["plan", "judge_plan", "cases", "jobs", "judge", "Case", "STOP_S", "NEES_BAND", "CLOSURE_BOUNDS"]
+__all__ = ["plan", "judge_plan", "cases", "jobs", "judge", "Case", "STOP_S", "NEES_BAND",
+           "CLOSURE_BOUNDS"]

@@ -7,7 +7,8 @@ The overlapping Allan deviation (``allantools.oadev``) of each gyro rate and spe
 (increments over ``imu_dt``) gives:
 
 * ARW / VRW: the slope -1/2 line fitted to the deviation at tau in :data:`WHITE_TAUS` (the
-  declared Gauss-Markov part, below, taken off the Allan variance first), read at tau = 1 s (white rate noise of density N has sigma(tau) = N / sqrt(tau)), against the
+  declared Gauss-Markov part, below, taken off the Allan variance first), read at
+  tau = 1 s (white rate noise of density N has sigma(tau) = N / sqrt(tau)), against the
   declared ``gyro_arw_dpsh`` [deg/sqrt(h)] / ``accel_vrw_ugpsHz`` [ug/sqrt(Hz)] or a
   datasheet value given with ``--set datasheet.NAME=VALUE``;
 * bias instability: where a Gauss-Markov bias is declared (``*_bias_instability_*`` with
@@ -163,7 +164,7 @@ def _density_check(setting, triad, curves):
 
 
 def _gm_check(setting, triad, curves):
-    prefix, par, si, bi_par, bi_si, tau_par = TRIADS[triad]
+    prefix, par, si, bi_par, _, tau_par = TRIADS[triad]
     cid = f"imu.{triad}_bias_instability"
     title = f"{triad} bias instability from the Allan deviation"
     tau_c, _ = _declared(setting, tau_par)
