@@ -386,7 +386,7 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, sche
                              sets=parse_named_sets(sets), out=out, junit=junit,
                              workers=workers, scheduler=scheduler, local_cluster=local_cluster,
                              progress=progress_bar("runs", unit="run"),
-                             log=lambda m: click.echo(m, err=True))
+                             log=lambda m: click.echo(m, err=True), default_root=DEFAULT_OUT)
     for check in summary["checks"]:
         click.echo(f"  {check.verdict:4s}  {check.id}: {check.measured}"
                    + (f" ({check.reason})" if check.reason and check.verdict != "pass" else ""))

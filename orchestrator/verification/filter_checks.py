@@ -295,7 +295,37 @@ def plan(setting: Setting, runs: int) -> Plan:
 
 def judge_plan(setting: Setting, planned: Plan, results, workdir):
     """``(checks, figures)`` of the finished runs (figures: file name -> path)."""
-    return judge(planned.cases, results), {}
+    checks = judge(planned.cases, results)
+    robust = [c for c in checks if c.id.startswith("robust.") and "filter" in c.details]
+    if not robust:
+        return checks, {}
+    path = workdir / "robustness.png"
+    _robustness_figure(robust, path)
+    for c in robust:
+        c.figure = path.name
+    return checks, {path.name: path}
+
+
+def _robustness_figure(checks, path):
+    """Per robustness case, the filter's value of every seed next to the references'."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(checks), figsize=(2.6 * len(checks), 3.2), squeeze=False)
+    for ax, c in zip(axes[0], checks):
+        series = {k: v for k, v in c.details.items() if isinstance(v, list)}
+        for j, (who, values) in enumerate(series.items()):
+            x = [i + 0.8 * j / len(series) for i in range(len(values))]
+            ax.bar(x, values, width=0.8 / len(series), label=who)
+        ax.set_title(c.id.split(".", 1)[1], fontsize=9)
+        ax.set_xlabel("seed")
+        ax.tick_params(labelsize=8)
+    axes[0][0].set_ylabel("m or m/s (see the check)")
+    axes[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
 
 
 def judge(case_list: List[Case], results) -> List[Check]:

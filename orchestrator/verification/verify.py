@@ -15,7 +15,6 @@ from typing import Any, Callable, Dict, Optional, Sequence
 
 from .. import build as fmu_build
 from .. import outputs, scenarios
-from ..cli_options import DEFAULT_OUT
 from ..errors import NavfmuError
 from ..executor import Executor, Task
 from . import attitude_checks, filter_checks, sensor_checks
@@ -46,16 +45,16 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
            runs: Optional[int] = None, sets: Optional[Dict[str, Any]] = None, out=None,
            junit=None, workers: int = 1, scheduler: Optional[str] = None,
            local_cluster: bool = False, progress=None,
-           log: Callable[[str], None] = print) -> Dict[str, Any]:
+           log: Callable[[str], None] = print, default_root=Path(".")) -> Dict[str, Any]:
     """Verify ``fmu``; returns the summary with ``checks``, ``counts``, ``report`` and
-    ``exit_status``."""
+    ``exit_status``.  Without ``out`` the report goes to ``default_root/verify-<model>``."""
     runs = DEFAULT_RUNS if runs is None else runs
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise NavfmuError(f"--runs: expected a whole number >= 1, got {runs!r}")
     facts = read_fmu(fmu)
     found_role = detect_role(facts, role)
     setting = make_setting(facts, found_role, scenario_names, sets)
-    out = Path(out) if out else DEFAULT_OUT / f"verify-{facts.model_name}"
+    out = Path(out) if out else Path(default_root) / f"verify-{facts.model_name}"
     outputs.check_target(out)
     executor = Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)
     fmu_build.build([n for n in REFERENCE_FMUS if (fmu_build.FMU_SOURCES / f"{n}.py").is_file()],
