@@ -186,14 +186,17 @@ def test_crashing_fmu_fails_its_checks_and_the_report_is_written(broken, navfmu_
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name,catching", [("OverconfidentKf", {"filter.consistency"}),
-                                           ("WrongCoriolisKf", {"filter.closure"}),
-                                           ("IgnoresValidKf", {"robust.outage"}),
-                                           ("InexactRestoreKf", {"fmi.state"})])
-def test_broken_filter_fails_only_its_check_in_a_full_verification(broken, navfmu_cli,
-                                                                   tmp_path, name, catching):
+@pytest.mark.parametrize("name,meant,also", [
+    ("OverconfidentKf", "filter.consistency", set()),
+    # an unmodelled 2 |omega_ie x v| ~ 0.015 m/s^2 is a real fault everywhere the INS counts:
+    # its velocity and attitude NEES leave the band and it drifts through the outage too
+    ("WrongCoriolisKf", "filter.closure", {"filter.consistency", "robust.outage"}),
+    ("IgnoresValidKf", "robust.outage", set()),
+    ("InexactRestoreKf", "fmi.state", set())])
+def test_broken_filter_fails_its_check_in_a_full_verification(broken, navfmu_cli, tmp_path,
+                                                              name, meant, also):
     out = tmp_path / name
     status, _, _ = navfmu_cli("verify", broken / f"{name}.fmu", "--runs", 3, "--out", out)
     checks = json.loads((out / "verify.json").read_text())["checks"]
     assert status == 1
-    assert {c["id"] for c in checks if c["verdict"] == "fail"} == catching
+    assert {c["id"] for c in checks if c["verdict"] == "fail"} == {meant} | also
