@@ -13,9 +13,9 @@ import math
 
 import pytest
 
-from orchestrator import build as fmu_build
-from orchestrator.cli_options import parse_named_sets
-from orchestrator.executor import Executor, Task
+from orchestrator.building import build as fmu_build
+from orchestrator.cli.cli_options import parse_named_sets
+from orchestrator.campaigns.executor import Executor, Task
 from orchestrator.verification import filter_checks, roles, sensor_checks
 from orchestrator.verification.fmi_checks import run_fmi_checks
 from orchestrator.verification.scenario_run import run_job

@@ -20,7 +20,7 @@ _BUILD = """
 import sys
 from pathlib import Path
 from pythonfmu.builder import FmuBuilder
-from orchestrator import build
+from orchestrator.building import build
 src, dist = Path(sys.argv[1]), Path(sys.argv[2])
 library = build.patched_library(log=None)
 for name in sys.argv[3].split(","):

@@ -18,7 +18,8 @@ from pathlib import Path
 import click
 
 from ..cosim import interrupts
-from .cli_options import DEFAULT_OUT, filter_names, nonempty_path, parse_sets, parse_window
+from .cli_options import (DEFAULT_OUT, filter_names, nonempty_path, parse_named_sets,
+                          parse_sets, parse_window)
 from ..errors import NavfmuError, SimulationError
 from ..cosim.exchange import ALGORITHMS
 from .progress import progress_bars
@@ -378,8 +379,7 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, sche
            local_cluster):
     """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
     checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
-    from .cli_options import parse_named_sets
-    from .verification.verify import verify as verify_fmu
+    from ..verification.verify import verify as verify_fmu
 
     with progress_bars() as progress_bar:
         summary = verify_fmu(fmu, role=role, scenario_names=scenario_names, runs=runs,

@@ -16,8 +16,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import List
 
-from .. import campaign, scenarios
-from ..metric_comparisons import pooled_rms
+from ..campaigns import campaign
+from ..running import scenarios
+from ..results.metric_comparisons import pooled_rms
 from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN
 from .setting import Setting
 from .verdicts import Check

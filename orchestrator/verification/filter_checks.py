@@ -32,9 +32,10 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional
 
-from .. import campaign, scenarios
-from ..metric_comparisons import pooled_rms, rms_3d
-from ..metrics import nis_band95
+from ..campaigns import campaign
+from ..running import scenarios
+from ..results.metric_comparisons import pooled_rms, rms_3d
+from ..results.metrics import nis_band95
 from .setting import MODELS, Setting
 from .verdicts import Check
 

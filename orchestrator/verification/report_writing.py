@@ -10,9 +10,9 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any, Dict, List, Optional
 
-from .. import outputs
-from ..jsonsafe import jsonable
-from ..results import atomic_write
+from ..results import outputs
+from ..results.jsonsafe import jsonable
+from ..results.run_results import atomic_write
 from .roles import ROLE_TITLES
 from .verdicts import Check
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, Optional, Tuple
 
-from navcore import signals
+from navcore.core import signals
 
 from ..errors import NavfmuError
 

@@ -18,7 +18,13 @@ from typing import Any, Dict
 
 import numpy as np
 
-from ..jsonsafe import jsonable
+from navcore.ins.earth import radii
+
+from ..errors import NavfmuError
+from ..results import metrics
+from ..results.jsonsafe import jsonable
+from ..running import scenarios
+from .sensor_checks import allan_curves
 from .verdicts import run_child
 
 MODULE = "orchestrator.verification.scenario_run"
@@ -32,8 +38,6 @@ def run_isolated(job: Dict[str, Any]) -> Dict[str, Any]:
 def run_job(job: Dict[str, Any], isolated: bool) -> Dict[str, Any]:
     """One run of a check (an executor task): in a child process when ``isolated``, else
     here (a reference of ours), a user error then becoming the run's ``error``."""
-    from ..errors import NavfmuError
-
     if isolated:
         return run_isolated(job)
     try:
@@ -48,8 +52,6 @@ def _position_error_norm(errors):
 
 def _growth(results, component, window):
     """3-D position error at the window's start and its largest value inside it [m]."""
-    from .. import metrics
-
     e = metrics.navigation_errors(results, component)
     if "pos_n" not in e:
         return None
@@ -65,10 +67,6 @@ def _growth(results, component, window):
 
 def _fix_errors(results, receiver):
     """NED errors of every new fix of ``receiver`` against the truth at its gnss_time."""
-    from navcore.earth import radii
-
-    from .. import metrics
-
     truth = metrics.find_component(results, "truth_", ("time", "lat", "lon", "h"))
     col = results.column
     epoch = col(receiver, "gnss_epoch")
@@ -105,8 +103,6 @@ def imu_static(job: Dict[str, Any]) -> Dict[str, Any]:
     rates (:func:`.sensor_checks.allan_curves`)."""
     from fmpy import read_model_description, simulate_fmu
 
-    from .sensor_checks import allan_curves
-
     md = read_model_description(job["fmu"], validate=False)
     params = job["parameters"]
     h = float(params.get("imu_period") or md.defaultExperiment.stepSize)
@@ -131,9 +127,6 @@ def imu_static(job: Dict[str, Any]) -> Dict[str, Any]:
 
 def summarize_run(job: Dict[str, Any]) -> Dict[str, Any]:
     """Run ``job`` in this process and summarize it (see the module docstring)."""
-    from .. import metrics, scenarios
-    from ..errors import NavfmuError
-
     if job.get("kind") == "imu_static":
         return imu_static(job)
     model = scenarios.load_scenario(job["ssd"])

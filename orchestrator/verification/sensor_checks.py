@@ -34,8 +34,8 @@ from typing import Dict, List
 
 import numpy as np
 
-from navcore.constants import DPH, DPSH, UG
-from navcore.innovation_stats import chi2_lower_quantile
+from navcore.ins.constants import DPH, DPSH, UG
+from navcore.filters.innovation_stats import chi2_lower_quantile
 
 from .setting import Setting
 from .verdicts import Check

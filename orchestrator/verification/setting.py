@@ -27,8 +27,8 @@ from typing import Any, Dict, List
 
 import numpy as np
 
-from .. import scenarios
-from ..build import ROOT
+from ..running import scenarios
+from ..building.build import ROOT
 from ..errors import NavfmuError
 from .roles import FmuFacts
 

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Optional
 
-from ..build import ROOT
+from ..building.build import ROOT
 
 VERDICTS = ("pass", "fail", "warn", "skip")
 #: longest a child process may take before it counts as hung [s]

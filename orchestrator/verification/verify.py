@@ -13,10 +13,11 @@ import tempfile
 from pathlib import Path
 from typing import Any, Callable, Dict, Optional, Sequence
 
-from .. import build as fmu_build
-from .. import outputs, scenarios
+from ..building import build as fmu_build
+from ..results import outputs
+from ..running import scenarios
 from ..errors import NavfmuError
-from ..executor import Executor, Task
+from ..campaigns.executor import Executor, Task
 from . import attitude_checks, filter_checks, sensor_checks
 from .fmi_checks import run_fmi_checks
 from .report_writing import counts, write_report

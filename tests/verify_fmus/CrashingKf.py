@@ -4,7 +4,7 @@ import os
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 CRASH_AFTER_S = 5.0
 

@@ -3,7 +3,7 @@
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class IgnoresValidKfModel(components.Kf):

@@ -4,7 +4,7 @@ import numpy as np
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 
 class InexactRestoreKfModel(components.Kf):

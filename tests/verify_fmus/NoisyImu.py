@@ -3,7 +3,7 @@ caught by the Allan-deviation ARW check."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
+from navcore.components import registry as components
 
 ARW_FACTOR = 3.0
 

@@ -5,8 +5,8 @@ import math
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore import components
-from navcore.strapdown import Strapdown
+from navcore.components import registry as components
+from navcore.ins.strapdown import Strapdown
 
 EARTH_RATE = 7.292115e-5
 
