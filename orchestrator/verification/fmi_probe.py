@@ -103,8 +103,8 @@ def _difference(a, b, names, h, k0):
     r, c = int(rows[0]), int(cols[0])
     with np.errstate(invalid="ignore"):
         worst = float(np.nanmax(np.abs(a - b)))
-    return {"what": f"{names[c]} at t = {(k0 + r + 1) * h:.6g} s: {a[r, c]!r} against "
-                    f"{b[r, c]!r}", "max_abs_difference": worst}
+    return {"what": f"{names[c]} at t = {(k0 + r + 1) * h:.6g} s: {float(a[r, c])!r} "
+                    f"against {float(b[r, c])!r}", "max_abs_difference": worst}
 
 
 def probe_state(path, md, unzip, parameters, table, h):
