@@ -17,7 +17,7 @@ PACKAGES = {"navcore": ROOT / "fmus" / "navcore", "orchestrator": ROOT / "orches
 WING_ORDER = {
     "navcore": ["core", "ins", "sensors", "filters", "vehicles", "components"],
     "orchestrator": ["results", "building", "model", "cosim", "running", "campaigns",
-                     "reporting", "packaging", "cli"],
+                     "reporting", "verification", "packaging", "cli"],
 }
 # the only modules outside a wing: the package face and the one error module
 OUTSIDE = {"__init__", "errors"}

@@ -48,6 +48,18 @@ def parse_window(text):
     return t0, t1
 
 
+def _typed_value(value):
+    """The text of a ``--set`` value as an int, float or bool where it reads as one."""
+    for conv in (int, float):
+        try:
+            return conv(value)
+        except ValueError:
+            continue
+    if value.lower() in ("true", "false"):
+        return value.lower() == "true"
+    return value
+
+
 def parse_sets(items):
     """``Component.variable=value`` items -> ``{"Component.variable": value}``, the value an
     int, float or bool where it reads as one, else the text."""
@@ -56,17 +68,21 @@ def parse_sets(items):
         key, sep, value = item.partition("=")
         if not sep or "." not in key:
             raise NavfmuError(f"--set: expected Component.variable=value, got {item!r}")
-        for conv in (int, float):
-            try:
-                value = conv(value)
-                break
-            except ValueError:
-                continue
-        else:
-            if value.lower() in ("true", "false"):
-                value = value.lower() == "true"
-        values[key] = value
+        values[key] = _typed_value(value)
     return values
 
 
-__all__ = ["DEFAULT_OUT", "nonempty_path", "filter_names", "parse_window", "parse_sets"]
+def parse_named_sets(items):
+    """``name=value`` items (one FMU's parameters) -> ``{"name": value}``, typed as by
+    :func:`parse_sets`."""
+    values = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise NavfmuError(f"--set: expected name=value, got {item!r}")
+        values[key.strip()] = _typed_value(value)
+    return values
+
+
+__all__ = ["DEFAULT_OUT", "nonempty_path", "filter_names", "parse_window", "parse_sets",
+           "parse_named_sets"]

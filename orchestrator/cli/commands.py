@@ -1,5 +1,5 @@
 """The ``navfmu`` command line: build, validate, env, run, compare, bench, convert,
-montecarlo, report, tune.
+montecarlo, report, tune, verify.
 
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
@@ -18,7 +18,8 @@ from pathlib import Path
 import click
 
 from ..cosim import interrupts
-from .cli_options import DEFAULT_OUT, filter_names, nonempty_path, parse_sets, parse_window
+from .cli_options import (DEFAULT_OUT, filter_names, nonempty_path, parse_named_sets,
+                          parse_sets, parse_window)
 from ..errors import NavfmuError, SimulationError
 from ..cosim.exchange import ALGORITHMS
 from .progress import progress_bars
@@ -383,6 +384,45 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
                f"of the component's bindings: it holds them too)")
 
 
+@cli.command()
+@click.argument("fmu", type=click.Path())
+@click.option("--role", type=click.Choice(["ins_gnss_filter", "attitude_filter", "imu_sensor",
+                                           "gnss_receiver"]),
+              help="Force the role (default: detected from the FMU's variables).")
+@click.option("--scenario", "scenario_names", multiple=True, help="Scenario of the "
+              "consistency runs (a models/ name or .ssd; repeatable; default: the role's).")
+@click.option("--runs", type=int, default=None, help="Seeds per case (default 3).")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="A parameter of "
+              "the FMU, or datasheet.NAME=VALUE: a declared value the FMU does not carry.")
+@click.option("--out", type=click.Path(file_okay=False),
+              help="Report folder (default: navfmu-results/verify-<model>).")
+@click.option("--junit", type=click.Path(dir_okay=False), help="Also write JUnit XML here.")
+@click.option("--workers", type=int, default=2, show_default=True,
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
+@click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
+@click.pass_context
+def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, scheduler,
+           local_cluster):
+    """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
+    checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
+    from ..verification.verify import verify as verify_fmu
+
+    with progress_bars() as progress_bar:
+        summary = verify_fmu(fmu, role=role, scenario_names=scenario_names, runs=runs,
+                             sets=parse_named_sets(sets), out=out, junit=junit,
+                             workers=workers, scheduler=scheduler, local_cluster=local_cluster,
+                             progress=progress_bar("runs", unit="run"),
+                             log=lambda m: click.echo(m, err=True), default_root=DEFAULT_OUT)
+    for check in summary["checks"]:
+        click.echo(f"  {check.verdict:4s}  {check.id}: {check.measured}"
+                   + (f" ({check.reason})" if check.reason and check.verdict != "pass" else ""))
+    n = summary["counts"]
+    click.echo(f"{n['pass']} pass, {n['fail']} fail, {n['warn']} warn, {n['skip']} skip; "
+               f"wrote {summary['report']}")
+    ctx.exit(summary["exit_status"])
+
+
 def _write_system(scenario, out, module_name):
     """Build the model's stale FMUs, then write it with ``orchestrator.packaging.<module_name>``."""
     import importlib
@@ -422,7 +462,7 @@ def main(argv=None):
     try:
         with in_cli_voice(lambda m: click.echo(m, err=True), debug=debug), \
                 interrupts.deferred():
-            cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
+            status = cli.main(args=argv, prog_name="navfmu", standalone_mode=False)
     except NavfmuError as exc:
         click.echo(f"navfmu: error: {exc}", err=True)
         if debug and isinstance(exc, SimulationError) and exc.log:
@@ -451,7 +491,8 @@ def main(argv=None):
         click.echo(f"navfmu: internal error: {exc!r} (run with --debug for the traceback)",
                    err=True)
         sys.exit(3)
-    sys.exit(0)
+    # a command's ctx.exit(n) comes back as its return value (verify: 1 when a check fails)
+    sys.exit(status if isinstance(status, int) else 0)
 
 
 if __name__ == "__main__":

@@ -206,6 +206,9 @@ class MetricAccumulator:
         self.groups = [g for g, first in (("pos", "nav_lat"), ("vel", "nav_vn"))
                        if first in names]
         self.has_std = all(f"std_p{a}" in names for a in AXES)
+        # a filter without some 1-sigma outputs (e.g. no attitude) has NEES of the others only
+        self.nees_groups = [g for g, (_, std) in _NEES_GROUPS.items()
+                            if all(f"{std}{a}" in names for a in AXES)]
         self.has_att_std = all(f"std_{a}" in names for a in ATTITUDE)
         self.normalized_sum = {a: 0.0 for a in ATTITUDE}
         self.normalized_n = {a: 0 for a in ATTITUDE}
@@ -255,7 +258,8 @@ class MetricAccumulator:
                 self.normalized_sum[a] += float(ratio2[finite].sum())
                 self.normalized_n[a] += int(finite.sum())
         if self.has_std:
-            for g, (err, std) in _NEES_GROUPS.items():
+            for g in self.nees_groups:
+                err, std = _NEES_GROUPS[g]
                 sig = np.stack([col(self.filter_name, std + a)[mask] for a in AXES])
                 err_ = np.stack([e[err + a][mask] for a in AXES])
                 with np.errstate(divide="ignore", invalid="ignore"):
@@ -310,17 +314,16 @@ class MetricAccumulator:
                     if self.normalized_n[a] else float("nan")) for a in ATTITUDE}
         if self.has_std:
             out["nees"] = {g: (self.nees_sum[g] / self.nees_n[g] if self.nees_n[g]
-                               else float("nan")) for g in _NEES_GROUPS}
+                               else float("nan")) for g in self.nees_groups}
             out["inside_3sigma_pct"] = {
                 g: {a: (100.0 * float(self.inside_3sigma[g][i] / self.sigma_n[g][i])
                         if self.sigma_n[g][i] else float("nan")) for i, a in enumerate(AXES)}
-                for g in _NEES_GROUPS}
+                for g in self.nees_groups}
         if self.nis_n:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n
             out["nis"] = {"mean": self.nis_sum / n, "dof": dof, "updates": n,
-                          "band95": [float(chi2_lower_quantile(0.025, n * dof) / n),
-                                     float(chi2_lower_quantile(0.975, n * dof) / n)]}
+                          "band95": nis_band95(n, dof)}
         if header is not None and self.filter_name in getattr(header, "step_time_s", {}):
             out["time_per_step_ms"] = 1e3 * float(header.step_time_s[self.filter_name])
         if self.epochs["dof"]:
@@ -334,6 +337,14 @@ class MetricAccumulator:
 
 _NEES_GROUPS = {"position": ("pos_", "std_p"), "velocity": ("vel_", "std_v"),
                 "attitude": ("phi_", "std_att_")}
+
+
+def nis_band95(updates, dof):
+    """The two-sided 95 % band of the mean of ``updates`` chi-square(``dof``) samples (the
+    NIS band of the module docstring)."""
+    n = int(updates)
+    return [float(chi2_lower_quantile(0.025, n * dof) / n),
+            float(chi2_lower_quantile(0.975, n * dof) / n)]
 
 
 def _median_of_counts(counts):

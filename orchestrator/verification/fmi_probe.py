@@ -1,0 +1,223 @@
+"""The FMI probes that load the FMU under test, run in a child process of their own
+(``python -m orchestrator.verification.fmi_probe JOB.json``) so that an FMU which crashes
+its host ends that child, not the verification: the parent reads the child's last stdout
+line (JSON) or, when there is none, reports how the child ended.
+
+Probes, each on fresh instances driven through raw fmpy calls:
+
+* ``state``: step through the input table; at its middle get the FMU state (and serialize
+  it); continue to the end (run A); set the state back and run the second half again (B);
+  deserialize the bytes into a new instance and run it (C).  B and C must equal A bit for bit.
+* ``variable_step``: the table coarsened ``k`` times (increments summed over ``k`` rows,
+  other inputs sampled at the end of each coarse interval); ``k`` steps of one period on the
+  held coarse inputs (the last one seeing the new sample, as Gauss-Seidel delivers it) against
+  one step of ``k`` periods; outputs compared bit for bit at the coarse instants.
+* ``hostile``: an unknown value reference read, an output set, a step back in time; each
+  must return an error status (fmi2Discard or worse), and the child must live on.
+
+Nothing here imports navcore: the probes need nothing of navfmu inside the FMU.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+
+import numpy as np
+
+INCREMENTS = ("imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x", "imu_dvel_y",
+              "imu_dvel_z")
+RATES = {"imu_gyro_x": "imu_dtheta_x", "imu_gyro_y": "imu_dtheta_y",
+         "imu_gyro_z": "imu_dtheta_z", "imu_accel_x": "imu_dvel_x",
+         "imu_accel_y": "imu_dvel_y", "imu_accel_z": "imu_dvel_z"}
+ERROR_STATUS = 2  # fmi2Discard or worse counts as a refusal
+
+
+class Instance:
+    """One initialized instance of the FMU, with its variables grouped by type."""
+
+    def __init__(self, path, md, unzip, name, parameters):
+        from fmpy.fmi2 import FMU2Slave
+
+        self.md = md
+        self.vars = {v.name: v for v in md.modelVariables}
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, instanceName=name,
+                             modelIdentifier=md.coSimulation.modelIdentifier)
+        self.fmu.instantiate()
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        for key, value in parameters.items():
+            self.set(key, value)
+        self.fmu.exitInitializationMode()
+        self.outputs = {t: [v for v in md.modelVariables
+                            if v.causality == "output" and v.type == t]
+                        for t in ("Real", "Integer", "Boolean")}
+
+    def set(self, name, value):
+        v = self.vars[name]
+        setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
+                  "Boolean": self.fmu.setBoolean, "String": self.fmu.setString}[v.type]
+        cast = {"Real": float, "Integer": int, "Boolean": bool, "String": str}[v.type]
+        setter([v.valueReference], [cast(value)])
+
+    def read(self):
+        """All outputs as one float64 vector (Integers and Booleans as numbers)."""
+        parts = [np.array(self.fmu.getReal([v.valueReference for v in self.outputs["Real"]]),
+                          dtype=float)]
+        if self.outputs["Integer"]:
+            parts.append(np.array(self.fmu.getInteger(
+                [v.valueReference for v in self.outputs["Integer"]]), dtype=float))
+        if self.outputs["Boolean"]:
+            parts.append(np.array(self.fmu.getBoolean(
+                [v.valueReference for v in self.outputs["Boolean"]]), dtype=float))
+        return np.concatenate(parts)
+
+    def output_names(self):
+        return [v.name for t in ("Real", "Integer", "Boolean") for v in self.outputs[t]]
+
+    def run(self, table, k0, k1, h):
+        rows = []
+        names = [n for n in table if n in self.vars and self.vars[n].causality == "input"]
+        for k in range(k0, k1):
+            for n in names:
+                self.set(n, table[n][k])
+            self.fmu.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            rows.append(self.read())
+        return np.array(rows)
+
+    def free(self):
+        try:
+            self.fmu.terminate()
+            self.fmu.freeInstance()
+        except Exception:
+            pass
+
+
+def _difference(a, b, names, h, k0):
+    """None when a and b are equal bit for bit, else where they first differ."""
+    if a.shape == b.shape and np.array_equal(a.view(np.uint64), b.view(np.uint64)):
+        return None
+    if a.shape != b.shape:
+        return {"what": f"{len(a)} rows against {len(b)}"}
+    rows, cols = np.nonzero(a.view(np.uint64) != b.view(np.uint64))
+    r, c = int(rows[0]), int(cols[0])
+    with np.errstate(invalid="ignore"):
+        worst = float(np.nanmax(np.abs(a - b)))
+    return {"what": f"{names[c]} at t = {(k0 + r + 1) * h:.6g} s: {float(a[r, c])!r} "
+                    f"against {float(b[r, c])!r}", "max_abs_difference": worst}
+
+
+def probe_state(path, md, unzip, parameters, table, h):
+    n = len(next(iter(table.values())))
+    k0 = n // 2
+    first = Instance(path, md, unzip, "state_a", parameters)
+    names = first.output_names()
+    first.run(table, 0, k0, h)
+    state = first.fmu.getFMUstate()
+    result = {"steps": n, "restored_at_s": k0 * h}
+    blob = first.fmu.serializeFMUstate(state) if md.coSimulation.canSerializeFMUstate else None
+    a = first.run(table, k0, n, h)
+    first.fmu.setFMUstate(state)
+    b = first.run(table, k0, n, h)
+    result["set_state"] = _difference(a, b, names, h, k0)
+    first.free()
+    if blob is not None:
+        second = Instance(path, md, unzip, "state_c", parameters)
+        restored = second.fmu.deSerializeFMUstate(blob)
+        second.fmu.setFMUstate(restored)
+        c = second.run(table, k0, n, h)
+        result["serialized_bytes"] = len(blob)
+        result["deserialize"] = _difference(a, c, names, h, k0)
+        second.free()
+    return result
+
+
+def coarsen(table, k):
+    """The input table with ``k`` rows merged into one (see the module docstring)."""
+    n = len(next(iter(table.values()))) // k
+    out = {}
+    for name, values in table.items():
+        x = np.asarray(values, dtype=float)[:n * k].reshape(n, k)
+        if name in INCREMENTS:
+            out[name] = x.sum(axis=1)
+        elif name == "imu_dt":
+            out[name] = x.sum(axis=1)
+        else:
+            out[name] = x[:, -1]
+    if "imu_dt" in out:
+        for rate, increment in RATES.items():
+            if rate in out and increment in out:
+                out[rate] = out[increment] / out["imu_dt"]
+    return out
+
+
+def probe_variable_step(path, md, unzip, parameters, table, h, k):
+    coarse = coarsen(table, k)
+    n = len(next(iter(coarse.values())))
+    held = {name: np.repeat(np.concatenate([[v[0]], v[:-1]]), k) for name, v in coarse.items()}
+    for name in held:            # the last fine step of each interval sees the new sample
+        held[name][k - 1::k] = coarse[name]
+    fine = Instance(path, md, unzip, "fine", parameters)
+    a = fine.run(held, 0, n * k, h)[k - 1::k]
+    big = Instance(path, md, unzip, "coarse", parameters)
+    b = big.run(coarse, 0, n, h * k)
+    names = fine.output_names()
+    fine.free()
+    big.free()
+    diff = _difference(a, b, names, h * k, 0)
+    return {"k": k, "coarse_steps": n, "difference": diff}
+
+
+def _status(call):
+    from fmpy.fmi1 import FMICallException
+
+    try:
+        call()
+    except FMICallException as exc:
+        return int(exc.status)
+    return 0
+
+
+def probe_hostile(path, md, unzip, parameters, table, h):
+    cases = {}
+    outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+    top = max(v.valueReference for v in md.modelVariables) + 1000
+    inst = Instance(path, md, unzip, "hostile_vr", parameters)
+    cases["unknown value reference"] = _status(lambda: inst.fmu.getReal([top]))
+    inst.free()
+    if outputs:
+        inst = Instance(path, md, unzip, "hostile_set", parameters)
+        cases["set of an output"] = _status(
+            lambda: inst.fmu.setReal([outputs[0].valueReference], [0.5]))
+        inst.free()
+    inst = Instance(path, md, unzip, "hostile_back", parameters)
+    inst.run(table, 0, 2, h)
+    cases["step back in time"] = _status(
+        lambda: inst.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=h))
+    inst.free()
+    return {"statuses": cases, "error_status_from": ERROR_STATUS}
+
+
+def main(job_file):
+    from fmpy import extract, read_model_description
+
+    with open(job_file, encoding="utf-8") as f:
+        job = json.load(f)
+    data = np.load(job["table"])
+    table = {name: data[name] for name in data.files}
+    md = read_model_description(job["fmu"], validate=False)
+    unzip = extract(job["fmu"])
+    probe = {"state": probe_state, "variable_step": probe_variable_step,
+             "hostile": probe_hostile}[job["probe"]]
+    extra = {"k": job["k"]} if job["probe"] == "variable_step" else {}
+    try:
+        result = probe(job["fmu"], md, unzip, job["parameters"], table, job["h"], **extra)
+    except Exception as exc:   # an FMI error status on a legal call, or a broken FMU
+        result = {"error": f"{type(exc).__name__}: {exc}"}
+    print(json.dumps(result), flush=True)
+    # the instances' shared libraries stay loaded; leave their files to the OS at exit
+    shutil.rmtree(unzip, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])

@@ -1,0 +1,81 @@
+"""``navfmu verify FMU``: detect the FMU's role, run the FMI checks and its role's checks,
+write the report and return the exit status (0 every required check passes, 1 one fails;
+usage errors raise :class:`~orchestrator.errors.NavfmuError`, status 2).
+
+The runs of a role's checks are tasks of the campaign executor (serial, process pool or
+Dask, :mod:`orchestrator.executor`); each run of the FMU under test happens in a child
+process of its worker (:mod:`.scenario_run`), so an FMU that crashes its host fails the
+checks that needed it and the report is still written.
+"""
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Any, Callable, Dict, Optional, Sequence
+
+from ..building import build as fmu_build
+from ..results import outputs
+from ..running import scenarios
+from ..errors import NavfmuError
+from ..campaigns.executor import Executor, Task
+from . import attitude_checks, filter_checks, sensor_checks
+from .fmi_checks import run_fmi_checks
+from .report_writing import counts, write_report
+from .roles import detect_role, read_fmu
+from .scenario_run import run_job
+from .setting import make_setting
+
+#: seeds per case when --runs is not given
+DEFAULT_RUNS = 3
+#: our FMUs the checks run as references or sources
+REFERENCE_FMUS = ("Kf", "InsOnly", "UkfAhrs", "TrajectoryImu", "GnssReceiver")
+
+
+def _role_checks(setting, runs, executor, progress, workdir):
+    """The checks of the role: plan the runs, run them on ``executor``, judge them."""
+    module = {"ins_gnss_filter": filter_checks, "attitude_filter": attitude_checks,
+              "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks}[setting.role]
+    plan = module.plan(setting, runs)
+    tasks = [Task(key=key, func=run_job, args=(job, isolated))
+             for key, job, isolated in plan.jobs]
+    results = dict(executor.run(tasks, progress=progress))
+    return module.judge_plan(setting, plan, results, workdir)
+
+
+def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
+           runs: Optional[int] = None, sets: Optional[Dict[str, Any]] = None, out=None,
+           junit=None, workers: int = 1, scheduler: Optional[str] = None,
+           local_cluster: bool = False, progress=None,
+           log: Callable[[str], None] = print, default_root=Path(".")) -> Dict[str, Any]:
+    """Verify ``fmu``; returns the summary with ``checks``, ``counts``, ``report`` and
+    ``exit_status``.  Without ``out`` the report goes to ``default_root/verify-<model>``."""
+    runs = DEFAULT_RUNS if runs is None else runs
+    if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
+        raise NavfmuError(f"--runs: expected a whole number >= 1, got {runs!r}")
+    facts = read_fmu(fmu)
+    found_role = detect_role(facts, role)
+    setting = make_setting(facts, found_role, scenario_names, sets)
+    out = Path(out) if out else Path(default_root) / f"verify-{facts.model_name}"
+    outputs.check_target(out)
+    executor = Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)
+    fmu_build.build([n for n in REFERENCE_FMUS if (fmu_build.FMU_SOURCES / f"{n}.py").is_file()],
+                    log=log)
+    for path in setting.scenario_paths:
+        scenarios.ensure_fmus(scenarios.load_scenario(path), log=log)
+    log(f"verifying {facts.path.name} as {found_role}")
+    checks = run_fmi_checks(setting)
+    with executor, tempfile.TemporaryDirectory(prefix="navfmu_verify_figures_") as tmp:
+        role_checks, figures = _role_checks(setting, runs, executor, progress, Path(tmp))
+        checks += role_checks
+        summary = {"fmu": str(facts.path), "model_name": facts.model_name,
+                   "role": found_role, "role_forced": role is not None,
+                   "scenarios": [p.parent.name for p in setting.scenario_paths],
+                   "runs": runs, "parameters": setting.user_sets,
+                   "datasheet": setting.datasheet, "executor": executor.mode}
+        report = write_report(out, summary, checks, figures, junit)
+    n = counts(checks)
+    summary.update(checks=checks, counts=n, report=report, exit_status=1 if n["fail"] else 0)
+    return summary
+
+
+__all__ = ["verify", "DEFAULT_RUNS"]

@@ -1,0 +1,45 @@
+"""The FMUs the verification tests verify: broken filters and a broken IMU made of navcore
+components (built with the project's build function from a temporary source folder that
+holds the scripts of tests/verify_fmus/ beside navcore and fmushell), and a filter written
+without navfmu (built with plain pythonfmu).  Built once per session, in a child process
+(a process that has run FMUs may import pythonfmu from an FMU's resources)."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPTS = Path(__file__).resolve().parent / "verify_fmus"
+NAVCORE_FMUS = ("OverconfidentKf", "WrongCoriolisKf", "IgnoresValidKf", "InexactRestoreKf",
+                "CrashingKf", "NoisyImu")
+PLAIN_FMUS = ("PvFilter",)
+
+_BUILD = """
+import sys
+from pathlib import Path
+from pythonfmu.builder import FmuBuilder
+from orchestrator.building import build
+src, dist = Path(sys.argv[1]), Path(sys.argv[2])
+library = build.patched_library(log=None)
+for name in sys.argv[3].split(","):
+    build.build_one(src / f"{name}.py", dist, library)
+for name in sys.argv[4].split(","):
+    FmuBuilder.build_FMU(src / f"{name}.py", dest=dist)
+"""
+
+
+def build_test_fmus(folder: Path) -> Path:
+    """Build every test FMU into ``folder/dist``; returns that folder."""
+    src, dist = folder / "src", folder / "dist"
+    src.mkdir(parents=True)
+    for package in ("navcore", "fmushell"):
+        (src / package).symlink_to(ROOT / "fmus" / package, target_is_directory=True)
+    for name in NAVCORE_FMUS + PLAIN_FMUS:
+        (src / f"{name}.py").write_text((SCRIPTS / f"{name}.py").read_text())
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "fmus")]))
+    subprocess.run([sys.executable, "-c", _BUILD, str(src), str(dist), ",".join(NAVCORE_FMUS),
+                    ",".join(PLAIN_FMUS)], check=True, cwd=str(folder), env=env,
+                   capture_output=True, text=True)
+    return dist
