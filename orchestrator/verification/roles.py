@@ -138,7 +138,8 @@ _IMU_REQUIRED = tuple(p.name for p in signals.IMU[:8])
 def contract(role: str):
     """The ports of ``role``'s contract: a list of :class:`Port`."""
     if role == "ins_gnss_filter":
-        inputs = {p.name for p in signals.FILTER_INPUTS}
+        # the receiver's per-fix sigmas are read only with r_from_receiver: optional
+        inputs = {p.name for p in signals.FILTER_INPUTS if p not in signals.GNSS_STD}
         return (_ports(signals.FILTER_INPUTS, "input", inputs)
                 + _ports(signals.FILTER_OUTPUTS, "output", set(_NAV_STATE)))
     if role == "attitude_filter":
