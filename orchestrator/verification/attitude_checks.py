@@ -19,7 +19,7 @@ from typing import List
 from ..campaigns import campaign
 from ..running import scenarios
 from ..results.metric_comparisons import pooled_rms
-from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN
+from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN, failed_run
 from .setting import Setting
 from .verdicts import Check
 
@@ -53,15 +53,6 @@ def plan(setting: Setting, runs: int) -> Plan:
         jobs.append((("ahrs", REFERENCE, i), dict(base, fmu=reference,
                      backend="fmu" if i == 0 else "direct"), i == 0))
     return Plan(runs, jobs)
-
-
-def _failed(runs):
-    for i, r in enumerate(runs):
-        if "error" in r:
-            return f"seed {i}: {r['error']}"
-        if r.get("nonfinite"):
-            return f"seed {i}: non-finite outputs {', '.join(r['nonfinite'][:6])}"
-    return None
 
 
 def _consistency(mine) -> Check:
@@ -120,14 +111,14 @@ def _timing(mine, theirs) -> Check:
 def judge_plan(setting: Setting, planned: Plan, results, workdir):
     mine = [results[("ahrs", "filter", i)] for i in range(planned.seeds)]
     theirs = [results[("ahrs", REFERENCE, i)] for i in range(planned.seeds)]
-    failed = _failed(mine)
+    failed = failed_run(mine)
     checks: List[Check]
     if failed:
         checks = [Check(f"ahrs.{n}", n, "the runs finish with finite outputs", "run failed",
                         "fail", failed) for n in ("consistency", "disturbance", "timing")]
-    elif _failed(theirs):
+    elif failed_run(theirs):
         checks = [Check("ahrs.reference", "reference", f"{REFERENCE} runs", "run failed",
-                        "fail", _failed(theirs))]
+                        "fail", failed_run(theirs))]
     else:
         checks = [_consistency(mine), _disturbance(mine, theirs), _timing(mine, theirs)]
     return checks, {}

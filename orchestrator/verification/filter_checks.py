@@ -151,7 +151,9 @@ def _runs(results, case, who):
     return [results[(case.name, who, i)] for i in range(case.seeds)]
 
 
-def _failed_run(runs) -> Optional[str]:
+def failed_run(runs) -> Optional[str]:
+    """Why the first of ``runs`` that failed did so (its error or its non-finite outputs), or
+    None when every run finished with finite outputs."""
     for i, r in enumerate(runs):
         if "error" in r:
             return f"seed {i}: {r['error']}"
@@ -165,7 +167,7 @@ def _judge_closure(case, results) -> Check:
             + ", ".join(f"{v:g} {_UNITS[k]} ({k.split('_')[0]})"
                         for k, v in CLOSURE_BOUNDS.items()))
     run = _runs(results, case, "filter")[0]
-    failed = _failed_run([run])
+    failed = failed_run([run])
     if failed:
         return Check("filter.closure", case.title, crit, "run failed", "fail", failed)
     m = run["metrics"]
@@ -182,7 +184,7 @@ def _judge_consistency(case, results) -> Check:
             f"{case.seeds} seeds; pooled mean NIS in its chi-square 95 % band")
     cid = "filter." + case.name
     runs = _runs(results, case, "filter")
-    failed = _failed_run(runs)
+    failed = failed_run(runs)
     if failed:
         return Check(cid, case.title, crit, "run failed", "fail", failed)
     ms = [r["metrics"] for r in runs]
@@ -235,11 +237,11 @@ def _judge_robustness(case, results) -> Check:
         crit = (f"{what}{where} over Kf's on the same {case.seeds} seeds: pass <= "
                 f"{RATIO_PASS:g}, warn <= {RATIO_WARN:g}; finite outputs, no refused step")
     runs = _runs(results, case, "filter")
-    failed = _failed_run(runs)
+    failed = failed_run(runs)
     if failed:
         return Check(cid, case.title, crit, "run failed", "fail", failed)
     refs = {ref: _runs(results, case, ref) for ref in case.references}
-    broken = [f"{ref}: {why}" for ref, rr in refs.items() if (why := _failed_run(rr))]
+    broken = [f"{ref}: {why}" for ref, rr in refs.items() if (why := failed_run(rr))]
     if broken:
         return Check(cid, case.title, crit, "reference failed", "fail",
                      "reference run failed: " + "; ".join(broken))
