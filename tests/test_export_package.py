@@ -22,6 +22,22 @@ from orchestrator.model.ssp_archive import load_model
 MODEL = Path(__file__).resolve().parents[1] / "models" / "aircraft_500s"
 
 
+def export_equals_jacobi(model, tmp_path, stop, step):
+    """Export ``model`` as one FMU, check it validates, simulate it with fmpy and assert every
+    output bit for bit equal to our master's Jacobi run of the model without step hints;
+    returns fmpy's result."""
+    fmu = export(model, tmp_path / "system.fmu")
+    assert validate_fmu(str(fmu)) == []
+    got = simulate_fmu(str(fmu), stop_time=stop, step_size=step, output_interval=step)
+    ours = Simulation(without_step_hints(load_model(model)), algorithm="jacobi").run(stop)
+    assert len(got) == len(ours.time)
+    for c in ours.components:
+        for j, v in enumerate(ours.columns[c]):
+            np.testing.assert_array_equal(got[f"{c}.{v}"].astype(float), ours.data[c][:, j],
+                                          err_msg=f"{c}.{v}")
+    return got
+
+
 @pytest.fixture(scope="module")
 def built():
     fmu_build.build(log=None)
@@ -30,16 +46,7 @@ def built():
 def test_exported_fmu_validates_and_reproduces_the_jacobi_master_bit_for_bit(built, tmp_path):
     """The container steps every component at the base step, Jacobi: our master's jacobi
     run of the model without step hints (an independent implementation of the rule)."""
-    fmu = export(MODEL, tmp_path / "system.fmu")
-    assert validate_fmu(str(fmu)) == []
-    stop = 3.0
-    got = simulate_fmu(str(fmu), stop_time=stop, step_size=0.01, output_interval=0.01)
-    ours = Simulation(without_step_hints(load_model(MODEL)), algorithm="jacobi").run(stop)
-    assert len(got) == len(ours.time)
-    for c in ours.components:
-        for j, v in enumerate(ours.columns[c]):
-            np.testing.assert_array_equal(got[f"{c}.{v}"].astype(float), ours.data[c][:, j],
-                                          err_msg=f"{c}.{v}")
+    got = export_equals_jacobi(MODEL, tmp_path, stop=3.0, step=0.01)
     assert got["gnss.gnss_epoch"][-1] == 2 and got["filter.updated"].sum() == 2
 
 

@@ -6,15 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import simulate_fmu
-from fmpy.validation import validate_fmu
 
 from orchestrator.building import build as fmu_build
+from test_export_package import export_equals_jacobi
 from orchestrator.cosim.master import Simulation
 from orchestrator.model.ssp_archive import load_model
-from orchestrator.packaging.export import export, without_step_hints
 from orchestrator.packaging.package import package
-from orchestrator.results import mission_metrics
 from orchestrator.running import scenarios
 
 MODEL = Path(__file__).resolve().parents[1] / "models" / "uav_mission"
@@ -26,16 +23,7 @@ def built():
 
 
 def test_exported_mission_fmu_reproduces_the_jacobi_master_bit_for_bit(built, tmp_path):
-    fmu = export(MODEL, tmp_path / "mission.fmu")
-    assert validate_fmu(str(fmu)) == []
-    stop = 3.0
-    got = simulate_fmu(str(fmu), stop_time=stop, step_size=0.02, output_interval=0.02)
-    ours = Simulation(without_step_hints(load_model(MODEL)), algorithm="jacobi").run(stop)
-    assert len(got) == len(ours.time)
-    for c in ours.components:
-        for j, v in enumerate(ours.columns[c]):
-            np.testing.assert_array_equal(got[f"{c}.{v}"].astype(float), ours.data[c][:, j],
-                                          err_msg=f"{c}.{v}")
+    got = export_equals_jacobi(MODEL, tmp_path, stop=3.0, step=0.02)
     assert got["gnss.gnss_epoch"][-1] == 2 and np.ptp(got["vehicle.truth_lat"]) > 0
 
 

@@ -121,7 +121,9 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
                 if run.series_file is None and FILTER_COMPONENT in run.results.components]
     vehicle = mission_metrics.find_vehicle(runs[0].results) if missions else None
     if vehicle is not None:
-        written.add(plots.plot_mission(missions, vehicle, out / "mission.png", title))
+        from ..results.mission_plots import plot_mission
+
+        written.add(plot_mission(missions, vehicle, out / "mission.png", title))
 
 
 def _navigation_plots(entries, out: Path, title, reference, written: _Written) -> None:

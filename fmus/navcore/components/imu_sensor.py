@@ -116,7 +116,7 @@ class ImuSensor(ImuMeasurement, Component):
         self.rates_form = form == "rates"
         self.build_error_models()
         self.start_time = float(start_time)
-        # the strapdown at the latest truth sample (a placeholder until the start sample)
+        # the strapdown at the latest truth sample; its state is replaced by the start sample
         self.ins = Strapdown(0.0, 0.0, 0.0, (0.0, 0.0, 0.0), np.eye(3))
         self.started = False
         self.last_time = self.start_time
