@@ -34,11 +34,11 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
 from ..results import metrics as nav_metrics
+from ..model.ssv_writer import ssv_text
 from ..errors import NavfmuError
 from .executor import Executor, Task
 from .genetic import GeneticAlgorithm, decode
@@ -225,30 +225,6 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
                                  model.component(component).parameters.items() if k not in best},
             "best_so_far": result.best_so_far, "generation_best": result.generation_best,
             "generation_mean": result.generation_mean, "evaluations": result.evaluations}
-
-
-def ssv_text(name: str, values: Dict[str, Any], bound: Optional[Dict[str, Any]] = None) -> str:
-    """An SSP 1.0 parameter set (``.ssv``): the component's other ``bound`` parameters
-    (``{name: [type, value]}``, as the model binds them now), then the tuned ``values`` (Real
-    or Integer), so that this one file replaces the component's bindings (libcosim reads one
-    binding per component)."""
-    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<ssv:ParameterSet version="1.0" name={quoteattr(name)} '
-             'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues">',
-             "  <ssv:Parameters>"]
-    typed = [(k, t, v) for k, (t, v) in (bound or {}).items()]
-    typed += [(k, "Integer" if isinstance(v, int) else "Real", v) for k, v in values.items()]
-    for key, typ, value in typed:
-        if typ == "Boolean":
-            text = "true" if value else "false"
-        elif typ == "String":
-            text = str(value)
-        else:
-            text = repr(value)
-        lines.append(f"    <ssv:Parameter name={quoteattr(key)}><ssv:{typ} "
-                     f"value={quoteattr(text)}/></ssv:Parameter>")
-    lines += ["  </ssv:Parameters>", "</ssv:ParameterSet>", ""]
-    return "\n".join(lines)
 
 
 def write_tune_outputs(summary: Dict[str, Any], out: Path, ssv: Optional[Path] = None

@@ -121,7 +121,7 @@ def read_config(path) -> Dict[str, Any]:
 def write_filter_ssv(settings, destination) -> str:
     """Write ``destination/filter.ssv`` from :func:`read_config`'s ``settings``; one line
     saying what was written and how to replay with it."""
-    from ..campaigns.tune import ssv_text
+    from ..model.ssv_writer import ssv_text
     from ..results.run_results import atomic_write
 
     typed = {k: ["String" if isinstance(v, str) else "Boolean" if isinstance(v, bool)
