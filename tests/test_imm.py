@@ -4,6 +4,7 @@ import copy
 import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
+from linear_kalman import LinearKalmanFilter as TextbookKalmanFilter
 
 from navcore.core.component import InputError, ParameterError
 from navcore.filters.imm import (ImmBank, imm_combine, imm_mix,
@@ -11,24 +12,11 @@ from navcore.filters.imm import (ImmBank, imm_combine, imm_mix,
 from navcore.filters.unscented import UnscentedKalmanFilter
 
 
-class LinearKalmanFilter:
-    """Textbook linear KF with the attributes the bank needs (x, P) and a log-likelihood."""
-
-    def __init__(self, x0, P0):
-        self.x = np.array(x0, dtype=float)
-        self.P = np.array(P0, dtype=float)
-
-    def predict(self, F, Q):
-        self.x = F @ self.x
-        self.P = F @ self.P @ F.T + Q
+class LinearKalmanFilter(TextbookKalmanFilter):
+    """The textbook KF whose update returns the log-likelihood, as the bank needs."""
 
     def update(self, z, H, R):
-        v = z - H @ self.x
-        S = H @ self.P @ H.T + R
-        K = self.P @ H.T @ np.linalg.inv(S)
-        self.x = self.x + K @ v
-        P = self.P - K @ S @ K.T
-        self.P = 0.5 * (P + P.T)
+        v, S, _ = super().update(z, H, R)
         return log_likelihood(v, S)
 
 

@@ -3,6 +3,7 @@ import copy
 
 import numpy as np
 import pytest
+from linear_kalman import LinearKalmanFilter
 
 from navcore.core.component import InputError, ParameterError
 from navcore.filters.unscented import (
@@ -15,27 +16,6 @@ from navcore.filters.unscented import (
 
 # (alpha, beta, kappa): the default, and a set with a negative centre weight (lambda < 0)
 PARAMETER_SETS = [(1.0, 2.0, 0.0), (0.5, 2.0, -1.0)]
-
-
-class LinearKalmanFilter:
-    """Textbook linear KF, the reference the UKF must reproduce on linear-Gaussian models."""
-
-    def __init__(self, x0, P0):
-        self.x = np.array(x0, dtype=float)
-        self.P = np.array(P0, dtype=float)
-
-    def predict(self, F, Q):
-        self.x = F @ self.x
-        self.P = F @ self.P @ F.T + Q
-
-    def update(self, z, H, R):
-        v = z - H @ self.x
-        S = H @ self.P @ H.T + R
-        K = self.P @ H.T @ np.linalg.inv(S)
-        self.x = self.x + K @ v
-        I_KH = np.eye(len(self.x)) - K @ H
-        self.P = I_KH @ self.P @ I_KH.T + K @ R @ K.T       # Joseph form
-        return v, S, float(v @ np.linalg.solve(S, v))
 
 
 def random_spd(rng, n, scale=1.0):
