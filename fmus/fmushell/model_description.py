@@ -8,7 +8,7 @@ from pythonfmu import Fmi2Slave
 
 from navcore.ins.constants import DEG as _DEG, G0 as _G0
 
-from .start_values import start_text
+from navcore.core.start_text import start_text
 
 #: every unit symbol used on our interfaces: (FMI 2.0 BaseUnit exponents, factor to SI).
 #: Datasheet units (only in parameters whose name says so) carry their factor; those with a

@@ -11,38 +11,14 @@ them still does.  A start text that does not parse as its variable's type makes
 """
 from __future__ import annotations
 
-import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Dict, Optional
 
+from navcore.core.start_text import parse_start, start_text
+
 #: (path, mtime, size) -> {name: (type, start text)}: each model description read once
 _READ: Dict[tuple, Dict[str, tuple]] = {}
-
-
-def start_text(type_name: str, value) -> str:
-    """The exact text of a start value of FMI type ``type_name``."""
-    if type_name == "Real":
-        return repr(float(value))
-    if type_name == "Boolean":
-        return "true" if value else "false"
-    return str(int(value)) if type_name == "Integer" else str(value)
-
-
-def parse_start(type_name: str, text: str):
-    """The value of a start text (raises ValueError)."""
-    if type_name == "Real":
-        value = float(text)
-        if not math.isfinite(value):
-            raise ValueError(f"{text!r} is not a finite number")
-        return value
-    if type_name == "Integer":
-        return int(text)
-    if type_name == "Boolean":
-        if text not in ("true", "false", "1", "0"):
-            raise ValueError(f"{text!r} is not true or false")
-        return text in ("true", "1")
-    return text
 
 
 def _starts(md_path: Path) -> Dict[str, tuple]:

@@ -36,12 +36,14 @@ import zipfile
 from pathlib import Path
 from typing import Dict, List, Set
 
+from navcore.core.start_text import start_text
+
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
 from ..results.outputs import check_writable
 from ..results.run_results import atomic_write
-from .fmu_copies import component_copies, fmu_bytes, start_text
+from .fmu_copies import component_copies, fmu_bytes
 
 _FMI_TYPES = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean", "String": "String"}
 #: the container's own type names for a connection (its configuration reader knows no FMI 2
@@ -83,11 +85,12 @@ def _configuration(model: SystemModel, copies: Dict[str, Path]):
     mappings: Dict = {}
     for spec in model.components:
         comp, own = components[spec.name], variables[spec.name]
-        for pname, (_, value) in spec.parameters.items():
+        for pname, (type_name, value) in spec.parameters.items():
             v = own[pname]
             cv = ModelVariable(name=f"{spec.name}.{pname}", type=_FMI_TYPES[v.type],
                                causality="parameter", variability="fixed", initial="exact",
-                               start=start_text(value), unit=v.unit, description=v.description)
+                               start=start_text(type_name, value), unit=v.unit,
+                               description=v.description)
             container_vars.append(cv)
             mappings[cv] = [(comp, v)]
         for v in own.values():

@@ -21,17 +21,12 @@ from xml.etree import ElementTree as ET
 
 from defusedxml.ElementTree import fromstring as parse_xml
 
+from navcore.core.start_text import start_text
+
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 
 MODEL_DESCRIPTION = "modelDescription.xml"
-
-
-def start_text(value) -> str:
-    """A bound value as the exact text of a start attribute (a float's shortest round trip)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return repr(value) if isinstance(value, float) else str(value)
 
 
 @dataclass
@@ -80,7 +75,7 @@ def component_copies(model: SystemModel) -> Dict[str, FmuCopy]:
         step = c.step_hint if c.step_hint is not None else model.base_step
         copy = FmuCopy(src, (model.start_time, model.stop_time, step))
         for pname, (type_name, value) in c.parameters.items():
-            copy.starts[pname] = start_text(value)
+            copy.starts[pname] = start_text(type_name, value)
             if type_name == "String":
                 copy.files.update(_carried_files(folder, c.name, pname, value))
         copies[c.name] = copy
@@ -128,4 +123,4 @@ def fmu_bytes(copy: FmuCopy, component: str) -> bytes:
     return out.getvalue()
 
 
-__all__ = ["FmuCopy", "component_copies", "fmu_bytes", "start_text"]
+__all__ = ["FmuCopy", "component_copies", "fmu_bytes"]
