@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from navcore.ins.rotations import euler_to_dcm_array
 from navcore.sensors import sensorlog
 from navcore.sensors.log_converters import read_gnss_ins_sim, read_kf_gins, trapezoid_increments
 from navcore.sensors.sensorlog import LogError, SensorLog, read_log, write_log
@@ -221,9 +222,11 @@ def test_kf_gins_bad_files(tmp_path):
 
 
 # -- gnss-ins-sim ----------------------------------------------------------------------------
-def test_gnss_ins_sim_copy_converts_to_the_scenario_log(tmp_path):
-    """The checked-in gnss-ins-sim run converts to exactly the log the scenario ships, and
-    the conversion follows the stated rule on the raw samples."""
+def test_gnss_ins_sim_copy_self_consistency_with_the_scenario_log(tmp_path):
+    """Self-consistency: the checked-in gnss-ins-sim run converts to exactly the log the
+    scenario ships (which this converter made), and the conversion follows the stated rule on
+    the raw samples.  Its attitude is zero throughout, so the test against gnss-ins-sim's own
+    references is the one below, on a run whose roll, pitch and yaw differ."""
     log = read_gnss_ins_sim(GNSS_INS_SIM)
     shipped = read_log(SCENARIO_LOG)
     for part in ("imu", "gnss", "truth"):
@@ -239,6 +242,101 @@ def test_gnss_ins_sim_copy_converts_to_the_scenario_log(tmp_path):
         0.5 * (t[k] - t[k - 1]) * math.radians(gyro[k - 1, 2] + gyro[k, 2]), rel=1e-15)
     assert len(log.gnss["time"]) == 81 and int(log.gnss["valid"].sum()) == 41
     assert log.imu_period == pytest.approx(0.01) and log.stop_time == pytest.approx(80.05)
+
+
+GNSS_INS_SIM_ATTITUDE = GNSS_INS_SIM.parent / "motion_def-attitude_mid_100Hz"
+
+
+def _gnss_ins_sim_columns(name):
+    """One gnss-ins-sim CSV read here, not by the converter: {title without unit: column}."""
+    path = GNSS_INS_SIM_ATTITUDE / name
+    titles = [t.split("(")[0].strip() for t in path.read_text().splitlines()[0].split(",")]
+    values = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return {title: values[:, j] for j, title in enumerate(titles)}
+
+
+def _body_to_ned_from_quaternion(q0, q1, q2, q3):
+    """The rotation matrices (n, 3, 3) of unit quaternions, scalar first, body to NED (the
+    textbook formula; gnss-ins-sim's ref_att_quat.csv convention)."""
+    return np.moveaxis(np.array([
+        [q0**2 + q1**2 - q2**2 - q3**2, 2 * (q1*q2 - q0*q3), 2 * (q1*q3 + q0*q2)],
+        [2 * (q1*q2 + q0*q3), q0**2 - q1**2 + q2**2 - q3**2, 2 * (q2*q3 - q0*q1)],
+        [2 * (q1*q3 - q0*q2), 2 * (q2*q3 + q0*q1), q0**2 - q1**2 - q2**2 + q3**2]]), -1, 0)
+
+
+@pytest.fixture(scope="module")
+def converted_attitude_run(tmp_path_factory):
+    """`navfmu convert` of the gnss-ins-sim run whose attitude turns about all three axes."""
+    from orchestrator.cli.commands import main
+    out = tmp_path_factory.mktemp("attitude") / "log"
+    with pytest.raises(SystemExit) as exc:
+        main(["convert", "gnss-ins-sim", str(GNSS_INS_SIM_ATTITUDE), str(out)])
+    assert exc.value.code == 0
+    return read_log(out)
+
+
+def test_gnss_ins_sim_truth_attitude_against_its_own_references(converted_attitude_run):
+    """The converted truth's roll, pitch, yaw [rad] against gnss-ins-sim's ref_att_euler.csv
+    (columns found by their titles here) and, through navcore's ZYX rotation, against the
+    body-to-NED matrices of ref_att_quat.csv, which the converter never reads.  The run's
+    angles are all different and change (roll -4..16, pitch 2..10.9 deg, yaw through 180 deg),
+    so a swapped pair, a sign or degrees for radians fails."""
+    truth = converted_attitude_run.truth
+    assert np.array_equal(truth["time"], _gnss_ins_sim_columns("time.csv")["time"])
+    euler = _gnss_ins_sim_columns("ref_att_euler.csv")
+    for ours, theirs in (("roll", "ref_Roll"), ("pitch", "ref_Pitch"), ("yaw", "ref_Yaw")):
+        difference = np.angle(np.exp(1j * (truth[ours] - np.radians(euler[theirs]))))
+        assert np.abs(difference).max() < 1e-12, ours
+    q = _gnss_ins_sim_columns("ref_att_quat.csv")
+    reference = _body_to_ned_from_quaternion(q["q0"], q["q1"], q["q2"], q["q3"])
+    ours = euler_to_dcm_array(truth["roll"], truth["pitch"], truth["yaw"])
+    assert np.abs(ours - reference).max() < 1e-12
+    assert np.ptp(truth["roll"]) > np.radians(19) and np.ptp(truth["pitch"]) > np.radians(8)
+
+
+def test_gnss_ins_sim_truth_position_velocity_and_fixes_against_its_files(
+        converted_attitude_run):
+    """Truth position [rad, m] and NED velocity at the GPS instants against ref_gps.csv (not
+    read by the converter), and the fixes against gps-0.csv, gps_visibility.csv."""
+    log = converted_attitude_run
+    reference = _gnss_ins_sim_columns("ref_gps.csv")
+    gps_time = _gnss_ins_sim_columns("gps_time.csv")["gps_time"]
+    at_fix = np.searchsorted(log.truth["time"], gps_time)
+    assert np.array_equal(log.truth["time"][at_fix], gps_time)
+    for ours, theirs, scale in (("lat", "ref_gps_lat", math.radians(1)),
+                                ("lon", "ref_gps_lon", math.radians(1)), ("h", "ref_gps_alt", 1),
+                                ("vn", "ref_gps_vN", 1), ("ve", "ref_gps_vE", 1),
+                                ("vd", "ref_gps_vD", 1)):
+        assert log.truth[ours][at_fix] == pytest.approx(scale * reference[theirs],
+                                                        rel=1e-14, abs=1e-14), ours
+    measured = _gnss_ins_sim_columns("gps-0.csv")
+    assert np.array_equal(log.gnss["time"], gps_time)
+    for ours, theirs, scale in (("lat", "gps_lat", math.radians(1)),
+                                ("lon", "gps_lon", math.radians(1)), ("h", "gps_alt", 1),
+                                ("vn", "gps_vN", 1), ("ve", "gps_vE", 1), ("vd", "gps_vD", 1)):
+        assert log.gnss[ours] == pytest.approx(scale * measured[theirs], rel=1e-15), ours
+    visible = _gnss_ins_sim_columns("gps_visibility.csv")["gps_visibility"]
+    assert np.array_equal(log.gnss["valid"], visible) and visible.sum() == 17
+
+
+def test_gnss_ins_sim_imu_increments_against_its_true_rates(converted_attitude_run):
+    """The converted increments over each interval divided by dt against the trapezoid of
+    gnss-ins-sim's true rates (ref_gyro.csv, ref_accel.csv, not read by the converter), within
+    6 sigma of the grade's white noise (../README.md: ARW 0.25 deg/sqrt(h), VRW 0.03
+    m/s/sqrt(h), sampled at 100 Hz, two samples per trapezoid).  The body rates reach 8 deg/s
+    and the specific forces differ by 0.17 m/s^2 or more between axes, so an axis swap, a sign
+    or degrees for radians is far outside."""
+    imu, dt = converted_attitude_run.imu, converted_attitude_run.imu["dt"]
+    assert np.array_equal(imu["time"], _gnss_ins_sim_columns("time.csv")["time"][1:])
+    rate_sigma = {"ref_gyro": math.radians(0.25 / 60) * 10 / math.sqrt(2),  # rad/s
+                  "ref_accel": 0.03 / 60 * 10 / math.sqrt(2)}  # m/s^2
+    for reference, ours, scale in (("ref_gyro", "dtheta", math.radians(1)),
+                                   ("ref_accel", "dvel", 1.0)):
+        true = _gnss_ins_sim_columns(f"{reference}.csv")
+        for axis in "xyz":
+            rate = scale * true[f"{reference}_{axis}"]
+            error = imu[f"{ours}_{axis}"] / dt - 0.5 * (rate[:-1] + rate[1:])
+            assert np.abs(error).max() < 6 * rate_sigma[reference], (ours, axis)
 
 
 def test_gnss_ins_sim_unit_error_and_nothing_written(tmp_path, navfmu_cli):
