@@ -1,5 +1,6 @@
 """Progress bars of the command line: one tqdm bar per label, on a terminal only, each
-update a safe point for a deferred Ctrl-C (:mod:`orchestrator.cosim.interrupts`)."""
+update a safe point for a deferred Ctrl-C (:mod:`orchestrator.cosim.interrupts`), named
+``UNIT-P%`` (``step-50%``: the update at half the run's steps) for the test hook."""
 from __future__ import annotations
 
 import contextlib
@@ -21,7 +22,7 @@ def progress_bars():
         bar = {}
 
         def progress(done, total):
-            interrupts.check()
+            interrupts.safe_point(f"{unit}-{100 * done // max(total, 1)}%")
             if "bar" not in bar:
                 bar["bar"] = tqdm(total=total, desc=label, unit=unit, leave=False,
                                   mininterval=0.5, file=sys.stderr, disable=None)

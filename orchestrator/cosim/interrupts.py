@@ -15,7 +15,10 @@ command then ends as terminated).
 
 Tests reach a chosen safe point deterministically through the environment variable
 :data:`SIGNAL_AT_ENV` (``POINT:SIGNAL``, e.g. ``writing:TERM``): the process sends itself
-that signal when it passes :func:`safe_point` ``POINT`` the first time.
+that signal when it passes :func:`safe_point` ``POINT`` the first time.  The points:
+``writing`` (after each output file), ``campaign-started`` (the manifest written) and the
+command line's progress updates ``UNIT-P%`` (``step-50%``: half the steps of a run done;
+``part-0%``: the output writing begun).
 """
 from __future__ import annotations
 
