@@ -1,5 +1,6 @@
 """Monte Carlo campaigns: same per-run numbers in every executor mode and backend, the same
-numbers as the hand-written replay loop, resume after SIGKILL of the driver or of a worker."""
+numbers as the hand-written replay loop, resume after SIGKILL of the driver or of a worker
+(at chosen runs, through the test hook)."""
 from __future__ import annotations
 
 import json
@@ -140,25 +141,36 @@ def _files(out):
             for p in sorted((out / "runs").glob("*/run-*.json"))}
 
 
-def _start_and_kill(out, victim, after_runs, timeout=240):
-    """Start the campaign, SIGKILL the driver or one worker once ``after_runs`` run files
-    exist; return the exit status and stderr, after every worker has ended."""
-    proc = subprocess.Popen(COMMAND + ["--out", str(out)], env=_env(), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    driver = psutil.Process(proc.pid)
-    deadline = time.monotonic() + timeout
-    while not out.exists() or len(_files(out)) < after_runs:
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() < deadline, "the campaign did not produce runs in time"
-        time.sleep(0.05)
-    workers = driver.children(recursive=True)
-    target = driver if victim == "driver" else next(
-        w for w in workers if "spawn_main" in " ".join(w.cmdline()))
-    target.send_signal(signal.SIGKILL)
-    _, stderr = proc.communicate(timeout=120)
-    psutil.wait_procs(workers, timeout=30)       # no worker outlives its driver
-    assert not [w for w in workers if w.is_running() and w.status() != psutil.STATUS_ZOMBIE]
-    return proc.returncode, stderr
+def _killed_at(out, point, workers):
+    """The campaign with ``workers`` SIGKILLed by the test hook at safe point ``point`` (a
+    crash at a chosen run: :data:`~orchestrator.cosim.interrupts.SIGNAL_AT_ENV`); returns the
+    exit status and stderr once no process of it is left (its output goes to a file, which
+    a worker outliving its driver cannot hold open)."""
+    from orchestrator.cosim.interrupts import SIGNAL_AT_ENV
+
+    marker = f"{out}:{point}"
+    log = out.parent / f"{point}.stderr"
+    with open(log, "w") as stderr:
+        done = subprocess.run(COMMAND[:-1] + [str(workers), "--out", str(out)],
+                              env={**_env(), SIGNAL_AT_ENV: f"{point}:KILL",
+                                   "NAVFMU_TEST_CAMPAIGN": marker},
+                              stdout=subprocess.DEVNULL, stderr=stderr, timeout=300)
+    _, alive = psutil.wait_procs(_processes_marked(marker), timeout=30)
+    for process in alive:
+        process.kill()
+    assert not alive, "a worker outlived its driver"   # it ends within 0.2 s of its driver
+    return done.returncode, log.read_text()
+
+
+def _processes_marked(marker):
+    found = []
+    for process in psutil.process_iter():
+        try:
+            if process.environ().get("NAVFMU_TEST_CAMPAIGN") == marker:
+                found.append(process)
+        except (psutil.Error, OSError):
+            continue
+    return found
 
 
 def _check_resumed(before, after):
@@ -167,25 +179,35 @@ def _check_resumed(before, after):
         assert json.loads(p.read_text())["metrics"]["samples"] == 2001
 
 
-def test_killed_worker_then_killed_driver_then_restart_completes(tmp_path):
+def _run_names(files):
+    return [f"{p.parent.name}/{p.name}" for p in files]
+
+
+def test_killed_driver_then_killed_worker_then_restart_completes(tmp_path):
+    """Crashes at chosen points, so every count is exact: the serial driver killed after its
+    5th run (runs are in the order Kf 0, Iakf 0, Kf 1, ...); a pool worker killed as it
+    starts the first missing run, Iakf 2 (the pool breaks, the other worker is stopped in
+    its run: a run takes seconds); a pool's driver killed while it first waits for its
+    workers (nothing can have finished); then the restart runs exactly the 9 missing."""
     out = tmp_path / "mc"
-    code, stderr = _start_and_kill(out, "worker", after_runs=2)
-    assert code == 2 and stderr.count("navfmu: error:") == 1 and "Traceback" not in stderr
-    first = _files(out)
-    assert 2 <= len(first) < TOTAL
-    code, _ = _start_and_kill(out, "driver", after_runs=len(first) + 2)
+    code, _ = _killed_at(out, "campaign-ran-5", workers=1)
     assert code == -signal.SIGKILL
-    second = _files(out)
-    assert len(first) + 2 <= len(second) < TOTAL
-    _check_resumed(first, second)
+    first = _files(out)
+    assert sorted(_run_names(first)) == sorted(
+        [f"Kf/run-000{i}.json" for i in range(3)] + [f"Iakf/run-000{i}.json" for i in range(2)])
+    code, stderr = _killed_at(out, "campaign-run-Iakf-2", workers=2)
+    assert code == 2 and stderr.count("navfmu: error:") == 1 and "Traceback" not in stderr
+    assert _files(out) == first
+    code, _ = _killed_at(out, "pool-waiting", workers=2)
+    assert code == -signal.SIGKILL
+    assert _files(out) == first
     done = subprocess.run(COMMAND + ["--out", str(out)], env=_env(), capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    assert (f"= {TOTAL} filter runs: {TOTAL - len(second)} now, {len(second)} done before"
-            in done.stdout)
+    assert f"= {TOTAL} filter runs: 9 now, 5 done before" in done.stdout
     final = _files(out)
     assert len(final) == TOTAL
-    _check_resumed(second, final)
+    _check_resumed(first, final)
     assert not list(out.rglob("*.tmp"))
 
 

@@ -210,6 +210,7 @@ def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
     from ..cosim.master import Simulation
     from ..running.scenarios import FILTER_COMPONENT, load_scenario, registry, swap_filter
 
+    interrupts.safe_point(f"campaign-run-{job['filter']}-{job['index']}")   # test hook
     t0 = time.perf_counter()
     model = swap_filter(load_scenario(job["ssd"]), job["filter"])
     parameters = dict(job["parameters"])
@@ -371,6 +372,7 @@ class Campaign:
             if read_run(self.out, f, i) is None:       # a worker that cannot see the folder
                 write_run(self.out, record)
             ran += 1
+            interrupts.safe_point(f"campaign-ran-{ran}")
         return {"done_before": total - len(todo), "ran": ran, "total": total}
 
     def records(self) -> Dict[str, List[Dict[str, Any]]]:

@@ -279,7 +279,7 @@ class Executor:
         try:
             while pending:
                 finished, _ = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
-                interrupts.check()
+                interrupts.safe_point("pool-waiting")
                 for future in finished:
                     key = pending.pop(future)
                     exc = future.exception()

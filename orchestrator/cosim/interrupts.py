@@ -16,9 +16,12 @@ command then ends as terminated).
 Tests reach a chosen safe point deterministically through the environment variable
 :data:`SIGNAL_AT_ENV` (``POINT:SIGNAL``, e.g. ``writing:TERM``): the process sends itself
 that signal when it passes :func:`safe_point` ``POINT`` the first time.  The points:
-``writing`` (after each output file), ``campaign-started`` (the manifest written) and the
-command line's progress updates ``UNIT-P%`` (``step-50%``: half the steps of a run done;
-``part-0%``: the output writing begun).
+``writing`` (after each output file), ``campaign-started`` (the manifest written),
+``campaign-run-FILTER-INDEX`` (that campaign run starting, in the process that runs it),
+``campaign-ran-N`` (the driver has the N-th result of this invocation), ``pool-waiting`` (the
+driver waiting for its process pool, from the pool's start) and the command line's progress
+updates ``UNIT-P%`` (``step-50%``: half the steps of a run done; ``part-0%``: the output
+writing begun).  ``KILL`` (SIGKILL) stands for a crash.
 """
 from __future__ import annotations
 
