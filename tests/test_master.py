@@ -366,8 +366,8 @@ def test_master_overhead_is_the_loop_time_outside_the_components(write_ssd, monk
     """The master's timing bookkeeping on a clock the test drives (no wall time): each
     component's step takes a fixed time (ramp 3, gain 5, acc 7 us; acc steps every 4th macro
     step), reading its outputs 2 us, the master's own work is the progress callback (11 us
-    each of its 100 calls), and reading the clock is free.  The size of the real overhead is a benchmark figure
-    (`navfmu bench` prints it), not a pass/fail bound here."""
+    each of its 100 calls), and reading the clock is free.  The size of the real overhead
+    is a benchmark figure (`navfmu bench` prints it), not a pass/fail bound here."""
     from types import SimpleNamespace
 
     from orchestrator.cosim import exchange, master
