@@ -10,6 +10,7 @@ import math
 
 import pytest
 
+from docs_tables import documented_parameters, parse_range, printed_exactly
 from navcore.components import registry as components
 from navcore.core import signals
 from navcore.core.component import InputError, Limits, ParameterError
@@ -55,7 +56,10 @@ def test_limits_text_and_membership():
         False, True, True, False, False, False]
 
 
-def test_every_default_is_accepted_and_extremes_are_refused():
+def test_self_consistency_defaults_inside_and_extremes_refused_naming_the_declared_range():
+    """Self-consistency (the refusal quotes the code's own declaration; the documented
+    ranges are checked independently below): every default is inside its declared range,
+    non-finite and huge values are refused naming the parameter and that range."""
     for cls, port in NUMERIC:
         assert port.limits.contains(port.default()), (cls.model_name, port.name)
         cls(**{port.name: port.default()})
@@ -67,6 +71,56 @@ def test_every_default_is_accepted_and_extremes_are_refused():
             text = str(err.value)
             assert f"parameter '{port.name}'" in text, text
             assert port.limits.text(port.unit) in text, text
+
+
+def _range_refusal(cls, name, value):
+    """The ParameterError text if ``cls(name=value)`` is refused for its range, else None
+    (other refusals, such as the order of the membership feet, are not this test's)."""
+    try:
+        cls(**{name: value})
+    except ParameterError as err:
+        return str(err) if f"'{name}' = " in str(err) and "accepted range" in str(err) else None
+    return None
+
+
+def _probes(documented):
+    """(value, inside) pairs at the documented bounds: the bound itself (inside if closed)
+    and a value just outside where the printed bound is exact, else values 1e-5 relative
+    inside and outside of it (the table prints 6 digits)."""
+    bounds = parse_range(documented.range)
+    integer = documented.type == "Integer"
+    probes = []
+    for bound, closed, outward in ((bounds.low, bounds.low_closed, -1.0),
+                                   (bounds.high, bounds.high_closed, 1.0)):
+        if not math.isfinite(bound):
+            continue
+        if printed_exactly(bound):
+            step = 1 if integer else max(abs(bound), 1.0) * 1e-9
+            probes += [(bound, closed), (bound + outward * step, False)]
+        else:
+            off = abs(bound) * 1e-5
+            probes += [(bound - outward * off, True), (bound + outward * off, False)]
+    return [(int(round(v)) if integer else v, inside) for v, inside in probes]
+
+
+DOCUMENTED = [(component, name, row) for component, rows in documented_parameters().items()
+              for name, row in rows.items() if row.range not in ("-", "finite")]
+
+
+@pytest.mark.parametrize("component, name, row", DOCUMENTED,
+                         ids=[f"{c}.{n}" for c, n, _ in DOCUMENTED])
+def test_documented_ranges_are_the_accepted_ones(component, name, row):
+    """Each range in docs/signals.md's parameter tables (read from the document) against the
+    component: a value on a closed bound is accepted, beyond a bound refused, the refusal
+    quoting the documented range."""
+    cls = components.REGISTRY[component]
+    for value, inside in _probes(row):
+        refusal = _range_refusal(cls, name, value)
+        if inside:
+            assert refusal is None, (value, refusal)
+        else:
+            assert refusal is not None, f"{component}.{name} = {value!r} accepted"
+            assert f"accepted range {row.range}" in refusal, refusal
 
 
 def test_huge_sigma_and_bias_name_the_range():

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from docs_tables import documented_parameters, parse_range
 from orchestrator.campaigns import tune as tuner
 from orchestrator.errors import NavfmuError
 from orchestrator.model.ssp import load_ssd
@@ -38,10 +39,29 @@ def test_same_seed_same_parameters_with_one_or_two_workers(serial):
         assert lo <= serial["best_values"][name] <= hi
 
 
-def test_ranges_come_from_the_declared_parameter_spec(serial):
+def test_self_consistency_ranges_come_from_the_declared_parameter_spec(serial):
+    """Self-consistency (the tuner reads the table it is compared with; the documented
+    ranges below are the independent check)."""
     from navcore.filters.fuzzy import FEET
 
     assert serial["ranges"]["fuzzy_e_z_right"] == list(FEET["fuzzy_e_z_right"][1:3])
+
+
+def test_search_ranges_are_the_documented_ones(serial):
+    """Every membership foot and output vertex of FuzzyUkfAhrs is searched over the range
+    docs/signals.md states for it (read from the document; its table says the feet's
+    accepted ranges are the GA's search ranges), and the run reports those ranges."""
+    documented = {n: parse_range(row.range) for n, row in
+                  documented_parameters()["FuzzyUkfAhrs"].items() if n.startswith("fuzzy_")
+                  and n != "fuzzy_window"}
+    assert len(documented) == 12
+    assert all(r.low_closed and r.high_closed for r in documented.values())
+    names = sorted(documented)
+    lo, hi, _, _ = tuner.resolve_parameters(tuner.load_scenario(MODEL), "filter", names, {},
+                                            "direct")
+    assert dict(zip(names, zip(lo.tolist(), hi.tolist()))) == {
+        n: (r.low, r.high) for n, r in documented.items()}
+    assert serial["ranges"] == {n: [documented[n].low, documented[n].high] for n in PARAMS}
 
 
 def test_tuned_set_is_bound_with_one_line(serial, tmp_path):
