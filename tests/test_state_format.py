@@ -267,9 +267,30 @@ class _HistoryKf(components.Kf):
         return out
 
 
-def test_a_declared_buffer_of_tuples_round_trips():
+def _described_node(value):
+    """The payload node of one value as the format's description spells it (module
+    docstring of state_format), built here without its code."""
+    if isinstance(value, collections.deque):
+        return {"deque": [value.maxlen, [_described_node(v) for v in value]]}
+    if isinstance(value, tuple):
+        return {"tuple": [_described_node(v) for v in value]}
+    if isinstance(value, dict):
+        return {"dict": {k: _described_node(v) for k, v in value.items()}}
+    if isinstance(value, np.ndarray):
+        return {"array": ["<f8", list(value.shape), b64(value.astype("<f8").tobytes())]}
+    return value
+
+
+def test_a_declared_buffer_of_tuples_is_encoded_as_described_and_round_trips():
+    """The buffer's bytes against the format's description (a deque of maxlen 4 holding the
+    last 4 (time, velocity array, dict) tuples, written here by hand); then the
+    self-consistency of the round trip: the restored filter continues bit for bit."""
     component, _ = stepped(_HistoryKf, 30)
-    tree = state_format.decode(state_format.encode(component.get_state(), IDENTITY), IDENTITY)
+    blob = state_format.encode(component.get_state(), IDENTITY)
+    node = payload_tree(blob)["dict"]["fields"]["dict"]["solutions"]
+    assert [entry["tuple"][0] for entry in node["deque"][1]] == [0.27, 0.28, 0.29, 0.3]
+    assert node == _described_node(component.solutions)
+    tree = state_format.decode(blob, IDENTITY)
     restored = _HistoryKf.from_state(tree)
     assert_same(component, restored)
     assert_same(run(component, 30, 20), run(restored, 30, 20))
