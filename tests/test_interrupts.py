@@ -99,12 +99,12 @@ def _staging(folder, name):
 
 
 def _interrupted_run(tmp_path, point):
-    """`navfmu run` of 30 s with SIGINT at safe point ``point``: the outcome checked."""
+    """`navfmu run` of 10 s with SIGINT at safe point ``point``: the outcome checked."""
     folder = tmp_path / point.replace("%", "")
     folder.mkdir()
     out = folder / "out"
     done = subprocess.run([sys.executable, "-m", "orchestrator.cli", "run", str(MODEL),
-                           "--stop", "30", "--out", str(out)], env=_env(point),
+                           "--stop", "10", "--out", str(out)], env=_env(point),
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                           timeout=300)
     err = done.stderr
