@@ -6,6 +6,7 @@ this package; :func:`do_step` advances the component and turns its errors into F
 """
 from __future__ import annotations
 
+import operator
 import sys
 import traceback
 
@@ -39,6 +40,7 @@ def setup(slave, component_class):
     slave._values = {}
     slave._units = {}
     slave._input_names = tuple(p.name for p in cls.inputs)
+    slave._read_inputs = _reader(slave._input_names)
     slave._component = None
     slave._entered = None      # (parameters, component) started in initialization mode
     slave._start_time = 0.0
@@ -67,6 +69,17 @@ def setup(slave, component_class):
         )
         _register(slave, port, Fmi2Causality.output, variability, None)
     slave._start_error = apply_start_values(slave, cls.parameters)
+
+
+def _reader(names):
+    """A function ``values -> {name: values[name] for name in names}`` (one itemgetter: the
+    inputs are read out of the value dict at every doStep)."""
+    if not names:
+        return lambda values: {}
+    get = operator.itemgetter(*names)
+    if len(names) == 1:
+        return lambda values: {names[0]: get(values)}
+    return lambda values: dict(zip(names, get(values)))
 
 
 def _register(slave, port, causality, variability, initial):
@@ -137,7 +150,7 @@ def exit_initialization_mode(slave):
         else:
             slave._component = slave.component_class(**params)
             slave._values.update(slave._component.start(slave._start_time))
-        started = slave._component.initial_inputs({n: values[n] for n in slave._input_names})
+        started = slave._component.initial_inputs(slave._read_inputs(values))
         if started is not None:
             slave._values.update(started)
         if slave._stop_time is not None:
@@ -174,8 +187,7 @@ def do_step(slave, current_time, step_size):
         return False
     values = slave._values
     try:
-        inputs = {n: values[n] for n in slave._input_names}
-        values.update(component.advance(current_time, step_size, inputs))
+        values.update(component.advance(current_time, step_size, slave._read_inputs(values)))
     except RefusedCall as exc:
         refuse(slave, str(exc), later=False)
         return False

@@ -42,7 +42,7 @@ from ..vehicles.point_mass_uav import PointMassUav
 from ..vehicles.route_guidance import L1Guidance, LocalPlane, Route, parse_route
 from ..vehicles.turbulence import DrydenTurbulence
 from .imu_measurement import SEED_LIMITS
-from .imu_sensor import RATES
+from .imu_sensor import RATE_NAMES, RATES
 
 #: farthest a navigation solution may be from every waypoint [m]
 MAX_ROUTE_DISTANCE = 1e5
@@ -154,17 +154,19 @@ class GuidedUav(Component):
 
     def _outputs(self):
         uav = self.uav
-        roll, pitch, yaw = uav.attitude()
         north, east = self.plane.to_plane(uav.lat, uav.lon)
         along, _ = self.route.track_errors(self.leg, north, east)
-        cross = self.route.deviation(north, east)
+        vn, ve, vd = uav.v_ned
         out = {"truth_time": self.start_time + self.n * self.dt, "truth_lat": uav.lat,
-               "truth_lon": uav.lon, "truth_h": uav.h, "truth_vn": uav.v_ned[0],
-               "truth_ve": uav.v_ned[1], "truth_vd": uav.v_ned[2], "truth_roll": roll,
-               "truth_pitch": pitch, "truth_yaw": yaw}
-        out.update(zip((p.name for p in RATES), uav.rates))
-        out.update(leg=self.leg, waypoints_reached=self.n_reached, cross_track=cross,
-                   along_track=along, waypoint_miss=self.miss)
+               "truth_lon": uav.lon, "truth_h": uav.h, "truth_vn": vn, "truth_ve": ve,
+               "truth_vd": vd, "truth_roll": uav.phi, "truth_pitch": uav.gamma,
+               "truth_yaw": uav.yaw()}
+        out.update(zip(RATE_NAMES, uav.rates))
+        out["leg"] = self.leg
+        out["waypoints_reached"] = self.n_reached
+        out["cross_track"] = self.route.deviation(north, east)
+        out["along_track"] = along
+        out["waypoint_miss"] = self.miss
         return out
 
     def step(self, t, h, inputs):
@@ -183,28 +185,39 @@ class GuidedUav(Component):
     def _truth_view(self):
         uav = self.uav
         north, east = self.plane.to_plane(uav.lat, uav.lon)
-        return north, east, uav.h, uav.v_ned[0], uav.v_ned[1], uav.attitude()[2]
+        return north, east, uav.h, uav.v_ned[0], uav.v_ned[1], uav.yaw()
 
     def _nav_view(self, inputs, t_sample):
         """The navigation solution extrapolated to ``t_sample`` on the route's plane."""
         age = t_sample - inputs["nav_time"]
-        tol = time_tolerance(self.dt, t_sample)
         limit = self.params["max_nav_age"]
-        if not abs(age) <= limit + tol:   # a host may tag inputs with the step's end
+        # a host may tag inputs with the step's end (within the time tolerance, which is
+        # >= 0: so an age within the limit needs no tolerance computed)
+        if not abs(age) <= limit and not abs(age) <= limit + time_tolerance(self.dt, t_sample):
             raise InputError(
                 f"{self.model_name}: input 'nav_time' = {inputs['nav_time']!r} s is "
                 f"{age:.6g} s {'old' if age > 0 else 'ahead'} at t = {t_sample!r} s (parameter "
                 f"'max_nav_age' = {limit:g} s): guidance needs a current navigation solution")
         vn, ve, vd = inputs["nav_vn"], inputs["nav_ve"], inputs["nav_vd"]
         north, east = self.plane.to_plane(inputs["nav_lat"], inputs["nav_lon"])
-        nearest = min(math.hypot(north - w[0], east - w[1]) for w in self.route.waypoints)
-        if nearest > MAX_ROUTE_DISTANCE:
+        if self._off_route(north, east):
+            nearest = min(math.hypot(north - w[0], east - w[1]) for w in self.route.waypoints)
             raise InputError(
                 f"{self.model_name}: inputs 'nav_lat'/'nav_lon' put the vehicle {nearest / 1e3:.6g}"
                 f" km from the nearest waypoint at t = {t_sample!r} s (more than "
                 f"{MAX_ROUTE_DISTANCE / 1e3:g} km): is a filter's navigation solution connected?")
         return (north + vn * age, east + ve * age, inputs["nav_h"] - vd * age, vn, ve,
                 inputs["nav_yaw"])
+
+    def _off_route(self, north, east):
+        """Whether (north, east) is more than :data:`MAX_ROUTE_DISTANCE` from every waypoint;
+        the active leg's end, the likely nearest, is tried first."""
+        waypoints = self.route.waypoints
+        w = waypoints[min(self.leg + 1, len(waypoints) - 1)]
+        if math.hypot(north - w[0], east - w[1]) <= MAX_ROUTE_DISTANCE:
+            return False
+        return all(math.hypot(north - w[0], east - w[1]) > MAX_ROUTE_DISTANCE
+                   for w in waypoints)
 
     def _fly(self, view):
         north, east, h_seen, vn, ve, heading = view

@@ -47,13 +47,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ..core import signals
 from ..core.component import Component, InputError, Limits, real, string
 from ..core.timing import same_time
 from ..ins.rotations import _euler_rows
-from ..ins.strapdown import Strapdown, _radii, integrate_position
+from ..ins.strapdown import InverseStrapdown, _radii, integrate_position
 from ..sensors.log_converters import trapezoid_increments
 from .imu_measurement import ERROR_PARAMETERS, ImuMeasurement
 
@@ -76,7 +74,10 @@ RATES = (
            "(input_form 'rates')") for a in signals.AXES_BODY),
 )
 RATE_NAMES = tuple(p.name for p in RATES)
+#: the inputs of input_form 'rates'
+TRUTH_AND_RATE_NAMES = TRUTH_NAMES + RATE_NAMES
 INPUT_FORMS = ("truth", "rates")
+_IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
 def position_tolerance(dv_norm, dt):
@@ -116,8 +117,8 @@ class ImuSensor(ImuMeasurement, Component):
         self.rates_form = form == "rates"
         self.build_error_models()
         self.start_time = float(start_time)
-        # the strapdown at the latest truth sample; its state is replaced by the start sample
-        self.ins = Strapdown(0.0, 0.0, 0.0, (0.0, 0.0, 0.0), np.eye(3))
+        # the inverse strapdown at the latest truth sample; replaced by the start sample
+        self.ins = InverseStrapdown(0.0, 0.0, 0.0, (0.0, 0.0, 0.0), _IDENTITY)
         self.started = False
         self.last_time = self.start_time
         self.last_rates = (0.0,) * 6
@@ -127,7 +128,7 @@ class ImuSensor(ImuMeasurement, Component):
         return dict(out)
 
     def _names(self):
-        return TRUTH_NAMES + RATE_NAMES if self.rates_form else TRUTH_NAMES
+        return TRUTH_AND_RATE_NAMES if self.rates_form else TRUTH_NAMES
 
     def initial_inputs(self, inputs):
         """The truth at the start time: the inputs at the end of initialization mode.  Inputs
@@ -167,8 +168,8 @@ class ImuSensor(ImuMeasurement, Component):
 
     def _take(self, inputs):
         v = (inputs["truth_vn"], inputs["truth_ve"], inputs["truth_vd"])
-        self.ins = Strapdown(inputs["truth_lat"], inputs["truth_lon"], inputs["truth_h"], v,
-                             _euler_rows(*_attitude(inputs)))
+        self.ins = InverseStrapdown(inputs["truth_lat"], inputs["truth_lon"], inputs["truth_h"],
+                                    v, _euler_rows(*_attitude(inputs)))
         if self.rates_form:
             self.last_rates = tuple(inputs[n] for n in RATE_NAMES)
 
@@ -181,57 +182,58 @@ class ImuSensor(ImuMeasurement, Component):
         dt = self.dt
         if same_time(t_new, t_last, dt):
             return self.out                # the same sample again: hold
-        self._check_interval(t_new, t_last)
+        if t_new < t_last or not same_time(t_new - t_last, dt, dt):
+            self._refuse_interval(t_new, t_last)
         attitude = _attitude(inputs)
         if self.rates_form:
             dtheta, dvel = self._rate_increments(inputs)
             self._take(inputs)
+            gx, gy, gz = dtheta.tolist()
+            angle = math.sqrt(gx * gx + gy * gy + gz * gz)
         else:
-            dtheta, dvel = self._exact_increments(inputs, attitude, t_new)
+            dtheta, dvel, angle = self._exact_increments(inputs, attitude, t_new)
         self.last_time = t_new
-        gx, gy, gz = dtheta.tolist()
-        rate_norm = math.sqrt(gx * gx + gy * gy + gz * gz) / dt
-        return self.measure(self.out, t_new, dt, dtheta, dvel, rate_norm, attitude)
+        return self.measure(self.out, t_new, dt, dtheta, dvel, angle / dt, attitude)
 
-    def _check_interval(self, t_new, t_last):
+    def _refuse_interval(self, t_new, t_last):
         name, dt = self.model_name, self.dt
         if t_new < t_last:
             raise InputError(f"{name}: input 'truth_time' = {t_new!r} s goes back from the "
                              f"previous sample at {t_last!r} s")
-        if not same_time(t_new - t_last, dt, dt):
-            raise InputError(
-                f"{name}: input 'truth_time' = {t_new!r} s is {t_new - t_last:.9g} s after the "
-                f"previous sample at {t_last!r} s; the sensor takes one truth sample every "
-                f"parameter 'imu_period' = {dt!r} s (nothing is resampled): output the "
-                "vehicle's truth at that period and step the sensor at least as often")
+        raise InputError(
+            f"{name}: input 'truth_time' = {t_new!r} s is {t_new - t_last:.9g} s after the "
+            f"previous sample at {t_last!r} s; the sensor takes one truth sample every "
+            f"parameter 'imu_period' = {dt!r} s (nothing is resampled): output the "
+            "vehicle's truth at that period and step the sensor at least as often")
 
     def _exact_increments(self, inputs, attitude, t_new):
         """The inverse strapdown from the previous truth sample to this one, after checking
-        that no vehicle makes the jump between them."""
+        that no vehicle makes the jump between them; with the rotation angle |dtheta|."""
         ins, dt = self.ins, self.dt
         lat, lon, h = inputs["truth_lat"], inputs["truth_lon"], inputs["truth_h"]
         v1 = [inputs["truth_vn"], inputs["truth_ve"], inputs["truth_vd"]]
-        C1 = _euler_rows(*attitude)
-        v0 = ins.v_ned.tolist()
-        dv = math.sqrt(sum((a - b) ** 2 for a, b in zip(v1, v0)))
-        where = f"at truth_time = {t_new!r} s"
+        v0 = ins.v
+        dn, de, dd = v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]
+        dv = math.sqrt(dn * dn + de * de + dd * dd)
         if dv > MAX_ACCELERATION * dt:
-            self._jump(f"the velocity changes by {dv:.6g} m/s in {dt:g} s {where} (more than "
-                       f"{MAX_ACCELERATION:g} m/s2)", "truth_vn")
+            self._jump(f"the velocity changes by {dv:.6g} m/s in {dt:g} s at truth_time = "
+                       f"{t_new!r} s (more than {MAX_ACCELERATION:g} m/s2)", "truth_vn")
         plat, plon, ph = integrate_position(ins.lat, ins.lon, ins.h, v0, v1, dt)
         rn, re = _radii(lat)
-        miss = math.sqrt(((lat - plat) * (rn + h)) ** 2
-                         + ((lon - plon) * (re + h) * math.cos(lat)) ** 2 + (h - ph) ** 2)
+        north, east = (lat - plat) * (rn + h), (lon - plon) * (re + h) * math.cos(lat)
+        miss = math.sqrt(north * north + east * east + (h - ph) * (h - ph))
         if miss > position_tolerance(dv, dt):
-            self._jump(f"the position is {miss:.6g} m from where the velocities lead {where} "
-                       f"(tolerance {position_tolerance(dv, dt):.3g} m)", "truth_lat")
-        # the same call (and floats) as the trajectory generator's
-        dtheta, dvel = ins._inverse_to(lat, lon, h, v1, C1, dt)
-        angle = math.sqrt(sum(x * x for x in dtheta.tolist()))
+            self._jump(f"the position is {miss:.6g} m from where the velocities lead at "
+                       f"truth_time = {t_new!r} s (tolerance {position_tolerance(dv, dt):.3g} "
+                       "m)", "truth_lat")
+        # the same function (and floats) as the trajectory generator's Strapdown._inverse_to
+        dtheta, dvel = ins.step_to(lat, lon, h, v1, _euler_rows(*attitude), dt)
+        gx, gy, gz = dtheta
+        angle = math.sqrt(gx * gx + gy * gy + gz * gz)
         if angle > MAX_ANGULAR_RATE * dt:   # (a refusal ends the run: the state may move)
-            self._jump(f"the attitude turns by {angle:.6g} rad in {dt:g} s {where} (more than "
-                       f"{MAX_ANGULAR_RATE:g} rad/s)", "truth_roll")
-        return dtheta, dvel
+            self._jump(f"the attitude turns by {angle:.6g} rad in {dt:g} s at truth_time = "
+                       f"{t_new!r} s (more than {MAX_ANGULAR_RATE:g} rad/s)", "truth_roll")
+        return dtheta, dvel, angle
 
     def _jump(self, what, name):
         first = " (the previous sample is the start, set in initialization mode)" \

@@ -210,15 +210,17 @@ class Component(ABC):
     def check_inputs(self, inputs: Dict[str, Any], names) -> None:
         """Raise an :class:`InputError` naming the first of the Real inputs ``names`` that is
         not finite or outside the range its port declares."""
-        # fast path: the declared bounds by comparison, finiteness by one sum (NaN and inf
-        # propagate into it); anything doubtful goes through the full check below
-        for n, low, high, low_open, high_open in type(self)._bounded_inputs(names):
+        # fast path: the declared bounds by comparison; finiteness by one sum (NaN and inf
+        # propagate into it) over the inputs whose range has an infinite end (within finite
+        # bounds a value is finite); anything doubtful goes through the full check below
+        bounded, open_ended = type(self)._input_checks(names)
+        for n, low, high, low_open, high_open in bounded:
             v = inputs[n]
             if not ((v > low if low_open else v >= low)
                     and (v < high if high_open else v <= high)):
                 break
         else:
-            if math.isfinite(sum([inputs[n] for n in names])):
+            if math.isfinite(sum([inputs[n] for n in open_ended])):
                 return
         ports = type(self)._input_ports()
         for n in names:
@@ -230,21 +232,26 @@ class Component(ABC):
                                  f"range {limits.text(port.unit if port else '')}")
 
     @classmethod
-    def _bounded_inputs(cls, names) -> Tuple[Tuple[str, float, float, bool, bool], ...]:
-        """``(name, low, high, low_open, high_open)`` of the inputs among ``names`` whose port
-        declares a range narrower than finite."""
-        cache = cls.__dict__.get("_bounded_input_cache")
+    def _input_checks(cls, names) -> Tuple[Tuple[Tuple[str, float, float, bool, bool], ...],
+                                           Tuple[str, ...]]:
+        """``(bounded, open_ended)`` of the inputs ``names``: ``(name, low, high, low_open,
+        high_open)`` of those whose port declares a range narrower than finite, and the
+        names of those whose range has an infinite end."""
+        cache = cls.__dict__.get("_input_check_cache")
         if cache is None:
-            cache = cls._bounded_input_cache = {}
+            cache = cls._input_check_cache = {}
         if type(names) is not tuple:   # the cache's keys: tuples of names
             names = tuple(names)
-        bounded = cache.get(names)
-        if bounded is None:
+        checks = cache.get(names)
+        if checks is None:
             ports = cls._input_ports()
-            limits = [(n, ports[n].limits) for n in names if n in ports]
-            bounded = cache[names] = tuple((n, x.low, x.high, x.low_open, x.high_open)
-                                           for n, x in limits if x != FINITE)
-        return bounded
+            limits = [(n, ports[n].limits if n in ports else FINITE) for n in names]
+            checks = cache[names] = (
+                tuple((n, x.low, x.high, x.low_open, x.high_open)
+                      for n, x in limits if x != FINITE),
+                tuple(n for n, x in limits if not (math.isfinite(x.low)
+                                                   and math.isfinite(x.high))))
+        return checks
 
     @classmethod
     def _input_ports(cls) -> Dict[str, Port]:

@@ -109,9 +109,12 @@ def _rotvec_from_rows(m):
 def _euler_rows(roll, pitch, yaw, sin=math.sin, cos=math.cos):
     """Rows of C_bn = Rz(yaw) Ry(pitch) Rx(roll); with ``sin``/``cos`` = numpy's, the same
     formula over arrays of angles (the rows are then arrays)."""
-    sr, cr = sin(roll), cos(roll)
-    sp, cp = sin(pitch), cos(pitch)
-    sy, cy = sin(yaw), cos(yaw)
+    return _euler_rows_of(sin(roll), cos(roll), sin(pitch), cos(pitch), sin(yaw), cos(yaw))
+
+
+def _euler_rows_of(sr, cr, sp, cp, sy, cy):
+    """:func:`_euler_rows` from the sines and cosines of roll, pitch and yaw (for a caller
+    that has them already)."""
     return [
         [cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy],
         [cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy],

@@ -129,6 +129,36 @@ def integrate_position(lat, lon, h, v_prev, v_next, dt):
     return float(lat_next), float(lon_next), float(h_next)
 
 
+def _mid_interval_terms(lat, h, v, vp, dt):
+    """zeta = (omega_ie + omega_en) dt and g_cor = g - (2 omega_ie + omega_en) x v_mid of an
+    interval of ``dt`` from latitude ``lat``, height ``h`` and velocity ``v`` (the previous
+    velocity ``vp``), extrapolated to mid-interval (module docstring, step 1)."""
+    vmn = 1.5 * v[0] - 0.5 * vp[0]
+    vme = 1.5 * v[1] - 0.5 * vp[1]
+    vmd = 1.5 * v[2] - 0.5 * vp[2]
+    rn, _ = _radii(lat)
+    half = 0.5 * dt
+    h_mid = h - half * (1.25 * v[2] - 0.25 * vp[2])
+    lat_mid = lat + half * (1.25 * v[0] - 0.25 * vp[0]) / (rn + h)
+    rn, re = _radii(lat_mid)
+    sl, cl = math.sin(lat_mid), math.cos(lat_mid)
+    rnh = rn + h_mid
+    reh = re + h_mid
+    # omega_ie^n (Groves 5.41) and omega_en^n (Groves 5.44)
+    wie_n, wie_d = _W_IE * cl, -_W_IE * sl
+    wen_n, wen_e, wen_d = vme / reh, -vmn / rnh, -vme * sl / (cl * reh)
+    zeta = ((wie_n + wen_n) * dt, wen_e * dt, (wie_d + wen_d) * dt)
+    # (2 omega_ie + omega_en) x v_mid
+    ax, ay, az = 2.0 * wie_n + wen_n, wen_e, 2.0 * wie_d + wen_d
+    g = _gravity(lat_mid, h_mid)
+    g_cor = (
+        -(ay * vmd - az * vme),
+        -(az * vmn - ax * vmd),
+        g - (ax * vme - ay * vmn),
+    )
+    return zeta, g_cor
+
+
 class Strapdown:
     """NED strapdown mechanization (see the module docstring for the equations).
 
@@ -169,34 +199,9 @@ class Strapdown:
     # -- shared pieces of update / inverse_update ----------------------------------------
     def _nav_terms(self, v, dt):
         """zeta = (omega_ie + omega_en) dt and g_cor = g - (2 omega_ie + omega_en) x v_mid,
-        from the position and velocity extrapolated to mid-interval."""
-        vp = self._v_prev
-        vmn = 1.5 * v[0] - 0.5 * vp[0]
-        vme = 1.5 * v[1] - 0.5 * vp[1]
-        vmd = 1.5 * v[2] - 0.5 * vp[2]
-        lat = self.lat
-        h = self.h
-        rn, _ = _radii(lat)
-        half = 0.5 * dt
-        h_mid = h - half * (1.25 * v[2] - 0.25 * vp[2])
-        lat_mid = lat + half * (1.25 * v[0] - 0.25 * vp[0]) / (rn + h)
-        rn, re = _radii(lat_mid)
-        sl, cl = math.sin(lat_mid), math.cos(lat_mid)
-        rnh = rn + h_mid
-        reh = re + h_mid
-        # omega_ie^n (Groves 5.41) and omega_en^n (Groves 5.44)
-        wie_n, wie_d = _W_IE * cl, -_W_IE * sl
-        wen_n, wen_e, wen_d = vme / reh, -vmn / rnh, -vme * sl / (cl * reh)
-        zeta = ((wie_n + wen_n) * dt, wen_e * dt, (wie_d + wen_d) * dt)
-        # (2 omega_ie + omega_en) x v_mid
-        ax, ay, az = 2.0 * wie_n + wen_n, wen_e, 2.0 * wie_d + wen_d
-        g = _gravity(lat_mid, h_mid)
-        g_cor = (
-            -(ay * vmd - az * vme),
-            -(az * vmn - ax * vmd),
-            g - (ax * vme - ay * vmn),
-        )
-        return zeta, g_cor
+        from the position and velocity extrapolated to mid-interval
+        (:func:`_mid_interval_terms` of this state)."""
+        return _mid_interval_terms(self.lat, self.h, v, self._v_prev, dt)
 
     # -- forward mechanization ---------------------------------------------------------
     def update(self, dtheta, dvel, dt):
@@ -283,35 +288,11 @@ class Strapdown:
         """:meth:`inverse_update` on checked floats: ``v1`` a 3-sequence, ``C1`` row lists
         (the trajectory generator, which integrates the position itself, calls it directly)."""
         v = np.asarray(self.v_ned, dtype=float).tolist()
-        C = np.asarray(self.C_bn, dtype=float).tolist()
-        zeta, g_cor = self._nav_terms(v, dt)
-        zx, zy, zz = zeta
-        px, py, pz = self._dtheta_prev
-        qx, qy, qz = self._dvel_prev
-        c12 = 1.0 / 12.0
-
-        # attitude: C1 = exp(-[zeta x]) C exp([phi x])  =>  exp([phi x]) = C^T exp([zeta x]) C1
-        M = _matTmul_rows(C, _matmul_rows(_rodrigues_rows(zx, zy, zz), C1))
-        phi = _rotvec_from_rows(M)
-        gx, gy, gz = _solve_skew(c12 * px, c12 * py, c12 * pz, phi)
-
-        # velocity
-        dvn = (v1[0] - v[0] - g_cor[0] * dt,
-               v1[1] - v[1] - g_cor[1] * dt,
-               v1[2] - v[2] - g_cor[2] * dt)
-        ux, uy, uz = _solve_skew(-0.5 * zx, -0.5 * zy, -0.5 * zz, dvn)
-        c0, c1, c2 = C
-        dv_rot = (c0[0] * ux + c1[0] * uy + c2[0] * uz,
-                  c0[1] * ux + c1[1] * uy + c2[1] * uz,
-                  c0[2] * ux + c1[2] * uy + c2[2] * uz)
-        rhs = (dv_rot[0] - c12 * (qy * gz - qz * gy),
-               dv_rot[1] - c12 * (qz * gx - qx * gz),
-               dv_rot[2] - c12 * (qx * gy - qy * gx))
-        fx, fy, fz = _solve_skew(0.5 * gx + c12 * px, 0.5 * gy + c12 * py,
-                                 0.5 * gz + c12 * pz, rhs)
-
-        self._move_to(lat, lon, h, tuple(v), v1, C1, (gx, gy, gz), (fx, fy, fz))
-        return np.array((gx, gy, gz)), np.array((fx, fy, fz))
+        dtheta, dvel = inverse_increments(self.lat, self.h, v, self._v_prev,
+                                          np.asarray(self.C_bn, dtype=float).tolist(),
+                                          self._dtheta_prev, self._dvel_prev, v1, C1, dt)
+        self._move_to(lat, lon, h, tuple(v), v1, C1, dtheta, dvel)
+        return np.array(dtheta), np.array(dvel)
 
     def _move_to(self, lat, lon, h, v_prev, v1, C1, dtheta, dvel):
         """Take the state an update with increments ``dtheta``, ``dvel`` (3-tuples) from
@@ -354,3 +335,64 @@ class Strapdown:
         dvl = dv.tolist()
         self._v_prev = (vp[0] - dvl[0], vp[1] - dvl[1], vp[2] - dvl[2])
         self.C_bn = np.array(_matmul_rows(_rodrigues_rows(*phi), self.C_bn.tolist()))
+
+
+def inverse_increments(lat, h, v, v_prev, C, dtheta_prev, dvel_prev, v1, C1, dt):
+    """The increments ``(dtheta, dvel)`` (3-tuples) with which :meth:`Strapdown.update` takes
+    the velocity ``v`` and attitude ``C`` (row lists) at latitude ``lat``, height ``h`` (with
+    the previous velocity ``v_prev`` and increments ``dtheta_prev``, ``dvel_prev``) to ``v1``
+    and ``C1`` over ``dt`` (the equations of :meth:`Strapdown.inverse_update`)."""
+    zeta, g_cor = _mid_interval_terms(lat, h, v, v_prev, dt)
+    zx, zy, zz = zeta
+    px, py, pz = dtheta_prev
+    qx, qy, qz = dvel_prev
+    c12 = 1.0 / 12.0
+
+    # attitude: C1 = exp(-[zeta x]) C exp([phi x])  =>  exp([phi x]) = C^T exp([zeta x]) C1
+    M = _matTmul_rows(C, _matmul_rows(_rodrigues_rows(zx, zy, zz), C1))
+    phi = _rotvec_from_rows(M)
+    gx, gy, gz = _solve_skew(c12 * px, c12 * py, c12 * pz, phi)
+
+    # velocity
+    dvn = (v1[0] - v[0] - g_cor[0] * dt,
+           v1[1] - v[1] - g_cor[1] * dt,
+           v1[2] - v[2] - g_cor[2] * dt)
+    ux, uy, uz = _solve_skew(-0.5 * zx, -0.5 * zy, -0.5 * zz, dvn)
+    c0, c1, c2 = C
+    dv_rot = (c0[0] * ux + c1[0] * uy + c2[0] * uz,
+              c0[1] * ux + c1[1] * uy + c2[1] * uz,
+              c0[2] * ux + c1[2] * uy + c2[2] * uz)
+    rhs = (dv_rot[0] - c12 * (qy * gz - qz * gy),
+           dv_rot[1] - c12 * (qz * gx - qx * gz),
+           dv_rot[2] - c12 * (qx * gy - qy * gx))
+    fx, fy, fz = _solve_skew(0.5 * gx + c12 * px, 0.5 * gy + c12 * py,
+                             0.5 * gz + c12 * pz, rhs)
+    return (gx, gy, gz), (fx, fy, fz)
+
+
+class InverseStrapdown:
+    """The memory of the exact inverse of :meth:`Strapdown.update` on plain floats, for a
+    sensor turning truth samples into increments: the position, velocity ``v`` and attitude
+    ``C`` (row lists) of the latest sample, the velocity before it and the latest increments.
+    :meth:`step_to` is :meth:`Strapdown.inverse_update` without the position check and
+    without the arrays of a :class:`Strapdown` (the same function, the same floats)."""
+
+    state_fields = ("lat", "lon", "h", "v", "C", "v_prev", "dtheta_prev", "dvel_prev")
+
+    def __init__(self, lat, lon, h, v, C):
+        self.lat, self.lon, self.h = float(lat), float(lon), float(h)
+        self.v = tuple(float(x) for x in v)
+        self.C = [[float(x) for x in row] for row in C]
+        self.v_prev = self.v
+        self.dtheta_prev = self.dvel_prev = (0.0, 0.0, 0.0)
+
+    def step_to(self, lat, lon, h, v1, C1, dt):
+        """The increments ``(dtheta, dvel)`` (3-tuples) from the latest sample to this one
+        (position ``lat, lon, h``, velocity ``v1``, attitude rows ``C1``), which becomes the
+        latest."""
+        dtheta, dvel = inverse_increments(self.lat, self.h, self.v, self.v_prev, self.C,
+                                          self.dtheta_prev, self.dvel_prev, v1, C1, dt)
+        self.lat, self.lon, self.h = lat, lon, h
+        self.v_prev, self.v, self.C = self.v, tuple(v1), C1
+        self.dtheta_prev, self.dvel_prev = dtheta, dvel
+        return dtheta, dvel

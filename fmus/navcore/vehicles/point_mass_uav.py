@@ -36,12 +36,14 @@ import math
 
 from ..ins.constants import G0
 from ..ins.earth import OMEGA_IE
-from ..ins.rotations import _euler_rows
+from ..ins.rotations import _euler_rows_of
 from ..ins.strapdown import _gravity, _radii, integrate_position
 
 
 def _clip(x, limit):
-    return max(-limit, min(limit, x))
+    """``max(-limit, min(limit, x))``, written out (the builtins' calls cost more)."""
+    x = x if x < limit else limit
+    return x if x > -limit else -limit
 
 
 class PointMassUav:
@@ -58,32 +60,45 @@ class PointMassUav:
         self.config = dict(config)
         c = self.config
         self.bank_max = min(c["bank_limit"], math.acos(1.0 / c["load_factor_limit"]))
-        self._loops = (c["loop_damping"], c["bank_bandwidth"], c["climb_bandwidth"],
-                       c["tau_airspeed"], c["accel_limit"])
+        zeta, wb, wg = c["loop_damping"], c["bank_bandwidth"], c["climb_bandwidth"]
+        #: the loops' coefficients w^2 and 2 zeta w (the products _derivatives would form
+        #: first), the airspeed time constant and the acceleration limit
+        self._loops = (wg * wg, 2.0 * zeta * wg, wb * wb, 2.0 * zeta * wb, c["tau_airspeed"],
+                       c["accel_limit"])
         self.lat, self.lon, self.h = float(lat), float(lon), float(h)
         self.V, self.psi, self.gamma, self.phi = float(V), float(psi), 0.0, 0.0
         self.gamma_rate = self.phi_rate = 0.0
         self.felt_gust = (0.0, 0.0, 0.0)
-        self.v_ned = self._ground_velocity()
+        trig = self._trig()
+        self.v_ned = self._ground_velocity(trig)
         #: (body rate x, y, z, specific force x, y, z) at the latest sample
-        self.rates = self._rates((0.0,) * 6, (0.0, 0.0, 0.0))
+        self.rates = self._rates((0.0,) * 6, (0.0, 0.0, 0.0), trig)
 
-    def _ground_velocity(self):
-        V, psi, gamma = self.V, self.psi, self.gamma
+    def _trig(self):
+        """(sin, cos) of roll ``phi``, of pitch ``gamma`` and of heading ``psi``, flat."""
+        phi, gamma, psi = self.phi, self.gamma, self.psi
+        return (math.sin(phi), math.cos(phi), math.sin(gamma), math.cos(gamma),
+                math.sin(psi), math.cos(psi))
+
+    def _ground_velocity(self, trig):
+        V = self.V
+        _, _, sg, cg, ss, cs = trig
         wn, we, wd = self.config["wind"]
         gn, ge, gd = self.felt_gust
-        cg = math.cos(gamma)
-        return (V * cg * math.cos(psi) + wn + gn, V * cg * math.sin(psi) + we + ge,
-                -V * math.sin(gamma) + wd + gd)
+        return (V * cg * cs + wn + gn, V * cg * ss + we + ge, -V * sg + wd + gd)
 
     def attitude(self):
         """(roll, pitch, yaw) [rad], yaw in (-pi, pi]."""
-        return self.phi, self.gamma, math.atan2(math.sin(self.psi), math.cos(self.psi))
+        return self.phi, self.gamma, self.yaw()
+
+    def yaw(self):
+        """The heading ``psi`` wrapped to (-pi, pi]."""
+        return math.atan2(math.sin(self.psi), math.cos(self.psi))
 
     def start_gust(self, gust_ned):
         """The rates at the start in the gust ``gust_ned`` (the felt gust starts at 0)."""
         tau = self.config["gust_response_time"]
-        self.rates = self._rates((0.0,) * 6, tuple(g / tau for g in gust_ned))
+        self.rates = self._rates((0.0,) * 6, tuple(g / tau for g in gust_ned), self._trig())
 
     def turn_rate(self):
         """psi' [rad/s] now."""
@@ -94,14 +109,13 @@ class PointMassUav:
         flight-path angle), the bank already limited."""
         V, psi, gamma, phi, gamma_rate, phi_rate = x
         bank_c, airspeed_c, gamma_c = targets
-        zeta, wb, wg, tau_v, accel_limit = self._loops
-        dV = (airspeed_c - V) / tau_v
-        return (max(-accel_limit, min(accel_limit, dV)),
+        wg2, damp_g, wb2, damp_b, tau_v, accel_limit = self._loops
+        return (_clip((airspeed_c - V) / tau_v, accel_limit),
                 G0 * math.tan(phi) / V,
                 gamma_rate,
                 phi_rate,
-                wg * wg * (gamma_c - gamma) - 2.0 * zeta * wg * gamma_rate,
-                wb * wb * (bank_c - phi) - 2.0 * zeta * wb * phi_rate)
+                wg2 * (gamma_c - gamma) - damp_g * gamma_rate,
+                wb2 * (bank_c - phi) - damp_b * phi_rate)
 
     def _targets(self, commands):
         """(bank, airspeed, flight-path angle) the loops follow over a step of ``commands``
@@ -128,40 +142,43 @@ class PointMassUav:
         targets = self._targets(commands)
         half = 0.5 * dt
         k1 = f(x, targets)
-        k2 = f([a + half * b for a, b in zip(x, k1)], targets)
-        k3 = f([a + half * b for a, b in zip(x, k2)], targets)
-        k4 = f([a + dt * b for a, b in zip(x, k3)], targets)
+        k2 = f(_moved(x, half, k1), targets)
+        k3 = f(_moved(x, half, k2), targets)
+        k4 = f(_moved(x, dt, k3), targets)
         sixth = dt / 6.0
-        (self.V, self.psi, self.gamma, self.phi, self.gamma_rate, self.phi_rate) = [
-            a + sixth * (p + 2.0 * q + 2.0 * r + s) for a, p, q, r, s in zip(x, k1, k2, k3, k4)]
+        (self.V, self.psi, self.gamma, self.phi, self.gamma_rate,
+         self.phi_rate) = _rk4_sum(x, sixth, k1, k2, k3, k4)
         # f' = (g(t) - f) / tau with g linear over the step, solved exactly
         tau = self.config["gust_response_time"]
         decay = math.exp(-dt / tau)
-        felt = []
-        for now, g0, g1 in zip(self.felt_gust, gust_start, gust_end):
-            slope = (g1 - g0) / dt
-            felt.append(g1 - tau * slope + (now - g0 + tau * slope) * decay)
-        self.felt_gust = tuple(felt)
+        (f0, f1, f2), (a0, a1, a2), (b0, b1, b2) = self.felt_gust, gust_start, gust_end
+        s0, s1, s2 = (b0 - a0) / dt, (b1 - a1) / dt, (b2 - a2) / dt
+        f0 = b0 - tau * s0 + (f0 - a0 + tau * s0) * decay
+        f1 = b1 - tau * s1 + (f1 - a1 + tau * s1) * decay
+        f2 = b2 - tau * s2 + (f2 - a2 + tau * s2) * decay
+        self.felt_gust = (f0, f1, f2)
         v_prev = self.v_ned
-        self.v_ned = self._ground_velocity()
+        trig = self._trig()
+        self.v_ned = self._ground_velocity(trig)
         self.lat, self.lon, self.h = integrate_position(self.lat, self.lon, self.h, v_prev,
                                                         self.v_ned, dt)
-        gust_rate = tuple((g - now) / tau for now, g in zip(self.felt_gust, gust_end))
-        self.rates = self._rates(f(self._state(), targets), gust_rate)
+        gust_rate = ((b0 - f0) / tau, (b1 - f1) / tau, (b2 - f2) / tau)
+        self.rates = self._rates(f(self._state(), targets), gust_rate, trig)
         return self.v_ned
 
-    def _rates(self, derivatives, gust_rate):
-        """(inertial body rate [rad/s] x, y, z, specific force [m/s^2] x, y, z) now."""
+    def _rates(self, derivatives, gust_rate, trig):
+        """(inertial body rate [rad/s] x, y, z, specific force [m/s^2] x, y, z) now;
+        ``trig``: :meth:`_trig` of now."""
         dV, dpsi, dgamma, dphi = derivatives[:4]
-        phi, theta, _ = self.attitude()
-        psi, V, gamma = self.psi, self.V, self.gamma
-        sp, cp, st, ct = math.sin(phi), math.cos(phi), math.sin(theta), math.cos(theta)
+        V = self.V
+        # roll phi, pitch theta = gamma (attitude()), heading psi
+        sp, cp, st, ct, ss, cs = trig
         # omega_nb^b from the ZYX Euler rates
         p = dphi - dpsi * st
         q = dgamma * cp + dpsi * ct * sp
         r = -dgamma * sp + dpsi * ct * cp
         # acceleration over the earth: d/dt of the air-relative velocity + the felt gust's
-        cg, sg, cs, ss = math.cos(gamma), math.sin(gamma), math.cos(psi), math.sin(psi)
+        cg, sg = ct, st
         a = (dV * cg * cs - V * sg * dgamma * cs - V * cg * ss * dpsi + gust_rate[0],
              dV * cg * ss - V * sg * dgamma * ss + V * cg * cs * dpsi + gust_rate[1],
              -dV * sg - V * cg * dgamma + gust_rate[2])
@@ -177,7 +194,8 @@ class PointMassUav:
         fn = a[0] + (ce * vd - cd * ve)
         fe = a[1] + (cd * vn - cn * vd)
         fd = a[2] + (cn * ve - ce * vn) - _gravity(lat, h)
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _euler_rows(phi, theta, psi)
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = _euler_rows_of(sp, cp, st, ct,
+                                                                           ss, cs)
         # C_bn^T resolves NED vectors in body axes
         return (p + c00 * in_n + c10 * in_e + c20 * in_d,
                 q + c01 * in_n + c11 * in_e + c21 * in_d,
@@ -185,3 +203,26 @@ class PointMassUav:
                 c00 * fn + c10 * fe + c20 * fd,
                 c01 * fn + c11 * fe + c21 * fd,
                 c02 * fn + c12 * fe + c22 * fd)
+
+
+def _moved(x, h, k):
+    """``x + h k`` of two 6-tuples (the Runge-Kutta stages)."""
+    x0, x1, x2, x3, x4, x5 = x
+    k0, k1, k2, k3, k4, k5 = k
+    return (x0 + h * k0, x1 + h * k1, x2 + h * k2, x3 + h * k3, x4 + h * k4, x5 + h * k5)
+
+
+def _rk4_sum(x, sixth, k1, k2, k3, k4):
+    """``x + sixth (k1 + 2 k2 + 2 k3 + k4)`` of 6-tuples, in the classical order (written
+    out: a loop over the six components costs three times as much)."""
+    x0, x1, x2, x3, x4, x5 = x
+    a0, a1, a2, a3, a4, a5 = k1
+    b0, b1, b2, b3, b4, b5 = k2
+    c0, c1, c2, c3, c4, c5 = k3
+    d0, d1, d2, d3, d4, d5 = k4
+    return (x0 + sixth * (a0 + 2.0 * b0 + 2.0 * c0 + d0),
+            x1 + sixth * (a1 + 2.0 * b1 + 2.0 * c1 + d1),
+            x2 + sixth * (a2 + 2.0 * b2 + 2.0 * c2 + d2),
+            x3 + sixth * (a3 + 2.0 * b3 + 2.0 * c3 + d3),
+            x4 + sixth * (a4 + 2.0 * b4 + 2.0 * c4 + d4),
+            x5 + sixth * (a5 + 2.0 * b5 + 2.0 * c5 + d5))

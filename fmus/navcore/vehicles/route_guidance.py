@@ -39,6 +39,7 @@ from ..ins.strapdown import _radii
 
 #: least distance between two consecutive waypoints [m]
 MIN_LEG_LENGTH = 1.0
+_HALF_PI = 0.5 * math.pi
 
 
 def parse_route(text, name="route"):
@@ -95,31 +96,34 @@ class Route:
     def __init__(self, waypoints):
         self.waypoints = [tuple(w) for w in waypoints]
         self.n_legs = len(self.waypoints) - 1
+        #: (start, unit direction (n, e), length) of each leg: asked for several times a
+        #: sample, so computed once
+        self.legs = [self._geometry(i) for i in range(self.n_legs)]
 
-    def leg(self, i):
-        """(start, unit direction (n, e), length) of leg ``i`` (the last leg beyond)."""
-        i = min(i, self.n_legs - 1)
+    def _geometry(self, i):
         a, b = self.waypoints[i], self.waypoints[i + 1]
         dn, de = b[0] - a[0], b[1] - a[1]
         length = math.hypot(dn, de)
         return a, (dn / length, de / length), length
 
+    def leg(self, i):
+        """(start, unit direction (n, e), length) of leg ``i`` (the last leg beyond)."""
+        return self.legs[i if i < self.n_legs else -1]
+
     def track_errors(self, i, north, east):
         """(along-track [m] from the leg's start, cross-track [m], right of the leg
         positive) of a point against leg ``i``."""
-        a, (un, ue), _ = self.leg(i)
-        rn, re = north - a[0], east - a[1]
-        return rn * un + re * ue, un * re - ue * rn
+        return _track_errors(self.leg(i), north, east)
 
     def deviation(self, north, east):
         """Signed distance [m] of a point from the route: to the nearest point of any leg
         (the last one extended beyond its end), right of that leg positive."""
         best = math.inf
-        for i in range(self.n_legs):
-            a, (un, ue), length = self.leg(i)
-            along, cross = self.track_errors(i, north, east)
-            if along < 0.0 or (along > length and i < self.n_legs - 1):
-                end = a if along < 0.0 else self.waypoints[i + 1]
+        last = self.n_legs - 1
+        for i, leg in enumerate(self.legs):
+            along, cross = _track_errors(leg, north, east)
+            if along < 0.0 or (along > leg[2] and i < last):
+                end = leg[0] if along < 0.0 else self.waypoints[i + 1]
                 d = math.hypot(north - end[0], east - end[1])
                 cross = math.copysign(d, cross)
             if abs(cross) < abs(best):
@@ -129,6 +133,13 @@ class Route:
     def leg_height(self, i):
         """The commanded height on leg ``i``: its end waypoint's."""
         return self.waypoints[min(i, self.n_legs - 1) + 1][2]
+
+
+def _track_errors(leg, north, east):
+    """(along-track, cross-track) [m] of a point against ``leg`` (:meth:`Route.leg`)."""
+    a, (un, ue), _ = leg
+    rn, re = north - a[0], east - a[1]
+    return rn * un + re * ue, un * re - ue * rn
 
 
 class L1Guidance:
@@ -178,7 +189,9 @@ class L1Guidance:
         course = math.atan2(ve, vn) if speed > 1.0 else heading
         eta = math.atan2(pe, pn) - course
         eta = math.atan2(math.sin(eta), math.cos(eta))
-        eta = max(-0.5 * math.pi, min(0.5 * math.pi, eta))
+        # max(-pi/2, min(pi/2, eta)), written out
+        eta = eta if eta < _HALF_PI else _HALF_PI
+        eta = eta if eta > -_HALF_PI else -_HALF_PI
         return 2.0 * speed * speed / self.l1 * math.sin(eta)
 
     @staticmethod

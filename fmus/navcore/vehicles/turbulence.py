@@ -42,6 +42,9 @@ LOW_ALTITUDE_MIN = 10.0 * FT
 LOW_ALTITUDE_MAX = 1000.0 * FT
 #: normals drawn per step: u, then the two driving noises of v and of w
 NORMALS_PER_STEP = 5
+#: steps whose normals are drawn in one call of the generator (the same sequence as one call
+#: per step: a generator call costs more than the numbers it draws)
+BLOCK_STEPS = 64
 
 
 def low_altitude(h, w20):
@@ -74,7 +77,7 @@ class DrydenTurbulence:
     generator.  :meth:`step` advances by ``dt`` at airspeed ``V`` and height above ground
     ``h``; :attr:`gust` is the current (u, v, w)."""
 
-    state_fields = ("rng", "x_u", "x_v", "x_w", "gust")
+    state_fields = ("rng", "x_u", "x_v", "x_w", "gust", "_normals", "_next")
     derived_fields = ("w20", "on")
 
     def __init__(self, w20, seed):
@@ -89,9 +92,12 @@ class DrydenTurbulence:
         else:
             self.x_u, self.x_v, self.x_w = 0.0, (0.0, 0.0), (0.0, 0.0)
         self.gust = (0.0, 0.0, 0.0)
+        #: the normals of the current block, and the index of the next step's first one
+        self._normals = []
+        self._next = 0
 
-    def _output(self, h):
-        _, (s_u, s_v, s_w) = low_altitude(h, self.w20)
+    def _output(self, sigmas):
+        s_u, s_v, s_w = sigmas
         return (s_u * self.x_u,
                 s_v * (_SQRT3 * self.x_v[0] + (1.0 - _SQRT3) * self.x_v[1]),
                 s_w * (_SQRT3 * self.x_w[0] + (1.0 - _SQRT3) * self.x_w[1]))
@@ -99,21 +105,26 @@ class DrydenTurbulence:
     def start(self, h):
         """The gust at the start (the stationary draw of ``__init__``) at height ``h``."""
         if self.on:
-            self.gust = self._output(h)
+            self.gust = self._output(low_altitude(h, self.w20)[1])
         return self.gust
 
     def step(self, dt, V, h):
         """Advance by ``dt`` [s] at airspeed ``V`` [m/s] and height ``h`` [m]; the new gust."""
         if not self.on:
             return self.gust
-        (L_u, L_v, L_w), _ = low_altitude(h, self.w20)
-        z = self.rng.standard_normal(NORMALS_PER_STEP).tolist()
+        (L_u, L_v, L_w), sigmas = low_altitude(h, self.w20)
+        z, i = self._normals, self._next
+        if i == len(z):
+            z = self._normals = self.rng.standard_normal(NORMALS_PER_STEP
+                                                         * BLOCK_STEPS).tolist()
+            i = 0
+        self._next = i + NORMALS_PER_STEP
         a = dt * V / L_u
         e = math.exp(-a)
-        self.x_u = e * self.x_u + math.sqrt(1.0 - e * e) * z[0]
-        self.x_v = self._second_order(self.x_v, dt * V / L_v, z[1], z[2])
-        self.x_w = self._second_order(self.x_w, dt * V / L_w, z[3], z[4])
-        self.gust = self._output(h)
+        self.x_u = e * self.x_u + math.sqrt(1.0 - e * e) * z[i]
+        self.x_v = self._second_order(self.x_v, dt * V / L_v, z[i + 1], z[i + 2])
+        self.x_w = self._second_order(self.x_w, dt * V / L_w, z[i + 3], z[i + 4])
+        self.gust = self._output(sigmas)
         return self.gust
 
     @staticmethod
