@@ -359,7 +359,9 @@ class ImuErrorModel:
         if len(dtheta) != 3 or len(dvel) != 3:
             raise InputError("ImuErrorModel.apply: inputs 'dtheta' and 'dvel' must have "
                              "3 elements each")
-        x = np.concatenate((dtheta, dvel))
+        # (two tuples, as ImuSensor's inverse strapdown gives them: one array of their sum)
+        x = (np.array(dtheta + dvel) if type(dtheta) is tuple and type(dvel) is tuple
+             else np.concatenate((dtheta, dvel)))
         if x.shape != (6,):
             raise InputError("ImuErrorModel.apply: inputs 'dtheta' and 'dvel' must be "
                              "flat 3-vectors")

@@ -110,7 +110,9 @@ class PointMassUav:
         V, psi, gamma, phi, gamma_rate, phi_rate = x
         bank_c, airspeed_c, gamma_c = targets
         wg2, damp_g, wb2, damp_b, tau_v, accel_limit = self._loops
-        return (_clip((airspeed_c - V) / tau_v, accel_limit),
+        dV = (airspeed_c - V) / tau_v
+        dV = dV if dV < accel_limit else accel_limit     # _clip, written out: five times a
+        return (dV if dV > -accel_limit else -accel_limit,  # sample
                 G0 * math.tan(phi) / V,
                 gamma_rate,
                 phi_rate,
