@@ -222,10 +222,11 @@ class GuidedUav(Component):
     def _fly(self, view):
         north, east, h_seen, vn, ve, heading = view
         guidance, uav, p = self.guidance, self.uav, self.params
-        while guidance.reached(self.leg, north, east, math.hypot(vn, ve)):
+        speed = math.hypot(vn, ve)
+        while guidance.reached(self.leg, north, east, speed):
             w = self.route.waypoints[self.leg + 1]
             t_north, t_east = self.plane.to_plane(uav.lat, uav.lon)
-            meant = guidance.switching_distance(self.leg, math.hypot(vn, ve))
+            meant = guidance.switching_distance(self.leg, speed)
             self.miss = math.hypot(t_north - w[0], t_east - w[1]) - meant
             self.leg += 1
             self.n_reached += 1
