@@ -54,10 +54,11 @@ MODULES: dict[str, list[str]] = {
     "navcore.filters.latency": ["tests/test_solution_history.py", "tests/test_latency.py",
                                 "-k", "not through_the_fmus"],
     "navcore.core.state_format": ["tests/test_state_blob_nodes.py", "tests/test_state_format.py"],
-    "navcore.filters.innovation_stats": ["tests/test_innovation_stats.py",
+    "navcore.filters.innovation_stats": ["tests/test_innovation_checks.py",
+                                         "tests/test_innovation_stats.py",
                                          "tests/test_law_arguments.py",
                                          "tests/test_adaptive_laws.py"],
-    "navcore.sensors.log_time": ["tests/test_log_time.py"],
+    "navcore.sensors.log_time": ["tests/test_log_time_stamps.py", "tests/test_log_time.py"],
     "orchestrator.campaigns.statistics": ["tests/test_statistics.py",
                                           "tests/test_statistics_by_hand.py"],
 }
@@ -162,6 +163,8 @@ def mutmut_section(module: str, tests: list[str]) -> str:
             f"only_mutate = {toml_list([str(module_file(module))])}\n"
             f"pytest_add_cli_args_test_selection = {toml_list(tests)}\n"
             f"pytest_add_cli_args = [\"-p\", \"no:cacheprovider\", \"-q\"]\n"
+            # an endless loop is given 3 times the tests' time (mutmut's default: 15 times)
+            f"timeout_multiplier = 3.0\n"
             f"do_not_mutate_patterns = {patterns}\n")
 
 

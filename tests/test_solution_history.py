@@ -5,8 +5,10 @@ fix within ``keep`` seconds can need, a rollback to the latest checkpoint at or 
 """
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
+from navcore.core.timing import time_tolerance
 from navcore.filters.latency import CHECKPOINT_INTERVAL, SolutionHistory
 
 DT = 0.01   # IMU interval of the toy runs
@@ -89,3 +91,31 @@ def test_restart_forgets_the_history():
     history = _history_after(30, keep=10.0, dense=True)
     history.restart(0.3, Counter(0.3))
     assert _checkpoint_times(history) == [0.3] and history.increments == []
+
+
+def test_a_checkpoint_is_due_at_the_edge_of_the_time_tolerance():
+    # an interval end at spacing - tolerance is the same instant as the due time (0.25 s)
+    engine = Counter(0.0)
+    history = SolutionHistory(0.0, engine)
+    t = 0.25
+    for _ in range(5):             # t = 0.25 - time_tolerance(dt, t), solved by iteration
+        t = 0.25 - time_tolerance(0.125, t)
+    assert t < 0.25
+    history.record((t, None, None, 0.125), engine, 0.25, False)
+    assert len(history.checkpoints) == 2
+    history = SolutionHistory(0.0, engine)
+    history.record((np.nextafter(t, 0.0), None, None, 0.125), engine, 0.25, False)
+    assert len(history.checkpoints) == 1
+
+
+def test_rollback_hands_back_every_increment_after_its_checkpoint():
+    # intervals of 1/8 s, each a checkpoint: rolling back to 0.375 keeps 3 increments (an odd
+    # number) and hands back those at 0.5 and 0.625
+    engine = Counter(0.0)
+    history = SolutionHistory(0.0, engine)
+    for k in range(1, 6):
+        history.record((k / 8, None, None, 1 / 8), engine, 10.0, True)
+    time, _, replay = history.rollback(0.4)
+    assert time == 0.375
+    assert [inc[0] for inc in replay] == [0.5, 0.625]
+    assert _increment_times(history) == [0.125, 0.25, 0.375]
