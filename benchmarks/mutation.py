@@ -72,6 +72,16 @@ _NUMBERS_ARRAY = ("per-run values are numbers (None already replaced or removed)
 _TAGGED = ("_encode_node has already written every non-finite float as a tagged node, so "
            "json.dumps never meets one whatever its allow_nan")
 _CODEC = "codec names are case-insensitive"
+_SQUARE = "the matrix was checked square just before: both sizes are the same"
+_CHECKED_NEXT = ("the function called next checks the same matrix against the size and refuses "
+                 "it with an error that starts with the same name")
+_SAME_LAPACK = ("numpy's cholesky and scipy's dpotrf are the same LAPACK routine in this build "
+                "(bit-identical factors in 300 random cases); only a build linking two "
+                "different LAPACKs could tell them apart")
+_RESTARTED = "__init__ calls restart, which sets both lists before anything reads them"
+_FIRST_INCREMENT = ("when checkpoints are dropped the new oldest one is at an IMU epoch after "
+                    "the old oldest, so the first stored increment is always at or before it "
+                    "and the scan may start at the second")
 _NO_INVALID = ("no operation of the middle branch can be invalid: k0/u is inf only at u = 0, "
                "where k1 - u = k1 > 0 (inf, not nan); only the division needs silencing")
 _FIND_FROM_MAGIC = ("the search starts after the magic bytes, so find returns -1 or at least "
@@ -120,6 +130,53 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
     "navcore.filters.robust_laws.x_igg3_weight__mutmut_50": (
         "w = np.where(u <= k0, 1.0, np.where(u < k1, middle, 0.0))",
         "at u = k1 the middle branch is (k0/k1) 0^2 = 0.0 exactly (continuity)"),
+    "navcore.filters.latency.xǁSolutionHistoryǁ__init____mutmut_1": (
+        "self.checkpoints: List[Tuple[float, object]] = None", _RESTARTED),
+    "navcore.filters.latency.xǁSolutionHistoryǁ__init____mutmut_2": (
+        "self.increments: List[Increment] = None", _RESTARTED),
+    "navcore.filters.latency.xǁSolutionHistoryǁrecord__mutmut_47": ("n = 1", _FIRST_INCREMENT),
+    "navcore.filters.latency.xǁSolutionHistoryǁrecord__mutmut_49": (
+        "while n < len(incs) and incs[n][0] <= oldest:".replace("<", "<=", 1),
+        "the increment just recorded is after the oldest checkpoint kept (which is at or "
+        "before time - keep), so the scan stops before the end of the list"),
+    "navcore.filters.adaptive_laws.x_r_floor_from_initial__mutmut_9": (
+        "a = np.asarray(R0, dtype=None)", _NUMBERS_ARRAY),
+    "navcore.filters.adaptive_laws.x_r_floor_from_initial__mutmut_11": (
+        "a = np.asarray(R0, )", _NUMBERS_ARRAY),
+    "navcore.filters.adaptive_laws.x_r_floor_from_initial__mutmut_20": (
+        "diag = np.diag(a) if a.ndim == 2 else a.reshape(-2)",
+        "numpy reads a negative size, -2 as -1, as all the elements"),
+    "navcore.filters.adaptive_laws.x_guard_positive_definite__mutmut_9": (
+        "m = R.shape[1]", _SQUARE),
+    "navcore.filters.adaptive_laws.x_guard_positive_definite__mutmut_12": (
+        "floor = np.asarray(R_min, dtype=None)", _NUMBERS_ARRAY),
+    "navcore.filters.adaptive_laws.x_guard_positive_definite__mutmut_14": (
+        "floor = np.asarray(R_min, )", _NUMBERS_ARRAY),
+    "navcore.filters.adaptive_laws.x_fading_predict__mutmut_24": (
+        'GQG = square("GQG", GQG, P_propagated.shape[1])', _SQUARE),
+    "navcore.filters.adaptive_laws.x_fading_factor__mutmut_31": (
+        'R = square("R", R, None)', _CHECKED_NEXT),
+    "navcore.filters.adaptive_laws.x_fading_factor__mutmut_34": (
+        'R = square("R", R, )', _CHECKED_NEXT),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_14": (
+        'G = square("G", G, None)', _CHECKED_NEXT),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_17": (
+        'G = square("G", G, )', _CHECKED_NEXT),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_33": (
+        'v, L = checked_cholesky(v, G, "G", numpy_factor=None)  # G = L L\', tau = |L^-1 v|^2',
+        _SAME_LAPACK),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_37": (
+        'v, L = checked_cholesky(v, G, "G", )  # G = L L\', tau = |L^-1 v|^2', _SAME_LAPACK),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_40": (
+        'v, L = checked_cholesky(v, G, "G", numpy_factor=False)  # G = L L\', tau = |L^-1 v|^2',
+        _SAME_LAPACK),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_59": (
+        "Y = 1.0 if tau < gate else math.sqrt(gate / tau)",
+        "at tau = gate, sqrt(gate / tau) = sqrt(1.0) = 1.0 exactly"),
+    "navcore.filters.adaptive_laws.x_compression_factor__mutmut_84": (
+        "Y = 1.0 if tau < gate else D / math.sqrt(tau * lam)",
+        "at tau = gate = D^2 / lam, D / sqrt(tau lam) = 1 (Y is continuous at the gate; no "
+        "case where tau lands on the gate and round-off moves Y was found)"),
     "navcore.core.state_format.x_decode__mutmut_32": (
         'node = json.loads(payload.decode("UTF-8"), parse_constant=_no_constant)', _CODEC),
     "navcore.core.state_format.x__split__mutmut_13": ("if end <= 0:", _FIND_FROM_MAGIC),

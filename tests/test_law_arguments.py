@@ -250,3 +250,37 @@ def test_igg3_of_a_zero_residual_warns_nothing():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert rl.igg3_weight(np.array([0.0, 2.0])).tolist() == pytest.approx([1.0, 1.0 / 3.0])
+
+
+def test_r_floor_of_a_scalar_r0_is_one_floor():
+    assert al.r_floor_from_initial(4.0).tolist() == pytest.approx([0.04])
+
+
+def test_the_reserve_coefficient_defaults_to_one():
+    # v'v = 10 against tr(HPH) + tr(R) = 4 (gamma 1) or 8 (gamma 2): fails either way;
+    # v'v = 5 passes only with gamma >= 1.25
+    assert not al.divergence_test([3.0, 1.0], np.eye(M), np.eye(M))
+    assert not al.divergence_test([2.0, 1.0], np.eye(M), np.eye(M))
+    assert al.divergence_test([2.0, 1.0], np.eye(M), np.eye(M), gamma=1.25)
+    # fading factor with traces 2, 2, 2: v'v = 10 fails the test at gamma 1: (10 - 4) / 2
+    assert al.fading_factor([3.0, 1.0], np.eye(M), np.eye(M), np.eye(M)) == pytest.approx(3.0)
+
+
+def test_fading_factor_with_a_reserve_coefficient_of_two():
+    # eq. 11 at gamma 2: v'v = 10 <= 2 tr(HPH0 + HQH + R) = 12 passes: lambda 1
+    assert al.fading_factor([3.0, 1.0], np.eye(M), np.eye(M), np.eye(M), gamma=2.0) == 1.0
+
+
+def test_compression_names_g_when_it_is_not_positive_definite():
+    with pytest.raises(InputError, match=r"^G: innovation covariance 'S' is not positive"):
+        al.compression_factor([1.0, 0.0], -np.eye(M), 0.5 * H.T)
+
+
+def test_newton_default_order_is_four_also_with_more_samples():
+    # t^5 at t = 0..5: order 4 misses 6^5 = 7776 by the fifth difference 5! = 120
+    samples = [float(t ** 5) for t in range(6)]
+    assert rl.newton_forward_extrapolate(samples) == pytest.approx(7776.0 - 120.0)
+    history = rl.ObservationHistory(6)
+    for value in samples:
+        history.append([value])
+    assert history.predict_next() == pytest.approx([7776.0 - 120.0])

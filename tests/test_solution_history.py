@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from navcore.core.timing import time_tolerance
+from navcore.errors import StateError
 from navcore.filters.latency import CHECKPOINT_INTERVAL, SolutionHistory
 
 DT = 0.01   # IMU interval of the toy runs
@@ -119,3 +120,36 @@ def test_rollback_hands_back_every_increment_after_its_checkpoint():
     assert time == 0.375
     assert [inc[0] for inc in replay] == [0.5, 0.625]
     assert _increment_times(history) == [0.125, 0.25, 0.375]
+
+
+def test_a_checkpoint_names_itself_in_a_state_error():
+    engine = Counter(0.0)
+    engine.extra = 1.0                         # not declared
+    with pytest.raises(StateError, match=r"^checkpoint: attribute\(s\) extra of Counter"):
+        SolutionHistory(0.0, engine)
+    engine = Counter(0.0)
+    history = SolutionHistory(0.0, engine)
+    engine.extra = 1.0
+    with pytest.raises(StateError, match=r"^checkpoint: attribute\(s\) extra of Counter"):
+        history.record((0.125, None, None, 0.125), engine, 10.0, True)
+
+
+@pytest.mark.parametrize("dt, keep, dense", [(1 / 16, 1 / 16, True), (1 / 32, 3 / 32, True),
+                                             (1 / 8, 3 / 8, False), (1 / 100, 0.15, True),
+                                             (1 / 64, 0.25, False)])
+def test_the_history_keeps_exactly_what_a_fix_within_keep_can_need(dt, keep, dense):
+    """After every interval: the oldest checkpoint is the latest one at or before time - keep
+    (or the first of the run), and the increments are exactly those after it."""
+    engine = Counter(0.0)
+    history = SolutionHistory(0.0, engine)
+    recorded = []
+    for k in range(1, 60):
+        increment = (k * dt, None, None, dt)
+        recorded.append(increment)
+        history.record(increment, engine, keep, dense)
+        times = [t for t, _ in history.checkpoints]
+        horizon = k * dt - keep
+        assert times == sorted(times) and times[-1] <= k * dt
+        assert times[0] <= horizon or times[0] == 0.0, (k, times)
+        assert len(times) == 1 or times[1] > horizon, (k, times)
+        assert history.increments == [inc for inc in recorded if inc[0] > times[0]], k

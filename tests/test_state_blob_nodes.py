@@ -187,3 +187,12 @@ def test_a_blob_of_max_state_bytes_is_read():
     assert len(blob) == LIMIT and state_format.decode(blob, IDENTITY) == []
     with pytest.raises(StateFormatError, match="more than"):
         state_format.decode(blob + b" ", IDENTITY)
+
+
+@pytest.mark.parametrize("fields, message", [
+    ({"extra": 1}, "exactly the keys build, model, payload_sha256, payload_size, version"),
+    ({"payload_size": "2"}, "fields of the wrong type"),
+    ({"build": 5}, "fields of the wrong type")])
+def test_the_header_has_its_keys_with_their_types(fields, message):
+    with pytest.raises(StateFormatError, match=message):
+        state_format.decode(_raw_blob(fields, b"[]"), IDENTITY)
