@@ -72,6 +72,8 @@ _NUMBERS_ARRAY = ("per-run values are numbers (None already replaced or removed)
 _TAGGED = ("_encode_node has already written every non-finite float as a tagged node, so "
            "json.dumps never meets one whatever its allow_nan")
 _CODEC = "codec names are case-insensitive"
+_CLEAN = ("scipy's dpotrf zeroes the other triangle by default (clean=1): the factor is the "
+          "same (tests/test_innovation_checks.py checks its zeros)")
 _SQUARE = "the matrix was checked square just before: both sizes are the same"
 _CHECKED_NEXT = ("the function called next checks the same matrix against the size and refuses "
                  "it with an error that starts with the same name")
@@ -177,6 +179,26 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
         "Y = 1.0 if tau < gate else D / math.sqrt(tau * lam)",
         "at tau = gate = D^2 / lam, D / sqrt(tau lam) = 1 (Y is continuous at the gate; no "
         "case where tau lands on the gate and round-off moves Y was found)"),
+    "navcore.filters.innovation_stats.x_log_det_from_cholesky__mutmut_6": (
+        "return 2.0 * sum(math.log(L[i, i]) for i in range(L.shape[1]))", _SQUARE),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_1": (
+        "numpy_factor: bool = True) -> Tuple[np.ndarray, np.ndarray]:", _SAME_LAPACK),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_5": (
+        "v = np.atleast_1d(np.asarray(innovation, dtype=None))", _NUMBERS_ARRAY),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_7": (
+        "v = np.atleast_1d(np.asarray(innovation, ))", _NUMBERS_ARRAY),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_11": (
+        "S = np.atleast_2d(np.asarray(S, dtype=None))", _NUMBERS_ARRAY),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_13": (
+        "S = np.atleast_2d(np.asarray(S, ))", _NUMBERS_ARRAY),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_28": (
+        "L, info = lapack.dpotrf(0.5 * (S + S.T), lower=1, clean=None)", _CLEAN),
+    "navcore.filters.innovation_stats.x_checked_cholesky__mutmut_31": (
+        "L, info = lapack.dpotrf(0.5 * (S + S.T), lower=1, )", _CLEAN),
+    "navcore.filters.innovation_stats.x_chi_square_per_observation__mutmut_3": (
+        "v = np.asarray(innovation, dtype=None)", _NUMBERS_ARRAY),
+    "navcore.filters.innovation_stats.x_chi_square_per_observation__mutmut_5": (
+        "v = np.asarray(innovation, )", _NUMBERS_ARRAY),
     "navcore.core.state_format.x_decode__mutmut_32": (
         'node = json.loads(payload.decode("UTF-8"), parse_constant=_no_constant)', _CODEC),
     "navcore.core.state_format.x__split__mutmut_13": ("if end <= 0:", _FIND_FROM_MAGIC),

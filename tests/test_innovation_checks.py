@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.linalg import lapack
 
 from navcore.errors import InputError, ParameterError
 from navcore.filters import innovation_stats as ist
@@ -73,3 +74,21 @@ def test_log_det_nis_and_likelihood_by_hand():
     assert ist.nis(np.array([2.0, 3.0]), L @ L.T) == pytest.approx(2.0)
     expected = -0.5 * (2.0 + math.log(16.0) + 2 * math.log(2 * math.pi))
     assert ist.gaussian_log_likelihood(2.0, math.log(16.0), 2) == pytest.approx(expected)
+
+
+def test_the_checked_statistic_names_itself():
+    with pytest.raises(InputError, match=r"^chi_square_statistic: innovation covariance 'S'"):
+        ist.chi_square_statistic([1.0, 1.0], -np.eye(2))
+
+
+def test_the_nis_of_a_factor_is_a_triangular_solve_by_default():
+    """One triangular solve (LAPACK dtrtrs), bit for bit; numpy's LU solve only on request
+    (a case where the two differ in the last bit)."""
+    S = np.array([[0.83, 0.07, -0.37], [0.07, 1.75, -0.18], [-0.37, -0.18, 2.28]])
+    v = np.array([1.2, 1.0, 1.3])
+    L = np.linalg.cholesky(S)
+    u_triangular, _ = lapack.dtrtrs(L, v, lower=1)
+    u_lu = np.linalg.solve(L, v)
+    assert float(u_triangular @ u_triangular) != float(u_lu @ u_lu)
+    assert ist.nis_from_cholesky(L, v) == float(u_triangular @ u_triangular)
+    assert ist.nis_from_cholesky(L, v, general_solve=True) == float(u_lu @ u_lu)
