@@ -74,6 +74,7 @@ _TAGGED = ("_encode_node has already written every non-finite float as a tagged 
 _CODEC = "codec names are case-insensitive"
 _CLEAN = ("scipy's dpotrf zeroes the other triangle by default (clean=1): the factor is the "
           "same (tests/test_innovation_checks.py checks its zeros)")
+_FLOATS_LIST = "the list holds Python floats: numpy makes a float64 array of it anyway"
 _SQUARE = "the matrix was checked square just before: both sizes are the same"
 _CHECKED_NEXT = ("the function called next checks the same matrix against the size and refuses "
                  "it with an error that starts with the same name")
@@ -199,6 +200,8 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
         "v = np.asarray(innovation, dtype=None)", _NUMBERS_ARRAY),
     "navcore.filters.innovation_stats.x_chi_square_per_observation__mutmut_5": (
         "v = np.asarray(innovation, )", _NUMBERS_ARRAY),
+    "navcore.sensors.log_time.x_relative_seconds__mutmut_5": ("dtype=None)", _FLOATS_LIST),
+    "navcore.sensors.log_time.x_relative_seconds__mutmut_7": (")", _FLOATS_LIST),
     "navcore.core.state_format.x_decode__mutmut_32": (
         'node = json.loads(payload.decode("UTF-8"), parse_constant=_no_constant)', _CODEC),
     "navcore.core.state_format.x__split__mutmut_13": ("if end <= 0:", _FIND_FROM_MAGIC),

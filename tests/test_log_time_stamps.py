@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from navcore.core.timing import time_tolerance
 from navcore.errors import LogError
 from navcore.sensors import log_time as lt
 
@@ -35,7 +36,8 @@ def test_relative_seconds_are_the_decimal_differences():
 
 @pytest.mark.parametrize("t, origin, text", [(0.01, 0.0, "0.01"), (2.5, 0.0, "2.5"),
                                              (0.01, 1700000000.0, "1700000000.01"),
-                                             (3.0, 5.0, "8.0")])
+                                             (3.0, 5.0, "8.0"), (0.25, 1.0, "1.25"),
+                                             (1e-07, 0.0, "1e-07")])
 def test_absolute_text(t, origin, text):
     assert lt.absolute_text(t, origin) == text
 
@@ -91,3 +93,10 @@ def test_steps_to_reach(start, end, step, n):
 
 def _array(values):
     return np.array(values, dtype=float)
+
+
+def test_a_step_within_the_time_tolerance_of_the_end_reaches_it():
+    # 4 steps of 0.25 end 1.0, the same instant as 1.0 + tolerance: no fifth step
+    end = 1.0 + time_tolerance(0.25, 1.0)
+    assert end > 1.0 and lt.steps_to_reach(0.0, end, 0.25) == 4
+    assert lt.steps_to_reach(0.0, np.nextafter(end, 2.0), 0.25) == 5
