@@ -202,6 +202,9 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
         "v = np.asarray(innovation, )", _NUMBERS_ARRAY),
     "navcore.sensors.log_time.x_relative_seconds__mutmut_5": ("dtype=None)", _FLOATS_LIST),
     "navcore.sensors.log_time.x_relative_seconds__mutmut_7": (")", _FLOATS_LIST),
+    "navcore.sensors.log_time.x_check_intervals__mutmut_19": (
+        'kind = ("a gap (a lost sample?)" if deviation[k] >= 0 else',
+        "a refused interval deviates by more than max_dt_jitter >= 0, so never by exactly 0"),
     "navcore.core.state_format.x_decode__mutmut_32": (
         'node = json.loads(payload.decode("UTF-8"), parse_constant=_no_constant)', _CODEC),
     "navcore.core.state_format.x__split__mutmut_13": ("if end <= 0:", _FIND_FROM_MAGIC),

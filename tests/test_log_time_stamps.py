@@ -100,3 +100,15 @@ def test_a_step_within_the_time_tolerance_of_the_end_reaches_it():
     end = 1.0 + time_tolerance(0.25, 1.0)
     assert end > 1.0 and lt.steps_to_reach(0.0, end, 0.25) == 4
     assert lt.steps_to_reach(0.0, np.nextafter(end, 2.0), 0.25) == 5
+
+
+@pytest.mark.parametrize("ends, dt, step", [
+    # each step of the first interval's length (0.5 s) reaches one end: (0, 0.5], (0.5, 1],
+    # (1, 1.5]; the replay keeps that step although the intervals vary
+    ([0.5, 0.75, 1.125], [0.5, 0.25, 0.375], 0.5),
+    # steps of the first length (0.25 s) reach 0.25, then none, then 0.75: not one end each,
+    # so the replay steps at the shortest interval
+    ([0.25, 0.75, 1.25], [0.25, 0.5, 0.5], 0.25),
+])
+def test_replay_step_counts_from_the_first_interval(ends, dt, step):
+    assert lt.replay_step(_array(ends), _array(dt)) == step
