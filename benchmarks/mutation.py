@@ -14,8 +14,9 @@ For each module named (default: all of ``MODULES``), in its own scratch folder
   survived, timeout, no tests or equivalent; a survivor listed in ``EQUIVALENT`` with the line it
   makes is counted equivalent, with its reason.
 
-One line per module is printed (and the table in markdown with ``--markdown``), then the diff of
-every non-equivalent survivor, so a survivor can be killed by a test or named equivalent::
+One line per module is printed, then the diff of every non-equivalent survivor, so a survivor
+can be killed by a test or named equivalent (``--markdown``: the table and a list of the
+survivors in markdown, for docs/mutation.md)::
 
     nice -n 10 python benchmarks/mutation.py navcore.filters.latency
     nice -n 10 python benchmarks/mutation.py --markdown            # every module of MODULES
@@ -297,10 +298,18 @@ def mutmut(folder: Path, *args: str, capture: bool = True) -> str:
     return done.stdout if capture else ""
 
 
-def mutated_lines(folder: Path, name: str) -> list[str]:
+def changed_lines(folder: Path, name: str, sign: str = "+") -> list[str]:
+    """The lines the mutant ``name`` adds (``sign`` "+") or removes ("-"), stripped."""
     diff = mutmut(folder, "show", name)
     return [line[1:].strip() for line in diff.splitlines()
-            if line.startswith("+") and not line.startswith("+++")]
+            if line.startswith(sign) and not line.startswith(sign * 3)]
+
+
+def survivor_item(folder: Path, name: str) -> str:
+    """One markdown list item: the mutant and the change it makes."""
+    removed = " ".join(changed_lines(folder, name, "-"))
+    added = " ".join(changed_lines(folder, name, "+"))
+    return f"* `{name.split('.')[-1]}`: `{removed}` -> `{added}`"
 
 
 def mutant_statuses(folder: Path) -> dict[str, str]:
@@ -322,7 +331,7 @@ def read_results(module: str, folder: Path) -> ModuleResult:
     result = ModuleResult(module)
     for name, status in mutant_statuses(folder).items():
         if status == SURVIVED and name in EQUIVALENT:
-            if EQUIVALENT[name][0] in mutated_lines(folder, name):
+            if EQUIVALENT[name][0] in changed_lines(folder, name):
                 status = EQUIV
             else:
                 result.stale_equivalents.append(name)
@@ -372,8 +381,12 @@ def main(argv=None) -> int:
     for result in results:
         for name in result.stale_equivalents:
             print(f"\nEQUIVALENT entry no longer matches its mutant: {name}")
+        if args.markdown and result.survivors:
+            print(f"\n{result.module}:\n")
         for name in result.survivors:
-            print(f"\n{mutmut(SCRATCH / result.module, 'show', name).rstrip()}")
+            folder = SCRATCH / result.module
+            print(survivor_item(folder, name) if args.markdown
+                  else f"\n{mutmut(folder, 'show', name).rstrip()}")
     return 0
 
 
