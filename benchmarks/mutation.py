@@ -206,6 +206,10 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
     "navcore.sensors.log_time.x_check_intervals__mutmut_19": (
         'kind = ("a gap (a lost sample?)" if deviation[k] >= 0 else',
         "a refused interval deviates by more than max_dt_jitter >= 0, so never by exactly 0"),
+    "navcore.sensors.log_time.x__reaching_step__mutmut_9": (
+        "tol = max(time_tolerance(step, ), time_tolerance(step, float(ends[-1])))",
+        "the ends increase, so the tolerance at the last end is at least that at t = 0: the "
+        "max is the second term either way"),
     "navcore.core.state_format.x_decode__mutmut_32": (
         'node = json.loads(payload.decode("UTF-8"), parse_constant=_no_constant)', _CODEC),
     "navcore.core.state_format.x__split__mutmut_13": ("if end <= 0:", _FIND_FROM_MAGIC),

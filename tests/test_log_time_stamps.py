@@ -112,3 +112,31 @@ def test_a_step_within_the_time_tolerance_of_the_end_reaches_it():
 ])
 def test_replay_step_counts_from_the_first_interval(ends, dt, step):
     assert lt.replay_step(_array(ends), _array(dt)) == step
+
+
+def _grid_with_two_slips(start, n, last_shift):
+    """Ends every 0.25 s from ``start``, the sixth 1e-10 s early and the last ``last_shift``
+    late, with the intervals they make (the shortest 0.25 - 1e-10)."""
+    ends = start + 0.25 * np.arange(1, n + 1)
+    ends[5] -= 1e-10
+    ends[-1] += last_shift
+    return ends, np.diff(np.concatenate([[start], ends]))
+
+
+def test_the_replay_tolerance_is_that_of_the_last_end():
+    # 4096 s into the log the time tolerance of a 0.25 s step is 2.5e-10 + 8 ulp(4096) =
+    # 2.573e-10: an end 2.555e-10 late is still on the grid (one end a step), so the replay
+    # keeps the first interval; with the tolerance near t = 0 (2.5e-10) it would not
+    ends, dt = _grid_with_two_slips(0.0, 16384, 2.555e-10)
+    assert 2.555e-10 < time_tolerance(0.25, 4096.0) and lt.replay_step(ends, dt) == 0.25
+
+
+def test_an_end_beyond_the_tolerance_leaves_the_grid():
+    # 1e-7 s late is beyond the tolerance (2.5e-10 + ULPs, whatever the time of the log):
+    # the replay steps at the shortest interval
+    ends, dt = _grid_with_two_slips(1000.0, 16, 1e-7)
+    assert lt.replay_step(ends, dt) == dt.min() < 0.25
+
+
+def test_replay_step_of_a_single_interval():
+    assert lt.replay_step(_array([0.25]), _array([0.25])) == 0.25
