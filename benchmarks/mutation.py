@@ -64,6 +64,26 @@ MODULES: dict[str, list[str]] = {
                                           "tests/test_statistics_by_hand.py"],
 }
 
+# orchestrator campaigns and exchange
+MODULES.update({
+    "orchestrator.campaigns.genetic": ["tests/test_genetic.py",
+                                       "tests/test_genetic_edges_and_bookkeeping.py"],
+    # the tests through the module fixture of real tunes (test_tune.py's "serial") are left
+    # out: half a minute a mutant; the fast file checks what they do piece by piece
+    "orchestrator.campaigns.tune": ["tests/test_tune.py",
+                                    "tests/test_tune_ranges_costs_and_summary.py", "-k",
+                                    "not same_seed and not self_consistency and not "
+                                    "search_ranges and not tuned_set_is_bound"],
+    # the executor modes, the FMU backend and the kill-and-resume runs are left out (they
+    # check the executor, the FMUs and the CLI, at many seconds a mutant)
+    "orchestrator.campaigns.campaign": ["tests/test_campaign.py",
+                                        "tests/test_campaign_folder_seeds_and_hashes.py", "-k",
+                                        "not pool_and_dask and not fmu_and_direct and not "
+                                        "killed_driver"],
+    "orchestrator.cosim.exchange": ["tests/test_jacobi.py", "tests/test_master.py",
+                                    "tests/test_exchange_by_hand.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -216,6 +236,165 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
     "navcore.core.state_format.x__split__mutmut_14": ("if end < 1:", _FIND_FROM_MAGIC),
 }
 
+# orchestrator campaigns and exchange
+_FLOAT_ALREADY = ("the values meet float64 arrays (the range hi - lo, 1 / cost, the float64 "
+                  "population row they are assigned into): the result is float64 whatever "
+                  "the dtype of the converted array")
+_DRAW_EQUALS_P = ("rng.random() < p and <= p differ only for a draw exactly equal to p, "
+                  "probability 2**-53 per draw")
+_GA = "orchestrator.campaigns.genetic.x"
+_TUNE = "orchestrator.campaigns.tune.x"
+_UNUSED_BACKEND = "_declared_ranges does not read its backend argument"
+_RANGE_DTYPE = ("lo and hi only meet float arithmetic (decode, the current values' genes) "
+                "and float() in the summary: an integer array of a range gives the same values")
+_JSON_LAYOUT = "only the layout of tune.json's text changes; its readers parse the JSON"
+_CAMPAIGN = "orchestrator.campaigns.campaign.x"
+_GIT_TIMEOUT = "the timeout only bounds a git that hangs; git answers in milliseconds here"
+_STATUS_CHECK = ("git status cannot fail in a folder where git rev-parse HEAD (checked) has "
+                 "just succeeded")
+_STATUS_BYTES = "the status output is only tested for being blank: bytes or text alike"
+_PATHSPEC = ("'--' only separates the paths from options: as a pathspec it matches no file, "
+             "and no path given starts with '-'")
+_FMU_REGISTRY = ("Simulation reads the registry only on the direct backend (the fmu backend "
+                 "describes the FMU files)")
+_FALSY_SEP = "sep is only tested for truth: None and '' are both false"
+_CAMPAIGN_JSON_LAYOUT = "only the layout of the JSON text changes; its readers parse it"
+_ASCII_JSON = ("json.dumps writes ASCII (ensure_ascii): the file reads the same in UTF-8 and "
+               "in the locale's ASCII-compatible encoding")
+_RUNS_AT_LEAST_ONE = "runs = max(--runs, default) and --runs >= 1: a default of 0 or 1 agrees"
+EQUIVALENT.update({
+    _GA + "_decode__mutmut_4": ("return lo + np.asarray(genes, dtype=None) * (hi - lo)",
+                                _FLOAT_ALREADY),
+    _GA + "_decode__mutmut_6": ("return lo + np.asarray(genes, ) * (hi - lo)", _FLOAT_ALREADY),
+    _GA + "_roulette__mutmut_3": ("fitness = np.asarray(fitness, dtype=None)", _FLOAT_ALREADY),
+    _GA + "_roulette__mutmut_5": ("fitness = np.asarray(fitness, )", _FLOAT_ALREADY),
+    _GA + "ǁGeneticAlgorithmǁ_offspring__mutmut_3": (
+        "fitness = 2.0 / np.asarray(cost)",
+        "roulette draws with p = fitness / fitness.sum(): a common factor 2 cancels exactly"),
+    _GA + "ǁGeneticAlgorithmǁ_offspring__mutmut_8": (
+        "while len(children) <= self.population:",
+        "one more pair is bred and dropped by children[:self.population]: other draws of the "
+        "seeded stream are used, the operators and their distribution are the same"),
+    _GA + "ǁGeneticAlgorithmǁ_offspring__mutmut_18": (
+        "if rng.random() <= self.crossover_probability:", _DRAW_EQUALS_P),
+    _GA + "ǁGeneticAlgorithmǁ_offspring__mutmut_30": (
+        "if rng.random() <= self.mutation_probability:", _DRAW_EQUALS_P),
+    _GA + "ǁGeneticAlgorithmǁrun__mutmut_5": (
+        'result = GaResult(None, float("inf"))',
+        "the first generation's best cost is finite (checked), so < inf: its genes replace "
+        "the placeholder before anything reads it"),
+    _GA + "ǁGeneticAlgorithmǁrun__mutmut_12": (
+        'result = GaResult(np.zeros(self.n_genes), float("INF"))',
+        "float() reads 'inf' case-insensitively"),
+    _GA + "ǁGeneticAlgorithmǁrun__mutmut_25": (
+        "pop[i] = np.clip(np.asarray(row, dtype=None), 0.0, 1.0)", _FLOAT_ALREADY),
+    _GA + "ǁGeneticAlgorithmǁrun__mutmut_27": (
+        "pop[i] = np.clip(np.asarray(row, ), 0.0, 1.0)", _FLOAT_ALREADY),
+    _GA + "ǁGeneticAlgorithmǁrun__mutmut_71": (
+        "if cost[best] <= result.best_cost:",
+        "a tie needs cost[best] == best so far; from generation 2 row 0 is the elite with "
+        "that cost and argmin returns the first of equal minima, so the same genes are kept"),
+    _TUNE + "_resolve_parameters__mutmut_6": (
+        "declared = _declared_ranges(model, component, None)", _UNUSED_BACKEND),
+    _TUNE + "__seed_parameters__mutmut_5": (
+        "declared = _declared_ranges(model, c.name, None)", _UNUSED_BACKEND),
+    _TUNE + "_run_tune__mutmut_24": ("None)", _UNUSED_BACKEND),
+    _TUNE + "_run_tune__mutmut_57": (
+        "window, _seed_parameters(model, None) if train_seeds else ())", _UNUSED_BACKEND),
+    _TUNE + "_resolve_parameters__mutmut_37": (
+        "return np.array(lo, None), np.array(hi, float), tuple(types), np.array(current)",
+        _RANGE_DTYPE),
+    _TUNE + "_resolve_parameters__mutmut_39": (
+        "return np.array(lo, ), np.array(hi, float), tuple(types), np.array(current)",
+        _RANGE_DTYPE),
+    _TUNE + "_resolve_parameters__mutmut_41": (
+        "return np.array(lo, float), np.array(hi, None), tuple(types), np.array(current)",
+        _RANGE_DTYPE),
+    _TUNE + "_resolve_parameters__mutmut_43": (
+        "return np.array(lo, float), np.array(hi, ), tuple(types), np.array(current)",
+        _RANGE_DTYPE),
+    _TUNE + "_evaluate__mutmut_17": (
+        'registry=registry() if (spec.backend == "direct") or True else None,',
+        "Simulation reads the registry only on the direct backend (the fmu backend "
+        "describes the FMU files)"),
+    _TUNE + "_write_tune_outputs__mutmut_46": (
+        "lambda f: f.write(json.dumps(summary, indent=None))),", _JSON_LAYOUT),
+    _TUNE + "_write_tune_outputs__mutmut_48": (
+        "lambda f: f.write(json.dumps(summary, ))),", _JSON_LAYOUT),
+    _TUNE + "_write_tune_outputs__mutmut_49": (
+        "lambda f: f.write(json.dumps(summary, indent=3))),", _JSON_LAYOUT),
+    _CAMPAIGN + "_code_commit__mutmut_7": (
+        "capture_output=True, text=True, timeout=None).stdout.strip()", _GIT_TIMEOUT),
+    _CAMPAIGN + "_code_commit__mutmut_12": (
+        "capture_output=True, text=True, ).stdout.strip()", _GIT_TIMEOUT),
+    _CAMPAIGN + "_code_commit__mutmut_25": (
+        "capture_output=True, text=True, timeout=31).stdout.strip()", _GIT_TIMEOUT),
+    _CAMPAIGN + "_code_commit__mutmut_31": (
+        "check=True, capture_output=True, text=True, timeout=None).stdout", _GIT_TIMEOUT),
+    _CAMPAIGN + "_code_commit__mutmut_36": (
+        "check=True, capture_output=True, text=True, ).stdout", _GIT_TIMEOUT),
+    _CAMPAIGN + "_code_commit__mutmut_58": (
+        "check=True, capture_output=True, text=True, timeout=31).stdout", _GIT_TIMEOUT),
+    _CAMPAIGN + "_code_commit__mutmut_28": (
+        "check=None, capture_output=True, text=True, timeout=30).stdout", _STATUS_CHECK),
+    _CAMPAIGN + "_code_commit__mutmut_33": (
+        "capture_output=True, text=True, timeout=30).stdout", _STATUS_CHECK),
+    _CAMPAIGN + "_code_commit__mutmut_55": (
+        "check=False, capture_output=True, text=True, timeout=30).stdout", _STATUS_CHECK),
+    _CAMPAIGN + "_code_commit__mutmut_30": (
+        "check=True, capture_output=True, text=None, timeout=30).stdout", _STATUS_BYTES),
+    _CAMPAIGN + "_code_commit__mutmut_35": (
+        "check=True, capture_output=True, timeout=30).stdout", _STATUS_BYTES),
+    _CAMPAIGN + "_code_commit__mutmut_57": (
+        "check=True, capture_output=True, text=False, timeout=30).stdout", _STATUS_BYTES),
+    _CAMPAIGN + "_code_commit__mutmut_48": (
+        "\"--untracked-files=no\", \"XX--XX\", \"fmus\", \"orchestrator\", \"models\"],",
+        _PATHSPEC),
+    _CAMPAIGN + "_random_components__mutmut_11": (
+        "sim = Simulation(model, backend=backend, registry=registry() if (backend == "
+        "\"direct\") or True else None,", _FMU_REGISTRY),
+    _CAMPAIGN + "_run_one__mutmut_36": (
+        "registry=registry() if (job[\"backend\"] == \"direct\") or True else None,",
+        _FMU_REGISTRY),
+    _CAMPAIGN + "_parse_seed_offsets__mutmut_8": (
+        "sep = None", _FALSY_SEP),
+    _CAMPAIGN + "_write_run__mutmut_25": (
+        "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), ind"
+        "ent=None)))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "_write_run__mutmut_27": (
+        "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), )))",
+        _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "_write_run__mutmut_29": (
+        "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), ind"
+        "ent=2)))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "_run_campaign__mutmut_48": (
+        "lambda f: f.write(json.dumps(jsonable(summary), indent=None)))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "_run_campaign__mutmut_50": (
+        "lambda f: f.write(json.dumps(jsonable(summary), )))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "_run_campaign__mutmut_52": (
+        "lambda f: f.write(json.dumps(jsonable(summary), indent=2)))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "ǁCampaignǁwrite_manifest__mutmut_15": (
+        "indent=None)))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "ǁCampaignǁwrite_manifest__mutmut_17": (
+        ")))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "ǁCampaignǁwrite_manifest__mutmut_25": (
+        "indent=3)))", _CAMPAIGN_JSON_LAYOUT),
+    _CAMPAIGN + "_read_run__mutmut_10": (
+        "record = json.loads(path.read_text(encoding=None))", _ASCII_JSON),
+    _CAMPAIGN + "_read_run__mutmut_12": (
+        "record = json.loads(path.read_text(encoding=\"UTF-8\"))", _ASCII_JSON),
+    _CAMPAIGN + "ǁCampaignǁ_check_manifest__mutmut_8": (
+        "old = json.loads(path.read_text(encoding=None))", _ASCII_JSON),
+    _CAMPAIGN + "ǁCampaignǁ_check_manifest__mutmut_10": (
+        "old = json.loads(path.read_text(encoding=\"UTF-8\"))", _ASCII_JSON),
+    _CAMPAIGN + "ǁCampaignǁ_check_manifest__mutmut_52": (
+        "runs = max(runs, int(old.get(\"runs\", 1)))", _RUNS_AT_LEAST_ONE),
+    "orchestrator.cosim.exchange.xǁJacobiǁ__init____mutmut_8": (
+        "self._pending_ns = [1] * len(self.slots)",
+        "never read before written: a window read at the end of step k (n | k + 1) started "
+        "at k + 1 - n, which is due and ends by the stop, so it set its entry"),
+})
+
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
 NOT_CHECKED = "not checked"
 EARLIER = "earlier.json"   # verdicts kept from before a run_again
@@ -290,6 +469,9 @@ def run_again(module: str, folder: Path, workers: int) -> None:
     shutil.copytree(ROOT / "tests", folder / "tests", dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("__pycache__"))
     write_config(module, folder)
+    # mutmut maps tests to functions again only for new test names: an edited test could
+    # reach a function it did not before and not be run for its mutants
+    (folder / "mutants" / "mutmut-stats.json").unlink(missing_ok=True)
     if pending:
         mutmut(folder, "run", "--max-children", str(workers), *pending, capture=False)
 
