@@ -468,4 +468,16 @@ def test_a_campaign_s_executor_options_and_summary_file(tmp_path, monkeypatch):
     assert summary["counts"] == {"done_before": 0, "ran": 1, "total": 1}
     assert written == json.loads(json.dumps({k: v for k, v in summary.items()
                                              if k != "counts"}))
-    assert "stand-in" in json.dumps(written)
+    assert written["provenance"]["mode"] == "stand-in"
+
+
+def test_a_campaign_s_log_reaches_the_fmu_build(tmp_path, monkeypatch):
+    from orchestrator.running import scenarios
+
+    logs = []
+    monkeypatch.setattr(cp, "Executor", StandInExecutor)
+    monkeypatch.setattr(scenarios, "ensure_fmus", lambda m, log: logs.append(log))
+    monkeypatch.setattr(cp, "random_components", lambda model, backend, parameters: ["gnss"])
+    say = []
+    cp.run_campaign(_spec(runs=1, backend="fmu"), tmp_path, log=say.append)
+    assert logs == [say.append]
