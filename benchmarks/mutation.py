@@ -62,6 +62,13 @@ MODULES: dict[str, list[str]] = {
     "navcore.sensors.log_time": ["tests/test_log_time_stamps.py", "tests/test_log_time.py"],
     "orchestrator.campaigns.statistics": ["tests/test_statistics.py",
                                           "tests/test_statistics_by_hand.py"],
+    # navcore filters, state and sensor log
+    "navcore.filters.fuzzy": ["tests/test_fuzzy.py", "tests/test_fuzzy_set_edges.py"],
+    "navcore.filters.imm": ["tests/test_imm.py", "tests/test_imm_arguments.py"],
+    "navcore.filters.ctfa": ["tests/test_ctfa.py", "tests/test_ctfa_arguments.py"],
+    "navcore.core.state": ["tests/test_state_format.py", "tests/test_state_blob_nodes.py",
+                           "tests/test_solution_history.py", "tests/test_imu_errors.py",
+                           "tests/test_ideal_track.py"],
 }
 
 # orchestrator campaigns and exchange
@@ -110,6 +117,21 @@ _NO_INVALID = ("no operation of the middle branch can be invalid: k0/u is inf on
                "where k1 - u = k1 > 0 (inf, not nan); only the division needs silencing")
 _FIND_FROM_MAGIC = ("the search starts after the magic bytes, so find returns -1 or at least "
                     "len(MAGIC): end < 0, end <= 0 and end < 1 agree")
+# navcore filters, state and sensor log
+_AT_A_FOOT = ("at a foot that is not the vertex the linear edge is 0.0 exactly, the value of the "
+              "branch it replaces (a foot at the vertex has returned 1 before)")
+_VERTEX_FIRST = "x == vertex has returned 1.0 before: the branch never meets it"
+_Z_AT_ZERO = "the Z sets, the only triangles, have their vertex at 0: right + 0 is right - 0"
+_LD_NO_RISE = "for LD (j = 0) the rising edge would run from v[-1] = v[4] down to v[0]: no point"
+_EDGE_AT_ZERO = ("at the foot of an output set's edge the edge is 0.0, the value the set's zeros "
+                 "have there anyway")
+_MADE_FLOAT = "_check_probabilities makes the array float64 at once (np.asarray(mu, dtype=float))"
+_DISCARDED_DIVISION = ("the divisor stands in for c_bar = 0 only, where the column of joint is "
+                       "0 and np.where takes mu instead of the quotient")
+_RENORMALIZED = ("with floor 0, np.maximum(mu, 0) is mu, and dividing mu, which sums to 1 "
+                 "already, by its sum changes at most its last bit")
+_FALSY = "needs_mixing is only read by `if`: None is false as False is"
+_AT_T2 = "at stat = T2 the linear branch gives (T2 - T1) / (T2 - T1) = 1.0 exactly"
 EQUIVALENT: dict[str, tuple[str, str]] = {
     "orchestrator.campaigns.statistics.x_t_interval__mutmut_3": (
         "x = np.array([math.nan if v is None else v for v in values], dtype=None)",
@@ -234,6 +256,80 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
         'node = json.loads(payload.decode("UTF-8"), parse_constant=_no_constant)', _CODEC),
     "navcore.core.state_format.x__split__mutmut_13": ("if end <= 0:", _FIND_FROM_MAGIC),
     "navcore.core.state_format.x__split__mutmut_14": ("if end < 1:", _FIND_FROM_MAGIC),
+    # navcore filters, state and sensor log
+    "navcore.filters.fuzzy.x__shoulder_left__mutmut_3": (
+        'if x > right:', _AT_A_FOOT),
+    "navcore.filters.fuzzy.x__shoulder_right__mutmut_3": (
+        'if x < left:', _AT_A_FOOT),
+    "navcore.filters.fuzzy.x__triangle__mutmut_4": (
+        'if x < left or x >= right:', _AT_A_FOOT),
+    "navcore.filters.fuzzy.x__triangle__mutmut_5": (
+        'if x <= left or x > right:', _AT_A_FOOT),
+    "navcore.filters.fuzzy.x__triangle__mutmut_7": (
+        'if x < vertex:', _VERTEX_FIRST),
+    "navcore.filters.fuzzy.x__triangle__mutmut_13": (
+        'return (right - x) / (right + vertex)', _Z_AT_ZERO),
+    "navcore.filters.fuzzy.xǁFuzzyRScaleǁ__init____mutmut_61": (
+        'if j >= 0:', _LD_NO_RISE),
+    "navcore.filters.fuzzy.xǁFuzzyRScaleǁ__init____mutmut_65": (
+        'rise = (grid > v[j - 1]) & (grid <= v[j])', _EDGE_AT_ZERO),
+    "navcore.filters.fuzzy.xǁFuzzyRScaleǁ__init____mutmut_82": (
+        'fall = (grid >= v[j]) & (grid < v[j + 1])', _EDGE_AT_ZERO),
+    "navcore.filters.imm.x_check_transition_matrix__mutmut_3": (
+        'Pi = np.array(Pi, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_check_transition_matrix__mutmut_5": (
+        'Pi = np.array(Pi, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x__check_probabilities__mutmut_3": (
+        'mu = np.asarray(mu, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x__check_probabilities__mutmut_5": (
+        'mu = np.asarray(mu, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_mix__mutmut_15": (
+        'X = np.asarray(xs, dtype=None)                  # (r, n)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_mix__mutmut_17": (
+        'X = np.asarray(xs, )                  # (r, n)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_mix__mutmut_20": (
+        'Parr = np.asarray(Ps, dtype=None)               # (r, n, n)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_mix__mutmut_22": (
+        'Parr = np.asarray(Ps, )               # (r, n, n)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_update_probabilities__mutmut_4": (
+        'c_bar = np.asarray(c_bar, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_update_probabilities__mutmut_6": (
+        'c_bar = np.asarray(c_bar, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_update_probabilities__mutmut_9": (
+        'lik = np.asarray(likelihoods, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_update_probabilities__mutmut_11": (
+        'lik = np.asarray(likelihoods, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_combine__mutmut_3": (
+        'mu = np.asarray(mu, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_combine__mutmut_5": (
+        'mu = np.asarray(mu, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_combine__mutmut_8": (
+        'X = np.asarray(xs, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_combine__mutmut_10": (
+        'X = np.asarray(xs, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_combine__mutmut_13": (
+        'Parr = np.asarray(Ps, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_imm_combine__mutmut_15": (
+        'Parr = np.asarray(Ps, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.xǁImmBankǁsubtract_from_states__mutmut_3": (
+        'delta = np.asarray(delta, dtype=None)', _NUMBERS_ARRAY),
+    "navcore.filters.imm.xǁImmBankǁsubtract_from_states__mutmut_5": (
+        'delta = np.asarray(delta, )', _NUMBERS_ARRAY),
+    "navcore.filters.imm.x_check_transition_matrix__mutmut_15": (
+        'if Pi.ndim != 2 or Pi.shape[0] != Pi.shape[1] or (r is not None and Pi.shape[1] != r):',
+        _SQUARE),
+    "navcore.filters.imm.xǁImmBankǁ__init____mutmut_25": (
+        'self.mu = _check_probabilities(np.array(mu0, dtype=None), "mu0").copy()', _MADE_FLOAT),
+    "navcore.filters.imm.xǁImmBankǁ__init____mutmut_27": (
+        'self.mu = _check_probabilities(np.array(mu0, ), "mu0").copy()', _MADE_FLOAT),
+    "navcore.filters.imm.x_imm_mix__mutmut_45": (
+        'reachable, joint / np.where(reachable, c_bar, 2.0), mu[:, None]', _DISCARDED_DIVISION),
+    "navcore.filters.imm.x_imm_update_probabilities__mutmut_70": (
+        'if floor >= 0.0:', _RENORMALIZED),
+    "navcore.filters.imm.xǁImmBankǁmix__mutmut_19": (
+        'self.needs_mixing = None', _FALSY),
+    "navcore.filters.ctfa.x_ctfa_q_scale__mutmut_23": (
+        'if stat >= T2:', _AT_T2),
 }
 
 # orchestrator campaigns and exchange

@@ -109,6 +109,9 @@ def _shoulder_right(x, left, vertex):
 
 
 def _triangle(x, left, vertex, right):
+    """1 at ``vertex``, linear down to 0 at each foot (a foot at the vertex: a vertical edge)."""
+    if x == vertex:     # first: a vertical edge keeps the vertex at 1, as the shoulders do
+        return 1.0
     if x <= left or x >= right:
         return 0.0
     if x <= vertex:
@@ -151,20 +154,14 @@ class FuzzyRScale:
         v = tuple(float(np.log(x)) for x in self.out_vertices)
         grid = np.linspace(v[0], v[4], _GRID_POINTS)
         sets = []
-        for j in range(5):
-            left = v[j - 1] if j > 0 else v[0]
-            right = v[j + 1] if j < 4 else v[4]
+        for j in range(5):     # the grid ends at v[0] and v[4]: LD only falls, LI only rises
             mu = np.zeros_like(grid)
             if j > 0:
-                rise = (grid >= left) & (grid <= v[j])
-                mu[rise] = (grid[rise] - left) / (v[j] - left)
-            else:
-                mu[grid <= v[0]] = 1.0
+                rise = (grid >= v[j - 1]) & (grid <= v[j])
+                mu[rise] = (grid[rise] - v[j - 1]) / (v[j] - v[j - 1])
             if j < 4:
-                fall = (grid >= v[j]) & (grid <= right)
-                mu[fall] = (right - grid[fall]) / (right - v[j])
-            else:
-                mu[grid >= v[4]] = 1.0
+                fall = (grid >= v[j]) & (grid <= v[j + 1])
+                mu[fall] = (v[j + 1] - grid[fall]) / (v[j + 1] - v[j])
             sets.append(mu)
         self.grid = grid          # ln F
         self.output_sets = np.array(sets)
