@@ -132,3 +132,15 @@ def test_the_update_passes_each_model_its_index_and_uses_the_bank_floor():
     np.testing.assert_array_equal(log_liks, [0.0, -1000.0])
     np.testing.assert_allclose(bank.mu, [1.0 / 1.1, 0.1 / 1.1], rtol=1e-15)
     assert math.isclose(bank.x[0], 0.1 / 1.1, rel_tol=1e-14)
+
+
+def test_transition_rows_must_sum_to_one_within_1e_9():
+    check_transition_matrix(np.array([[1.0 - 0.5e-9, 0.0], [0.0, 1.0]]))
+    with pytest.raises(ParameterError, match="rows must sum to 1"):
+        check_transition_matrix(np.array([[1.0 - 2e-9, 0.0], [0.0, 1.0]]))
+
+
+def test_a_bank_of_one_filter_is_that_filter():
+    bank = ImmBank(_filters(2.0), np.eye(1))
+    np.testing.assert_array_equal(bank.mu, [1.0])
+    np.testing.assert_array_equal(bank.x, [2.0])
