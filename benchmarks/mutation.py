@@ -68,7 +68,7 @@ MODULES: dict[str, list[str]] = {
     "navcore.filters.ctfa": ["tests/test_ctfa.py", "tests/test_ctfa_arguments.py"],
     "navcore.core.state": ["tests/test_state_format.py", "tests/test_state_blob_nodes.py",
                            "tests/test_solution_history.py", "tests/test_imu_errors.py",
-                           "tests/test_ideal_track.py"],
+                           "tests/test_ideal_track.py", "tests/test_state_tree_paths.py"],
 }
 
 # orchestrator campaigns and exchange
@@ -132,6 +132,17 @@ _RENORMALIZED = ("with floor 0, np.maximum(mu, 0) is mu, and dividing mu, which 
                  "already, by its sum changes at most its last bit")
 _FALSY = "needs_mixing is only read by `if`: None is false as False is"
 _AT_T2 = "at stat = T2 the linear branch gives (T2 - T1) / (T2 - T1) = 1.0 exactly"
+_FAST_PATHS = ("the first branches are shortcuts: the general branches after them return the "
+               "same values (a plain value, a tuple of floats, a copy of a native array)")
+_SUBCLASS_ONLY = ("exact ints and floats have returned at the shortcut: here the type is a "
+                  "subclass, never int or float itself")
+_COPY_DEFAULT = "np.array copies by default (copy=True)"
+_CONVERTED_COPY = ("an array reaching this branch is converted from big-endian (a copy anyway) "
+                   "or refused just after")
+_LITTLE_ENDIAN = ("on a little-endian machine newbyteorder('<') of an array reaching this branch "
+                  "is the dtype the condition would pick")
+_BIT_GENERATOR = ("a bit generator's state is a dict of str keys, str, ints and int arrays: it is "
+                  "never refused, so its path is never printed")
 EQUIVALENT: dict[str, tuple[str, str]] = {
     "orchestrator.campaigns.statistics.x_t_interval__mutmut_3": (
         "x = np.array([math.nan if v is None else v for v in values], dtype=None)",
@@ -330,6 +341,31 @@ EQUIVALENT: dict[str, tuple[str, str]] = {
         'self.needs_mixing = None', _FALSY),
     "navcore.filters.ctfa.x_ctfa_q_scale__mutmut_23": (
         'if stat >= T2:', _AT_T2),
+    "navcore.core.state.x_capture_value__mutmut_1": (
+        'kind = None', _FAST_PATHS),
+    "navcore.core.state.x_capture_value__mutmut_15": (
+        'if kind is tuple and all(type(None) is float for v in value):   #'
+        ' e.g. a 3-vector of floats',
+        _FAST_PATHS),
+    "navcore.core.state.x_capture_value__mutmut_19": (
+        'return value if (type(value) in (int, float)) and False else _python_scalar(value)',
+        _SUBCLASS_ONLY),
+    "navcore.core.state.x_capture_value__mutmut_21": (
+        'return value if type(None) in (int, float) else _python_scalar(value)', _SUBCLASS_ONLY),
+    "navcore.core.state.x_capture_value__mutmut_10": (
+        'return np.array(value, )', _COPY_DEFAULT),
+    "navcore.core.state.x_capture_value__mutmut_38": (
+        'return np.array(value, dtype=dtype, )', _COPY_DEFAULT),
+    "navcore.core.state.x_copy_value__mutmut_4": (
+        'return np.array(node, )', _COPY_DEFAULT),
+    "navcore.core.state.x_capture_value__mutmut_35": (
+        'return np.array(value, dtype=dtype, copy=None)', _CONVERTED_COPY),
+    "navcore.core.state.x_capture_value__mutmut_27": (
+        'dtype = value.dtype.newbyteorder("<") if (value.dtype.byteorder =='
+        ' ">") or True else value.dtype',
+        _LITTLE_ENDIAN),
+    "navcore.core.state.x_capture_value__mutmut_41": (
+        'return capture_value(value.bit_generator.state, None)', _BIT_GENERATOR),
 }
 
 # orchestrator campaigns and exchange
