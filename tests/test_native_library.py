@@ -6,6 +6,7 @@ fmi2OK, an Error-status message, fmi2Discard at the next step.  The fmi2Error an
 themselves are tested where the calls are (test_fmu_state.py, test_fmus.py)."""
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -152,6 +153,26 @@ def test_wheel_library_reports_refusals_at_the_next_step(wheel_kf):
         assert info.value.status == FMI2_DISCARD
     finally:
         bad.close()
+
+
+def test_build_after_the_same_fmu_ran_from_a_deleted_folder(tmp_path, monkeypatch):
+    """An FMU loaded in this process leaves its script module in sys.modules with the path of
+    the folder it was unpacked to, which the host deletes after it; building that FMU again
+    later in the same process reads the sources of the script being built, not that path."""
+    resources = tmp_path / "unpacked" / "resources"
+    resources.mkdir(parents=True)
+    script = shutil.copy(fmu_build.FMU_SOURCES / "GnssReceiver.py", resources)
+    monkeypatch.syspath_prepend(str(resources))
+    shutil.copytree(fmu_build.FMU_SOURCES / "fmushell", resources / "fmushell")
+    for name in [m for m in sys.modules if m == "fmushell" or m.startswith("fmushell.")]:
+        monkeypatch.delitem(sys.modules, name)     # the script imports the shell beside it
+    spec = importlib.util.spec_from_file_location("GnssReceiver", script)
+    stale = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(stale)
+    monkeypatch.setitem(sys.modules, "GnssReceiver", stale)
+    shutil.rmtree(tmp_path / "unpacked")
+    built = fmu_build.build(["GnssReceiver"], force=True, dist=tmp_path / "dist", log=None)
+    assert [Path(b).name for b in built] == ["GnssReceiver.fmu"]
 
 
 @pytest.mark.parametrize("umask", [0o022, 0o027])

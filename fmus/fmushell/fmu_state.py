@@ -6,7 +6,6 @@ identity (model name and the hash of its Python sources).
 """
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from pythonfmu.enums import Fmi2Status
@@ -57,7 +56,10 @@ def fmu_identity(slave_class):
     """(model name, hash of the FMU's Python sources): which FMU wrote a state."""
     identity = _IDENTITIES.get(slave_class)
     if identity is None:
-        script = sys.modules[slave_class.__module__].__file__
+        # the file the class's own __init__ was compiled from (every FMU script defines one):
+        # sys.modules may still hold a module of the same name loaded from another FMU's
+        # folder, since deleted (an FMU loaded in this process before this one was built)
+        script = slave_class.__init__.__code__.co_filename
         identity = (slave_class.__name__, state_format.build_hash(Path(script)))
         _IDENTITIES[slave_class] = identity
     return identity

@@ -469,6 +469,9 @@ def main(argv=None):
             click.echo("component log:\n  " + "\n  ".join(exc.log), err=True)
         sys.exit(2)
     except (click.exceptions.Abort, KeyboardInterrupt) as exc:
+        # a second Ctrl-C (a terminal sends it to the whole group) must not kill the teardown
+        # that follows (Dask's cluster closing at exit) with a traceback or a signal status
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         # click turns a KeyboardInterrupt (and so Terminated) into Abort, the cause kept
         if isinstance(exc, interrupts.Terminated) or isinstance(exc.__cause__,
                                                                  interrupts.Terminated):
