@@ -414,7 +414,7 @@ EQUIVALENT.update({
     _GA + "ǁGeneticAlgorithmǁrun__mutmut_5": (
         'result = GaResult(None, float("inf"))',
         "the first generation's best cost is finite (checked), so < inf: its genes replace "
-        "the placeholder before anything reads it"),
+        "the initial result before anything reads it"),
     _GA + "ǁGeneticAlgorithmǁrun__mutmut_12": (
         'result = GaResult(np.zeros(self.n_genes), float("INF"))',
         "float() reads 'inf' case-insensitively"),

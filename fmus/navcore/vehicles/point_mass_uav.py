@@ -111,8 +111,9 @@ class PointMassUav:
         bank_c, airspeed_c, gamma_c = targets
         wg2, damp_g, wb2, damp_b, tau_v, accel_limit = self._loops
         dV = (airspeed_c - V) / tau_v
-        dV = dV if dV < accel_limit else accel_limit     # _clip, written out: five times a
-        return (dV if dV > -accel_limit else -accel_limit,  # sample
+        # _clip written out: this runs five times a sample
+        dV = dV if dV < accel_limit else accel_limit
+        return (dV if dV > -accel_limit else -accel_limit,
                 G0 * math.tan(phi) / V,
                 gamma_rate,
                 phi_rate,
