@@ -424,8 +424,9 @@ _TRIMMED = ("after every append the loop trims sample_variances to the history's
 _FIRST_EPOCH = ("history_epoch is first read in _next_epoch after last_update_time is set, "
                 "and the first call (last_update_time None) sets it to 0 without reading it")
 _SMALL_BINOMIALS = ("the binomial weights are integers of at most C(11, 5) = 462 "
-                    "(newton_order <= 10): their squares are exact and promote to the same "
-                    "float64 in the product with the variances")
+                    "(newton_order <= 10, its limits; int64 squares stay exact up to order "
+                    "33): exact squares, promoted to the same float64 in the product with "
+                    "the variances")
 _ALL_VARIANCES = ("sample_variances holds at most newton_order + 1 values, so p + 1 is its "
                   "length and both slices take all of it")
 EQUIVALENT.update({
