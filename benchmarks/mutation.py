@@ -91,6 +91,16 @@ MODULES.update({
                                     "tests/test_exchange_by_hand.py"],
 })
 
+# Kf engines and recovery: the engines' own unit tests (the scenario runs of
+# test_adaptive_filters.py and test_outage_recovery.py cost minutes a survivor)
+MODULES.update({
+    "navcore.filters.ins_gnss_kf": ["tests/test_kf_engine_by_hand.py",
+                                    "tests/test_bias_covariance.py"],
+    "navcore.filters.recovery": ["tests/test_recovery.py",
+                                 "tests/test_recovery_guard_by_hand.py"],
+    "navcore.filters.adaptive_filters": ["tests/test_adaptive_engines_by_hand.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -394,6 +404,31 @@ _CAMPAIGN_JSON_LAYOUT = "only the layout of the JSON text changes; its readers p
 _ASCII_JSON = ("json.dumps writes ASCII (ensure_ascii): the file reads the same in UTF-8 and "
                "in the locale's ASCII-compatible encoding")
 _RUNS_AT_LEAST_ONE = "runs = max(--runs, default) and --runs >= 1: a default of 0 or 1 agrees"
+# Kf engines and recovery
+_KF = "navcore.filters.ins_gnss_kf.xǁKfEngineǁ"
+_EINSUM_CASE = "einsum subscripts are letters of either case: 'IJ,IJ->I' is the same contraction"
+_SLICE_PAST_M = ("z has m = 6 elements here: the slice 3:7 stops at its end, as 3:6 does")
+_RECOVERY = "navcore.filters.recovery.x"
+_NIS_AT_TARGET = ("with the NIS at lambda = 1 equal to the target every bisection step sets "
+                  "hi = mid (the NIS is at most the target for lambda > 1): hi ends at "
+                  "log(1e6) / 2^60 = 1.2e-17, whose exp is 1.0, the value returned early")
+_SAME_INTERVAL = "a gap equal to the interval sets the interval to the value it has"
+_ADAPTIVE = "navcore.filters.adaptive_filters.x"
+_LEVEL_CHECK_ONLY = ("the call only checks the level alpha (its quantile is discarded); "
+                     "the default dof 1 is as valid as m")
+_UNIT_Y = "Y v with Y = 1.0 is v to the last bit"
+_NEWEST_SAMPLES = ("newton_forward_extrapolate reads only the newest newton_order + 1 samples "
+                   "(table = a[n - p - 1:]), so an older sample kept is never read")
+_TRIMMED = ("after every append the loop trims sample_variances to the history's length, at "
+            "most newton_order + 1")
+_FIRST_EPOCH = ("history_epoch is first read in _next_epoch after last_update_time is set, "
+                "and the first call (last_update_time None) sets it to 0 without reading it")
+_SMALL_BINOMIALS = ("the binomial weights are integers of at most C(11, 5) = 462 "
+                    "(newton_order <= 10, its limits; int64 squares stay exact up to order "
+                    "33): exact squares, promoted to the same float64 in the product with "
+                    "the variances")
+_ALL_VARIANCES = ("sample_variances holds at most newton_order + 1 values, so p + 1 is its "
+                  "length and both slices take all of it")
 EQUIVALENT.update({
     _GA + "_decode__mutmut_4": ("return lo + np.asarray(genes, dtype=None) * (hi - lo)",
                                 _FLOAT_ALREADY),
@@ -525,6 +560,43 @@ EQUIVALENT.update({
         "self._pending_ns = [1] * len(self.slots)",
         "never read before written: a window read at the end of step k (n | k + 1) started "
         "at k + 1 - n, which is due and ends by the stop, so it set its entry"),
+    # Kf engines and recovery
+    _KF + "covariance_diagonal__mutmut_10": (
+        'return np.einsum("IJ,IJ->I", a @ self.P, a) + np.diagonal(self.q_acc)', _EINSUM_CASE),
+    _KF + "measurement__mutmut_36": ("z[3:7] = v - fix_v_ned", _SLICE_PAST_M),
+    _KF + "measurement__mutmut_52": (
+        "z[3:7] += antenna_velocity_offset(nav.C_bn, lever, self.rate_ib, nav.lat)",
+        _SLICE_PAST_M),
+    _RECOVERY + "_inflation_factor__mutmut_36": ("if nis_at(1.0) < target:", _NIS_AT_TARGET),
+    _RECOVERY + "ǁRecoveryGuardǁopen_epoch__mutmut_10": (
+        "if gap > 0.0 and (self.interval == 0.0 or gap <= self.interval):", _SAME_INTERVAL),
+    _ADAPTIVE + "ǁIakfEngineǁ__init____mutmut_9": (
+        "chi2_gate(outlier_alpha, )   # checks the level (compression_factor gates)",
+        _LEVEL_CHECK_ONLY),
+    _ADAPTIVE + "ǁIakfEngineǁupdate__mutmut_39": (
+        "v_used = v if (Y == 1.0) and False else Y * v                        # paper 001 eq. 13",
+        _UNIT_Y),
+    _ADAPTIVE + "ǁIakfEngineǁupdate__mutmut_42": (
+        "v_used = v if Y == 2.0 else Y * v                        # paper 001 eq. 13", _UNIT_Y),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_17": (
+        "self.history = robust_laws.ObservationHistory(maxlen=self.newton_order + 2)",
+        _NEWEST_SAMPLES),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_19": (
+        "self.sample_variances = deque(maxlen=None)", _TRIMMED),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_21": (
+        "self.sample_variances = deque(maxlen=self.newton_order + 2)", _TRIMMED),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_26": (
+        "self.history_epoch = None", _FIRST_EPOCH),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_27": (
+        "self.history_epoch = 1", _FIRST_EPOCH),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_12": (
+        "weights = np.array([math.comb(p + 1, j + 1) for j in range(p + 1)], dtype=None)",
+        _SMALL_BINOMIALS),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_14": (
+        "weights = np.array([math.comb(p + 1, j + 1) for j in range(p + 1)], )",
+        _SMALL_BINOMIALS),
+    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_30": (
+        "newest_first = variances[::-1][:p + 2]", _ALL_VARIANCES),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
