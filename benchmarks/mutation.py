@@ -101,6 +101,16 @@ MODULES.update({
     "navcore.filters.adaptive_filters": ["tests/test_adaptive_engines_by_hand.py"],
 })
 
+# UKF engines
+MODULES.update({
+    "navcore.filters.unscented": ["tests/test_unscented.py", "tests/test_ukf_process_model.py",
+                                  "tests/test_unscented_checks_and_defaults.py"],
+    "navcore.filters.ukf_filters": ["tests/test_ukf_process_model.py",
+                                    "tests/test_bias_covariance.py",
+                                    "tests/test_ukf_engines_by_hand.py",
+                                    "tests/test_ukf_process_model_series_and_defaults.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -429,6 +439,21 @@ _SMALL_BINOMIALS = ("the binomial weights are integers of at most C(11, 5) = 462
                     "the variances")
 _ALL_VARIANCES = ("sample_variances holds at most newton_order + 1 values, so p + 1 is its "
                   "length and both slices take all of it")
+# UKF engines
+_UNSCENTED = "navcore.filters.unscented.x"
+_UKF = _UNSCENTED + "ǁUnscentedKalmanFilterǁ"
+_CLEAN_DEFAULT = ("scipy's dpotrf reads clean=None, as a clean left out, as its default clean=1 "
+                  "(the other triangle zeroed): the same factor")
+_MODEL_NUMBERS = ("the states, covariances, measurements and model outputs are numbers: an "
+                  "integer array meets float weights or float arrays in every use and gives "
+                  "the same values")
+_UNIT_SCALE = "a scale of 1.0 times the matrix is the matrix exactly: the branch saves a product"
+_UKF_FILTERS = "navcore.filters.ukf_filters.x"
+_STAND_IN = ("the stand-in for a small angle only keeps the closed form finite where np.where "
+             "takes the series instead")
+_ROWS_READ = "only rows 0-2 of it are read (dr[0], dr[2]; phi[_NEXT], phi[_PREV])"
+_FIFTEEN = "the state has 15 components: the slice 12:16 is 12:15"
+_DEFAULT_ZEROS = "the filter's default initial state is zeros(n), the one passed"
 EQUIVALENT.update({
     _GA + "_decode__mutmut_4": ("return lo + np.asarray(genes, dtype=None) * (hi - lo)",
                                 _FLOAT_ALREADY),
@@ -597,6 +622,62 @@ EQUIVALENT.update({
         _SMALL_BINOMIALS),
     _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_30": (
         "newest_first = variances[::-1][:p + 2]", _ALL_VARIANCES),
+    # UKF engines
+    _UNSCENTED + "__sqrt_symmetric__mutmut_4": (
+        "L, info = lapack.dpotrf(A, lower=1, clean=None)", _CLEAN_DEFAULT),
+    _UNSCENTED + "__sqrt_symmetric__mutmut_7": (
+        "L, info = lapack.dpotrf(A, lower=1, )", _CLEAN_DEFAULT),
+    _UKF + "correct__mutmut_43": ("Ls, info = lapack.dpotrf(S, lower=1, clean=None)",
+                                  _CLEAN_DEFAULT),
+    _UKF + "correct__mutmut_46": ("Ls, info = lapack.dpotrf(S, lower=1, )", _CLEAN_DEFAULT),
+    _UNSCENTED + "_sigma_points__mutmut_3": ("x = np.asarray(x, dtype=None)", _MODEL_NUMBERS),
+    _UNSCENTED + "_sigma_points__mutmut_5": ("x = np.asarray(x, )", _MODEL_NUMBERS),
+    _UNSCENTED + "_sigma_points__mutmut_8": ("P = np.asarray(P, dtype=None)", _MODEL_NUMBERS),
+    _UNSCENTED + "_sigma_points__mutmut_10": ("P = np.asarray(P, )", _MODEL_NUMBERS),
+    _UNSCENTED + "_unscented_transform__mutmut_3": (
+        "points = np.asarray(points, dtype=None)", _MODEL_NUMBERS),
+    _UNSCENTED + "_unscented_transform__mutmut_5": (
+        "points = np.asarray(points, )", _MODEL_NUMBERS),
+    _UNSCENTED + "__apply_model__mutmut_3": (
+        "Y = np.asarray(func(X, *args), dtype=None)", _MODEL_NUMBERS),
+    _UNSCENTED + "__apply_model__mutmut_5": ("Y = np.asarray(func(X, *args), )", _MODEL_NUMBERS),
+    _UNSCENTED + "__apply_model__mutmut_16": (
+        "return np.array([np.atleast_1d(func(xi, *args)) for xi in X], dtype=None)",
+        _MODEL_NUMBERS),
+    _UNSCENTED + "__apply_model__mutmut_18": (
+        "return np.array([np.atleast_1d(func(xi, *args)) for xi in X], )", _MODEL_NUMBERS),
+    _UKF + "predict_points__mutmut_4": ("Y = np.asarray(Y, dtype=None)", _MODEL_NUMBERS),
+    _UKF + "predict_points__mutmut_6": ("Y = np.asarray(Y, )", _MODEL_NUMBERS),
+    _UKF + "predict_points__mutmut_21": (
+        "P += Q if (q_scale == 1.0) and False else q_scale * np.asarray(Q)", _UNIT_SCALE),
+    _UKF + "correct__mutmut_4": ("z = np.asarray(z, dtype=None)", _MODEL_NUMBERS),
+    _UKF + "correct__mutmut_6": ("z = np.asarray(z, )", _MODEL_NUMBERS),
+    _UKF + "correct__mutmut_24": (
+        "S = Pzz + (R if (r_scale == 1.0) and False else r_scale * np.asarray(R))", _UNIT_SCALE),
+    _UKF_FILTERS + "__rodrigues_coefficients__mutmut_21": (
+        "safe = np.where(small, 2.0, theta)", _STAND_IN),
+    _UKF_FILTERS + "__inverse_jacobian_apply__mutmut_12": (
+        "theta = np.sqrt(np.where(small, 2.0, theta2))", _STAND_IN),
+    _UKF_FILTERS + "_error_dynamics__mutmut_6": (
+        "dr, dv, phi = Xt[0:4], Xt[3:6], Xt[6:9]", _ROWS_READ),
+    _UKF_FILTERS + "_error_dynamics__mutmut_10": (
+        "dr, dv, phi = Xt[0:3], Xt[3:6], Xt[6:10]", _ROWS_READ),
+    _UKF_FILTERS + "_error_dynamics__mutmut_65": (
+        'theta2 = np.einsum("IJ,IJ->I", phi_rows, phi_rows)',
+        "einsum's subscripts are labels: IJ,IJ->I is the same sum as ij,ij->i"),
+    _UKF_FILTERS + "_error_dynamics__mutmut_72": (
+        "V = np.empty((4, 3, X.shape[0]))",
+        "a fourth slice of V is rotated along elementwise and never read: RV[0..2] are the same"),
+    _UKF_FILTERS + "_error_dynamics__mutmut_90": ("V[2] = (X[:, 12:16] @ C_t).T", _FIFTEEN),
+    _UKF_FILTERS + "_error_dynamics__mutmut_183": (
+        "Xdot_t[12:16] = 0.0 if tau_a <= 0 else -Xt[12:15] / tau_a", _FIFTEEN),
+    _UKF_FILTERS + "_error_dynamics__mutmut_192": (
+        "Xdot_t[12:15] = 0.0 if tau_a <= 0 else -Xt[12:16] / tau_a", _FIFTEEN),
+    _UKF_FILTERS + "ǁUkfEngineǁ_new_ukf__mutmut_5": ("x0=None, P0=self.P.copy())", _DEFAULT_ZEROS),
+    _UKF_FILTERS + "ǁUkfEngineǁ_new_ukf__mutmut_11": ("P0=self.P.copy())", _DEFAULT_ZEROS),
+    _UKF_FILTERS + "ǁCtfaUkfEngineǁ__init____mutmut_42": (
+        "self.schedule = CtfaQSchedule(np.eye(1), self.q_max_scale / np.eye(1), T1, T2,",
+        "the 1 x 1 identity: q_max_scale over it is q_max_scale times it, exactly"),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
