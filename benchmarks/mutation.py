@@ -91,6 +91,22 @@ MODULES.update({
                                     "tests/test_exchange_by_hand.py"],
 })
 
+# AHRS engines and sensor logs
+MODULES.update({
+    # the scenario replays of test_log_time.py and test_kf_gins.py are left out (seconds a
+    # mutant); the fast files read, check and write logs directly
+    "navcore.sensors.sensorlog": ["tests/test_sensorlog.py", "tests/test_log_time.py",
+                                  "tests/test_kf_gins.py",
+                                  "tests/test_sensorlog_rules_by_hand.py", "-k",
+                                  "not replays_bit_for_bit and not integrated_as_recorded and "
+                                  "not metrics_only and not receiver_sigmas_as_r and not "
+                                  "start_and_stop"],
+    # the turntable scenario runs (test_ahrs_scenario.py) are left out; the filter's short
+    # runs without FMI and the engine by hand are fast
+    "navcore.filters.ahrs": ["tests/test_ahrs.py", "tests/test_mrp.py", "tests/test_fuzzy.py",
+                             "tests/test_ahrs_engine_by_hand.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -525,6 +541,66 @@ EQUIVALENT.update({
         "self._pending_ns = [1] * len(self.slots)",
         "never read before written: a window read at the end of step k (n | k + 1) started "
         "at k + 1 - n, which is due and ends by the stop, so it set its entry"),
+})
+
+# AHRS engines and sensor logs
+_SL = "navcore.sensors.sensorlog.x"
+_SPLITLINES = ("the lines are split by str.splitlines, which breaks at \\r, \\n and \\r\\n as "
+               "universal newlines translate them: the same lines either way")
+_ASCII_TEXT = ("the text written is ASCII (titles, %.17g numbers, Decimal times): every locale "
+               "encoding Python runs under writes the same bytes")
+_LINESEP = ("newline=None writes os.linesep, '\\n' on POSIX; a '\\r\\n' of Windows reads back "
+            "the same (str.splitlines)")
+_LAST_FILE = ("only the truth table can be None (imu and gnss are read or refused), and it is "
+              "the last of the loop: nothing is left to skip")
+_PARTLY = ("a group is partly present exactly when it is partly absent: the condition holds "
+           "for the present and the absent columns alike, and the message names the first "
+           "absent one either way")
+_NONZERO_GAP = ("a refused gap has |gap| > IMU_GAP_TOLERANCE dt > 0 (dt > 0 checked above): it "
+                "is never 0")
+_ORIGIN_PASSED = "write_log, the only caller, always passes the log's origin"
+_PARENT_NEVER_EMPTY = ("Path.parent is never the empty path (str gives '.' for a bare name): the "
+                       "else branch is never taken")
+_UMASK_RESTORED = ("os.umask returns the mask it replaces whatever it sets, and the next call "
+                   "restores that mask")
+EQUIVALENT.update({
+    _SL + "_read_lines__mutmut_8": ('with open(path, encoding="utf-8", newline=None) as f:',
+                                    _SPLITLINES),
+    _SL + "_read_lines__mutmut_11": ('with open(path, encoding="utf-8", ) as f:', _SPLITLINES),
+    _SL + "_read_lines__mutmut_13": ('with open(path, encoding="UTF-8", newline="") as f:',
+                                     _CODEC),
+    _SL + "_parse_rows__mutmut_26": ("return np.array(rows, dtype=None), np.array(numbers)",
+                                     _FLOATS_LIST),
+    _SL + "_parse_rows__mutmut_28": ("return np.array(rows, ), np.array(numbers)",
+                                     _FLOATS_LIST),
+    _SL + "__check_columns__mutmut_8": ("have = [c for c in group if c not in present]",
+                                        _PARTLY),
+    _SL + "_check_imu__mutmut_58": ('kind = "gap" if gap[k - 1] >= 0 else "overlap"',
+                                    _NONZERO_GAP),
+    _SL + "_check_overlap__mutmut_3": ("break", _LAST_FILE),
+    _SL + "_read_log__mutmut_12": ("break", _LAST_FILE),
+    _SL + "_check_log__mutmut_12": ("break", _LAST_FILE),
+    _SL + "__write_table__mutmut_1": (
+        "def _write_table(path: Path, data, origin=1.0) -> None:", _ORIGIN_PASSED),
+    _SL + "__write_table__mutmut_12": (
+        'with open(path, "w", encoding=None, newline="") as f:', _ASCII_TEXT),
+    _SL + "__write_table__mutmut_16": ('with open(path, "w", newline="") as f:', _ASCII_TEXT),
+    _SL + "__write_table__mutmut_21": (
+        'with open(path, "w", encoding="UTF-8", newline="") as f:', _CODEC),
+    _SL + "__write_table__mutmut_13": (
+        'with open(path, "w", encoding="utf-8", newline=None) as f:', _LINESEP),
+    _SL + "__write_table__mutmut_17": ('with open(path, "w", encoding="utf-8", ) as f:',
+                                       _LINESEP),
+    _SL + "_write_log__mutmut_10": (
+        'parent = folder.parent if (str(folder.parent)) or True else Path(".")',
+        _PARENT_NEVER_EMPTY),
+    _SL + "_write_log__mutmut_11": (
+        'parent = folder.parent if str(None) else Path(".")', _PARENT_NEVER_EMPTY),
+    _SL + "_write_log__mutmut_12": (
+        "parent = folder.parent if str(folder.parent) else Path(None)", _PARENT_NEVER_EMPTY),
+    _SL + "_write_log__mutmut_13": (
+        'parent = folder.parent if str(folder.parent) else Path("XX.XX")', _PARENT_NEVER_EMPTY),
+    _SL + "__umask__mutmut_3": ("mask = os.umask(1)", _UMASK_RESTORED),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
