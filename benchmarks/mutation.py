@@ -563,6 +563,20 @@ _PARENT_NEVER_EMPTY = ("Path.parent is never the empty path (str gives '.' for a
                        "else branch is never taken")
 _UMASK_RESTORED = ("os.umask returns the mask it replaces whatever it sets, and the next call "
                    "restores that mask")
+_AHRS = "navcore.filters.ahrs.x"
+_FLOAT_INPUTS = ("the AHRS component passes float64 arrays built from its Real inputs: the "
+                 "conversion returns them as they are")
+_NAN_REFUSED = ("a zero f_b makes down, east and |east| nan, and nan > 0 is false: the second "
+                "test refuses it as the first does")
+_LAST_AXIS = "the stacked components are 1-D (one value per row): axis 1 is the last axis"
+_SERIES_PLACEHOLDER = ("the placeholder divisor of the series branch: np.where takes the series "
+                       "there and discards the quotient")
+_NEVER_READ = "inclination is never read after __init__ (field_unit holds it), nor saved"
+_NIS_SET_FIRST = ("last_nis is read (the component's nis output) only after an update has set "
+                  "it; a float either way, so a restored state is checked alike")
+_SCALES_FLOAT = ("step is called by the engine with its r_scale, a float64 array (np.ones(2), "
+                 "then what step returned)")
+_SLICE_END = "for b = 1 the slice 3:7 of a 6-vector is 3:6; for b = 0 both are 0:3"
 EQUIVALENT.update({
     _SL + "_read_lines__mutmut_8": ('with open(path, encoding="utf-8", newline=None) as f:',
                                     _SPLITLINES),
@@ -601,6 +615,42 @@ EQUIVALENT.update({
     _SL + "_write_log__mutmut_13": (
         'parent = folder.parent if str(folder.parent) else Path("XX.XX")', _PARENT_NEVER_EMPTY),
     _SL + "__umask__mutmut_3": ("mask = os.umask(1)", _UMASK_RESTORED),
+    _AHRS + "_triad_attitude__mutmut_3": ("f_b = np.asarray(f_b, dtype=None)", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_5": ("f_b = np.asarray(f_b, )", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_8": ("m_b = np.asarray(m_b, dtype=None)", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_10": ("m_b = np.asarray(m_b, )", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_25": (
+        "if not (np.linalg.norm(f_b) >= 0 and n_east > 0):", _NAN_REFUSED),
+    _AHRS + "__quat_multiply_rows__mutmut_35": (
+        "w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2), axis=+1)", _LAST_AXIS),
+    _AHRS + "__bias_quats__mutmut_22": ("safe = np.where(t >= 1e-6, t, 1.0)",
+                                        _SERIES_PLACEHOLDER),
+    _AHRS + "__bias_quats__mutmut_24": ("safe = np.where(t > 1e-6, t, 2.0)",
+                                        _SERIES_PLACEHOLDER),
+    _AHRS + "ǁUkfAhrsEngineǁ__init____mutmut_10": ("self.inclination = None", _NEVER_READ),
+    _AHRS + "ǁUkfAhrsEngineǁ__init____mutmut_63": ("self.last_nis = 1.0", _NIS_SET_FIRST),
+    _AHRS + "ǁUkfAhrsEngineǁaccumulate__mutmut_7": (
+        "self.dq = _qmul(self.dq, _rotvec_quat(*np.asarray(dtheta, dtype=None).tolist()))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁaccumulate__mutmut_9": (
+        "self.dq = _qmul(self.dq, _rotvec_quat(*np.asarray(dtheta, ).tolist()))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_4": (
+        "z = np.concatenate((np.asarray(f_b, None), np.asarray(m_b, float) / self.field_inte"
+        "nsity))", _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_6": (
+        "z = np.concatenate((np.asarray(f_b, ), np.asarray(m_b, float) / self.field_intensity))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_9": (
+        "z = np.concatenate((np.asarray(f_b, float), np.asarray(m_b, None) / self.field_inte"
+        "nsity))", _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_11": (
+        "z = np.concatenate((np.asarray(f_b, float), np.asarray(m_b, ) / self.field_intensity))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_26": ("new = np.array(r_scale, dtype=None)",
+                                                _SCALES_FLOAT),
+    _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_28": ("new = np.array(r_scale, )", _SCALES_FLOAT),
+    _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_43": ("block = slice(3 * b, 4 * b + 3)", _SLICE_END),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
