@@ -111,6 +111,22 @@ MODULES.update({
                                     "tests/test_ukf_process_model_series_and_defaults.py"],
 })
 
+# AHRS engines and sensor logs
+MODULES.update({
+    # the scenario replays of test_log_time.py and test_kf_gins.py are left out (seconds a
+    # mutant); the fast files read, check and write logs directly
+    "navcore.sensors.sensorlog": ["tests/test_sensorlog.py", "tests/test_log_time.py",
+                                  "tests/test_kf_gins.py",
+                                  "tests/test_sensorlog_rules_by_hand.py", "-k",
+                                  "not replays_bit_for_bit and not integrated_as_recorded and "
+                                  "not metrics_only and not receiver_sigmas_as_r and not "
+                                  "start_and_stop"],
+    # the turntable scenario runs (test_ahrs_scenario.py) are left out; the filter's short
+    # runs without FMI and the engine by hand are fast
+    "navcore.filters.ahrs": ["tests/test_ahrs.py", "tests/test_mrp.py", "tests/test_fuzzy.py",
+                             "tests/test_ahrs_engine_by_hand.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -678,6 +694,116 @@ EQUIVALENT.update({
     _UKF_FILTERS + "ǁCtfaUkfEngineǁ__init____mutmut_42": (
         "self.schedule = CtfaQSchedule(np.eye(1), self.q_max_scale / np.eye(1), T1, T2,",
         "the 1 x 1 identity: q_max_scale over it is q_max_scale times it, exactly"),
+})
+
+# AHRS engines and sensor logs
+_SL = "navcore.sensors.sensorlog.x"
+_SPLITLINES = ("the lines are split by str.splitlines, which breaks at \\r, \\n and \\r\\n as "
+               "universal newlines translate them: the same lines either way")
+_ASCII_TEXT = ("the text written is ASCII (titles, %.17g numbers, Decimal times): every locale "
+               "encoding Python runs under writes the same bytes")
+_LINESEP = ("newline=None writes os.linesep, '\\n' on POSIX; a '\\r\\n' of Windows reads back "
+            "the same (str.splitlines)")
+_LAST_FILE = ("only the truth table can be None (imu and gnss are read or refused), and it is "
+              "the last of the loop: nothing is left to skip")
+_PARTLY = ("a group is partly present exactly when it is partly absent: the condition holds "
+           "for the present and the absent columns alike, and the message names the first "
+           "absent one either way")
+_NONZERO_GAP = ("a refused gap has |gap| > IMU_GAP_TOLERANCE dt > 0 (dt > 0 checked above): it "
+                "is never 0")
+_ORIGIN_PASSED = "write_log, the only caller, always passes the log's origin"
+_PARENT_NEVER_EMPTY = ("Path.parent is never the empty path (str gives '.' for a bare name): the "
+                       "else branch is never taken")
+_UMASK_RESTORED = ("os.umask returns the mask it replaces whatever it sets, and the next call "
+                   "restores that mask")
+_AHRS = "navcore.filters.ahrs.x"
+_FLOAT_INPUTS = ("the AHRS component passes float64 arrays built from its Real inputs: the "
+                 "conversion returns them as they are")
+_NAN_REFUSED = ("a zero f_b makes down, east and |east| nan, and nan > 0 is false: the second "
+                "test refuses it as the first does")
+_LAST_AXIS = "the stacked components are 1-D (one value per row): axis 1 is the last axis"
+_SERIES_PLACEHOLDER = ("the placeholder divisor of the series branch: np.where takes the series "
+                       "there and discards the quotient")
+_NEVER_READ = "inclination is never read after __init__ (field_unit holds it), nor saved"
+_NIS_SET_FIRST = ("last_nis is read (the component's nis output) only after an update has set "
+                  "it; a float either way, so a restored state is checked alike")
+_SCALES_FLOAT = ("step is called by the engine with its r_scale, a float64 array (np.ones(2), "
+                 "then what step returned)")
+_SLICE_END = "for b = 1 the slice 3:7 of a 6-vector is 3:6; for b = 0 both are 0:3"
+EQUIVALENT.update({
+    _SL + "_read_lines__mutmut_8": ('with open(path, encoding="utf-8", newline=None) as f:',
+                                    _SPLITLINES),
+    _SL + "_read_lines__mutmut_11": ('with open(path, encoding="utf-8", ) as f:', _SPLITLINES),
+    _SL + "_read_lines__mutmut_13": ('with open(path, encoding="UTF-8", newline="") as f:',
+                                     _CODEC),
+    _SL + "_parse_rows__mutmut_26": ("return np.array(rows, dtype=None), np.array(numbers)",
+                                     _FLOATS_LIST),
+    _SL + "_parse_rows__mutmut_28": ("return np.array(rows, ), np.array(numbers)",
+                                     _FLOATS_LIST),
+    _SL + "__check_columns__mutmut_8": ("have = [c for c in group if c not in present]",
+                                        _PARTLY),
+    _SL + "_check_imu__mutmut_58": ('kind = "gap" if gap[k - 1] >= 0 else "overlap"',
+                                    _NONZERO_GAP),
+    _SL + "_check_overlap__mutmut_3": ("break", _LAST_FILE),
+    _SL + "_read_log__mutmut_12": ("break", _LAST_FILE),
+    _SL + "_check_log__mutmut_12": ("break", _LAST_FILE),
+    _SL + "__write_table__mutmut_1": (
+        "def _write_table(path: Path, data, origin=1.0) -> None:", _ORIGIN_PASSED),
+    _SL + "__write_table__mutmut_12": (
+        'with open(path, "w", encoding=None, newline="") as f:', _ASCII_TEXT),
+    _SL + "__write_table__mutmut_16": ('with open(path, "w", newline="") as f:', _ASCII_TEXT),
+    _SL + "__write_table__mutmut_21": (
+        'with open(path, "w", encoding="UTF-8", newline="") as f:', _CODEC),
+    _SL + "__write_table__mutmut_13": (
+        'with open(path, "w", encoding="utf-8", newline=None) as f:', _LINESEP),
+    _SL + "__write_table__mutmut_17": ('with open(path, "w", encoding="utf-8", ) as f:',
+                                       _LINESEP),
+    _SL + "_write_log__mutmut_10": (
+        'parent = folder.parent if (str(folder.parent)) or True else Path(".")',
+        _PARENT_NEVER_EMPTY),
+    _SL + "_write_log__mutmut_11": (
+        'parent = folder.parent if str(None) else Path(".")', _PARENT_NEVER_EMPTY),
+    _SL + "_write_log__mutmut_12": (
+        "parent = folder.parent if str(folder.parent) else Path(None)", _PARENT_NEVER_EMPTY),
+    _SL + "_write_log__mutmut_13": (
+        'parent = folder.parent if str(folder.parent) else Path("XX.XX")', _PARENT_NEVER_EMPTY),
+    _SL + "__umask__mutmut_3": ("mask = os.umask(1)", _UMASK_RESTORED),
+    _AHRS + "_triad_attitude__mutmut_3": ("f_b = np.asarray(f_b, dtype=None)", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_5": ("f_b = np.asarray(f_b, )", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_8": ("m_b = np.asarray(m_b, dtype=None)", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_10": ("m_b = np.asarray(m_b, )", _FLOAT_INPUTS),
+    _AHRS + "_triad_attitude__mutmut_25": (
+        "if not (np.linalg.norm(f_b) >= 0 and n_east > 0):", _NAN_REFUSED),
+    _AHRS + "__quat_multiply_rows__mutmut_35": (
+        "w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2), axis=+1)", _LAST_AXIS),
+    _AHRS + "__bias_quats__mutmut_22": ("safe = np.where(t >= 1e-6, t, 1.0)",
+                                        _SERIES_PLACEHOLDER),
+    _AHRS + "__bias_quats__mutmut_24": ("safe = np.where(t > 1e-6, t, 2.0)",
+                                        _SERIES_PLACEHOLDER),
+    _AHRS + "ǁUkfAhrsEngineǁ__init____mutmut_10": ("self.inclination = None", _NEVER_READ),
+    _AHRS + "ǁUkfAhrsEngineǁ__init____mutmut_63": ("self.last_nis = 1.0", _NIS_SET_FIRST),
+    _AHRS + "ǁUkfAhrsEngineǁaccumulate__mutmut_7": (
+        "self.dq = _qmul(self.dq, _rotvec_quat(*np.asarray(dtheta, dtype=None).tolist()))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁaccumulate__mutmut_9": (
+        "self.dq = _qmul(self.dq, _rotvec_quat(*np.asarray(dtheta, ).tolist()))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_4": (
+        "z = np.concatenate((np.asarray(f_b, None), np.asarray(m_b, float) / self.field_inte"
+        "nsity))", _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_6": (
+        "z = np.concatenate((np.asarray(f_b, ), np.asarray(m_b, float) / self.field_intensity))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_9": (
+        "z = np.concatenate((np.asarray(f_b, float), np.asarray(m_b, None) / self.field_inte"
+        "nsity))", _FLOAT_INPUTS),
+    _AHRS + "ǁUkfAhrsEngineǁupdate__mutmut_11": (
+        "z = np.concatenate((np.asarray(f_b, float), np.asarray(m_b, ) / self.field_intensity))",
+        _FLOAT_INPUTS),
+    _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_26": ("new = np.array(r_scale, dtype=None)",
+                                                _SCALES_FLOAT),
+    _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_28": ("new = np.array(r_scale, )", _SCALES_FLOAT),
+    _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_43": ("block = slice(3 * b, 4 * b + 3)", _SLICE_END),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"

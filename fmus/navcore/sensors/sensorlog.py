@@ -347,11 +347,15 @@ def read_log(folder, max_dt_jitter=DEFAULT_MAX_DT_JITTER) -> SensorLog:
 
 
 def check_log(log: SensorLog, where="sensor log", sources=None) -> None:
-    """The rules of :func:`read_log` on arrays.  Errors name ``sources[file]`` (the file the
-    data came from) or ``where/file``, and the line given by an optional ``"_line"`` array
-    of the table (else the line the row will have in the written file); ``"_line"`` arrays
-    are removed afterwards."""
+    """The rules of :func:`read_log` on arrays (``imu`` and ``gnss`` required, as their files
+    are).  Errors name ``sources[file]`` (the file the data came from) or ``where/file``, and
+    the line given by an optional ``"_line"`` array of the table (else the line the row will
+    have in the written file); ``"_line"`` arrays are removed afterwards."""
     sources = sources or {}
+    for name, data in ((IMU_FILE, log.imu), (GNSS_FILE, log.gnss)):
+        if data is None:   # read_log would refuse the folder written without it
+            path = sources.get(name, f"{where}/{name}")
+            raise LogError(f"{path}: no data (a sensor log needs {IMU_FILE} and {GNSS_FILE})")
     for name, data in ((IMU_FILE, log.imu), (GNSS_FILE, log.gnss), (TRUTH_FILE, log.truth)):
         if data is None:
             continue
