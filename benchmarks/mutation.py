@@ -101,6 +101,14 @@ MODULES.update({
     "navcore.filters.adaptive_filters": ["tests/test_adaptive_engines_by_hand.py"],
 })
 
+# Campaign summary, sweep and executor
+MODULES.update({
+    "orchestrator.campaigns.campaign_summary": ["tests/test_campaign_summary_by_hand.py",
+                                                "tests/test_statistics.py"],
+    "orchestrator.campaigns.sweep": ["tests/test_sweep.py",
+                                     "tests/test_sweep_points_tasks_and_plot.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -429,6 +437,16 @@ _SMALL_BINOMIALS = ("the binomial weights are integers of at most C(11, 5) = 462
                     "the variances")
 _ALL_VARIANCES = ("sample_variances holds at most newton_order + 1 values, so p + 1 is its "
                   "length and both slices take all of it")
+# Campaign summary, sweep and executor
+_SUMMARY = "orchestrator.campaigns.campaign_summary.x"
+_MISSION_LAST = ("the mission axes, the only ones without a paper key, are the last of AXES: "
+                 "stopping at the first of them skips the same axes as skipping each")
+_SWEEP = "orchestrator.campaigns.sweep.x"
+_DIRECT_ONLY = ("simulate_scenario reads build and log only on the fmu backend (to build the "
+                "FMUs first); run_point always runs on the direct backend")
+_NAN_SPELLING = "float() reads 'nan' in any case: float('NAN') is the same nan"
+_GRID_ON = ("matplotlib turns the grid on when line properties (alpha) are given and the "
+            "first argument is None or left out")
 EQUIVALENT.update({
     _GA + "_decode__mutmut_4": ("return lo + np.asarray(genes, dtype=None) * (hi - lo)",
                                 _FLOAT_ALREADY),
@@ -597,6 +615,18 @@ EQUIVALENT.update({
         _SMALL_BINOMIALS),
     _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_30": (
         "newest_first = variances[::-1][:p + 2]", _ALL_VARIANCES),
+    # Campaign summary, sweep and executor
+    _SUMMARY + "_paper_values__mutmut_14": ("break", _MISSION_LAST),
+    _SWEEP + "_run_point__mutmut_19": ("build=None, log=lambda m: None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_20": ("build=False, log=None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_26": ("log=lambda m: None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_27": ("build=False, )", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_30": ("build=True, log=lambda m: None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_31": ("build=False, log=lambda m: 0)", _DIRECT_ONLY),
+    _SWEEP + "__mean_over_seeds__mutmut_14": (
+        'return float(np.mean(values)) if values else float("NAN")', _NAN_SPELLING),
+    _SWEEP + "_plot_sweep__mutmut_82": ("ax.grid(None, alpha=0.3)", _GRID_ON),
+    _SWEEP + "_plot_sweep__mutmut_84": ("ax.grid(alpha=0.3)", _GRID_ON),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
