@@ -127,6 +127,19 @@ MODULES.update({
                              "tests/test_ahrs_engine_by_hand.py"],
 })
 
+# Campaign summary, sweep and executor
+MODULES.update({
+    "orchestrator.campaigns.campaign_summary": ["tests/test_campaign_summary_by_hand.py",
+                                                "tests/test_statistics.py"],
+    "orchestrator.campaigns.sweep": ["tests/test_sweep.py",
+                                     "tests/test_sweep_points_tasks_and_plot.py"],
+    # the run on a real Dask LocalCluster is left out (a second a mutant, and a mutant that
+    # breaks closing leaves its processes behind); the stand-ins check the Dask code instead
+    "orchestrator.campaigns.executor": ["tests/test_executor.py",
+                                        "tests/test_executor_modes_with_stand_ins.py", "-k",
+                                        "not dask_local_cluster"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -470,6 +483,16 @@ _STAND_IN = ("the stand-in for a small angle only keeps the closed form finite w
 _ROWS_READ = "only rows 0-2 of it are read (dr[0], dr[2]; phi[_NEXT], phi[_PREV])"
 _FIFTEEN = "the state has 15 components: the slice 12:16 is 12:15"
 _DEFAULT_ZEROS = "the filter's default initial state is zeros(n), the one passed"
+# Campaign summary, sweep and executor
+_SUMMARY = "orchestrator.campaigns.campaign_summary.x"
+_MISSION_LAST = ("the mission axes, the only ones without a paper key, are the last of AXES: "
+                 "stopping at the first of them skips the same axes as skipping each")
+_SWEEP = "orchestrator.campaigns.sweep.x"
+_DIRECT_ONLY = ("simulate_scenario reads build and log only on the fmu backend (to build the "
+                "FMUs first); run_point always runs on the direct backend")
+_NAN_SPELLING = "float() reads 'nan' in any case: float('NAN') is the same nan"
+_GRID_ON = ("matplotlib turns the grid on when line properties (alpha) are given and the "
+            "first argument is None or left out")
 EQUIVALENT.update({
     _GA + "_decode__mutmut_4": ("return lo + np.asarray(genes, dtype=None) * (hi - lo)",
                                 _FLOAT_ALREADY),
@@ -804,6 +827,18 @@ EQUIVALENT.update({
                                                 _SCALES_FLOAT),
     _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_28": ("new = np.array(r_scale, )", _SCALES_FLOAT),
     _AHRS + "ǁFuzzyAdaptiveRǁstep__mutmut_43": ("block = slice(3 * b, 4 * b + 3)", _SLICE_END),
+    # Campaign summary, sweep and executor
+    _SUMMARY + "_paper_values__mutmut_14": ("break", _MISSION_LAST),
+    _SWEEP + "_run_point__mutmut_19": ("build=None, log=lambda m: None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_20": ("build=False, log=None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_26": ("log=lambda m: None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_27": ("build=False, )", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_30": ("build=True, log=lambda m: None)", _DIRECT_ONLY),
+    _SWEEP + "_run_point__mutmut_31": ("build=False, log=lambda m: 0)", _DIRECT_ONLY),
+    _SWEEP + "__mean_over_seeds__mutmut_14": (
+        'return float(np.mean(values)) if values else float("NAN")', _NAN_SPELLING),
+    _SWEEP + "_plot_sweep__mutmut_82": ("ax.grid(None, alpha=0.3)", _GRID_ON),
+    _SWEEP + "_plot_sweep__mutmut_84": ("ax.grid(alpha=0.3)", _GRID_ON),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
