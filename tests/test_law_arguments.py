@@ -10,11 +10,11 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.linalg import lapack
 
 from navcore.errors import InputError, ParameterError
 from navcore.filters import adaptive_laws as al
 from navcore.filters import robust_laws as rl
+from lapack_cases import case_where_the_solves_differ
 
 M, N = 2, 3                                   # measurement and state dimensions
 H = np.hstack([np.eye(M), np.zeros((M, 1))])  # (2, 3)
@@ -165,15 +165,9 @@ def test_compression_with_a_small_gain():
 def test_compression_nis_is_numpys_lu_solve_of_numpys_factor():
     """The documented arithmetic of the compression factor (paper 001's), bit for bit: tau =
     |u|^2 with u from numpy's solve with numpy's Cholesky factor, not a triangular solve."""
-    # a case where a triangular solve (LAPACK dtrtrs) gives another last bit
-    G = np.array([[0.83, 0.07, -0.37], [0.07, 1.75, -0.18], [-0.37, -0.18, 2.28]])
-    v = np.array([1.2, 1.0, 1.3])
-    L = np.linalg.cholesky(G)
-    u = np.linalg.solve(L, v)
-    triangular, _ = lapack.dtrtrs(L, v, lower=1)
-    assert float(triangular @ triangular) != float(u @ u)    # the case tells them apart
-    tau = al.compression_factor(v, G, np.eye(3))[1]
-    assert tau == float(u @ u)
+    S, v, _, nis_lu = case_where_the_solves_differ()
+    tau = al.compression_factor(v, S, np.eye(3))[1]
+    assert tau == nis_lu
 
 
 # -- robust laws ----------------------------------------------------------------------------
