@@ -91,6 +91,17 @@ MODULES.update({
                                     "tests/test_exchange_by_hand.py"],
 })
 
+# filter helpers and log converters
+MODULES.update({
+    "navcore.filters.array_checks": ["tests/test_array_checks.py",
+                                     "tests/test_law_arguments.py",
+                                     "tests/test_innovation_checks.py"],
+    "navcore.filters.nis_monitor": ["tests/test_nis_monitor.py",
+                                    "tests/test_nis_monitor_by_hand.py"],
+    "navcore.filters.initial_state": ["tests/test_initial_state.py"],
+    "navcore.sensors.log_converters": ["tests/test_sensorlog.py", "tests/test_kf_gins.py"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -390,6 +401,9 @@ _PATHSPEC = ("'--' only separates the paths from options: as a pathspec it match
 _FMU_REGISTRY = ("Simulation reads the registry only on the direct backend (the fmu backend "
                  "describes the FMU files)")
 _FALSY_SEP = "sep is only tested for truth: None and '' are both false"
+# filter helpers and log converters
+_ZERO_SPAN = ("with a span of 0 an update leaves the window as soon as it is added (its time "
+              "is <= t - 0), so the window never holds MIN_UPDATES: no warning either way")
 _CAMPAIGN_JSON_LAYOUT = "only the layout of the JSON text changes; its readers parse it"
 _ASCII_JSON = ("json.dumps writes ASCII (ensure_ascii): the file reads the same in UTF-8 and "
                "in the locale's ASCII-compatible encoding")
@@ -525,6 +539,13 @@ EQUIVALENT.update({
         "self._pending_ns = [1] * len(self.slots)",
         "never read before written: a window read at the end of step k (n | k + 1) started "
         "at k + 1 - n, which is due and ends by the stop, so it set its entry"),
+    # filter helpers and log converters
+    "navcore.filters.array_checks.x_square__mutmut_23": (
+        "if m is not None and a.shape[1] != m:", _SQUARE),
+    "navcore.filters.nis_monitor.xǁNisMonitorǁ__init____mutmut_5": (
+        "self.warned = None", "warned is only read by `if`: None is false as False is"),
+    "navcore.filters.nis_monitor.xǁNisMonitorǁobserve__mutmut_2": (
+        "if self.span < 0.0 or self.warned:", _ZERO_SPAN),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
