@@ -98,8 +98,13 @@ MODULES.update({
                                      "tests/test_innovation_checks.py"],
     "navcore.filters.nis_monitor": ["tests/test_nis_monitor.py",
                                     "tests/test_nis_monitor_by_hand.py"],
-    "navcore.filters.initial_state": ["tests/test_initial_state.py"],
-    "navcore.sensors.log_converters": ["tests/test_sensorlog.py", "tests/test_kf_gins.py"],
+    # test_initial_state.py's runs through the filters (seconds each) are left out
+    "navcore.filters.initial_state": ["tests/test_initial_state_by_hand.py",
+                                      "tests/test_initial_state.py", "-k",
+                                      "by_hand or coarse_alignment_recovers"],
+    # test_kf_gins.py's run of a filter on the converted log (seconds) is left out
+    "navcore.sensors.log_converters": ["tests/test_sensorlog.py", "tests/test_kf_gins.py", "-k",
+                                       "not receiver_sigmas_as_r"],
 })
 
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
@@ -402,6 +407,15 @@ _FMU_REGISTRY = ("Simulation reads the registry only on the direct backend (the 
                  "describes the FMU files)")
 _FALSY_SEP = "sep is only tested for truth: None and '' are both false"
 # filter helpers and log converters
+_INIT = "navcore.filters.initial_state.x"
+_FLOAT_PRODUCT = ("the integer array meets a float (a DCM, a float division, a square root of "
+                  "a sum with floats) before any result: the same float64 values")
+_SCALE_FREE = ("leveling and gyrocompassing are atan2 of ratios of the mean's components: a "
+               "positive time (> 0 there) times the sum gives the angles of the sum / time")
+_ONLY_WRITTEN = ("the initializer's warned flag is written by the filter shell and saved with "
+                 "the state, never read")
+_THREE_OR_SIX = ("the fix sigmas are 3 (position) or 6 (with velocity) values: the slice "
+                 "3:7 of six values is 3:6, 0:4 of three is 0:3")
 _ZERO_SPAN = ("with a span of 0 an update leaves the window as soon as it is added (its time "
               "is <= t - 0), so the window never holds MIN_UPDATES: no warning either way")
 _CAMPAIGN_JSON_LAYOUT = "only the layout of the JSON text changes; its readers parse it"
@@ -546,6 +560,44 @@ EQUIVALENT.update({
         "self.warned = None", "warned is only read by `if`: None is false as False is"),
     "navcore.filters.nis_monitor.xǁNisMonitorǁobserve__mutmut_2": (
         "if self.span < 0.0 or self.warned:", _ZERO_SPAN),
+    _INIT + "_coarse_alignment__mutmut_12": (
+        "w_level = euler_to_dcm(roll, pitch, 0.0) @ np.asarray(w_body, dtype=None)",
+        _FLOAT_PRODUCT),
+    _INIT + "_coarse_alignment__mutmut_14": (
+        "w_level = euler_to_dcm(roll, pitch, 0.0) @ np.asarray(w_body, )", _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_3": ("d = np.asarray(z_pos, dtype=None)[:3]", _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_5": ("d = np.asarray(z_pos, )[:3]", _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_11": (
+        "sigma = np.sqrt(np.asarray(pos_var, dtype=None) + np.asarray(r_pos, dtype=float) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_13": (
+        "sigma = np.sqrt(np.asarray(pos_var, ) + np.asarray(r_pos, dtype=float) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_16": (
+        "sigma = np.sqrt(np.asarray(pos_var, dtype=float) + np.asarray(r_pos, dtype=None) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_18": (
+        "sigma = np.sqrt(np.asarray(pos_var, dtype=float) + np.asarray(r_pos, ) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "ǁInitializerǁ__init____mutmut_8": (
+        "self.checked = None          # given: the first fix was compared with the state",
+        "checked is only read by `if not`: None is false as False is"),
+    _INIT + "ǁInitializerǁ__init____mutmut_10": (
+        "self.warned = None           # ... and found too far from it (warned once)",
+        _ONLY_WRITTEN),
+    _INIT + "ǁInitializerǁ__init____mutmut_11": (
+        "self.warned = True           # ... and found too far from it (warned once)",
+        _ONLY_WRITTEN),
+    _INIT + "ǁInitializerǁstate_from_fix__mutmut_38": (
+        "roll, pitch = level(self.rest_dvel * self.rest_time)", _SCALE_FREE),
+    _INIT + "ǁInitializerǁstate_from_alignment__mutmut_8": (
+        "roll, pitch, yaw = coarse_alignment(self.all_dvel * self.elapsed,", _SCALE_FREE),
+    _INIT + "ǁInitializerǁstate_from_alignment__mutmut_9": (
+        "self.all_dtheta * self.elapsed)", _SCALE_FREE),
+    _INIT + "ǁInitializerǁstart_sigmas__mutmut_24": (
+        "v_sigma = (r_sigma[3:7] if len(r_sigma) == 6 else", _THREE_OR_SIX),
+    _INIT + "ǁInitializerǁstart_sigmas__mutmut_32": (
+        "math.sqrt(2.0) * r_sigma[0:4] / MAX_DIFFERENCED_FIX_GAP)", _THREE_OR_SIX),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
