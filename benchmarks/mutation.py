@@ -103,7 +103,8 @@ MODULES.update({
                                       "tests/test_initial_state.py", "-k",
                                       "by_hand or coarse_alignment_recovers"],
     # test_kf_gins.py's run of a filter on the converted log (seconds) is left out
-    "navcore.sensors.log_converters": ["tests/test_sensorlog.py", "tests/test_kf_gins.py", "-k",
+    "navcore.sensors.log_converters": ["tests/test_sensorlog.py", "tests/test_kf_gins.py",
+                                       "tests/test_log_converters_by_hand.py", "-k",
                                        "not receiver_sigmas_as_r"],
 })
 
@@ -416,6 +417,21 @@ _ONLY_WRITTEN = ("the initializer's warned flag is written by the filter shell a
                  "the state, never read")
 _THREE_OR_SIX = ("the fix sigmas are 3 (position) or 6 (with velocity) values: the slice "
                  "3:7 of six values is 3:6, 0:4 of three is 0:3")
+_LC = "navcore.sensors.log_converters.x"
+_COMMENT_SPLIT = "only the text before the first '#' is kept: [0] of any split at '#' is it"
+_PARSED_FLOATS = "parse_numbers returns Python floats: numpy makes a float64 array of them anyway"
+_FLOAT_RATES = ("the callers pass float arrays (rates times a float constant, read from text); "
+                "0.5 * dt makes the result float, with integers exact below 2**53")
+_LOCAL_FRAME_DEFAULT = "an empty first column does not start with gps_x, as 'XXXX' does not"
+_BOOL_AS_FLOAT = "astype(None) is astype(float64), numpy's default dtype"
+_EXTRA_LINE = ("one line number more than rows: only the rows' entries are read (_line(data, k) "
+               "for a row k)")
+_DEFAULT_LINE = ("check_log's default line of row k is k + 2, the line numbers given here for "
+                 "the fixes (gps_time.csv) and the truth (time.csv)")
+_NAMED_SOURCES = ("every file check_log names here is in sources; the where of _check_columns "
+                  "is never printed: the converter always gives every column")
+_ONE_SAMPLE_SPAN = ("a table has at least one row here (no samples are refused before); for one "
+                    "row t[-1] - t[0] = 0 and a span of 1.0 gives the same rate 0")
 _ZERO_SPAN = ("with a span of 0 an update leaves the window as soon as it is added (its time "
               "is <= t - 0), so the window never holds MIN_UPDATES: no warning either way")
 _CAMPAIGN_JSON_LAYOUT = "only the layout of the JSON text changes; its readers parse it"
@@ -560,6 +576,46 @@ EQUIVALENT.update({
         "self.warned = None", "warned is only read by `if`: None is false as False is"),
     "navcore.filters.nis_monitor.xǁNisMonitorǁobserve__mutmut_2": (
         "if self.span < 0.0 or self.warned:", _ZERO_SPAN),
+    _LC + "_read_plain_text__mutmut_19": (
+        'text = line.split("#", )[0].replace(",", " ")', _COMMENT_SPLIT),
+    _LC + "_read_plain_text__mutmut_22": (
+        'text = line.split("#", 2)[0].replace(",", " ")', _COMMENT_SPLIT),
+    _LC + "_read_plain_text__mutmut_58": (
+        "return np.array(rows, dtype=None), np.array(numbers), tuple(names)", _PARSED_FLOATS),
+    _LC + "_read_plain_text__mutmut_60": (
+        "return np.array(rows, ), np.array(numbers), tuple(names)", _PARSED_FLOATS),
+    _LC + "_trapezoid_increments__mutmut_3": ("time = np.asarray(time, dtype=None)", _FLOAT_RATES),
+    _LC + "_trapezoid_increments__mutmut_5": ("time = np.asarray(time, )", _FLOAT_RATES),
+    _LC + "_trapezoid_increments__mutmut_8": (
+        "rates = np.asarray(rates, dtype=None)", _FLOAT_RATES),
+    _LC + "_trapezoid_increments__mutmut_10": ("rates = np.asarray(rates, )", _FLOAT_RATES),
+    _LC + "__refuse_local_frame__mutmut_13": (
+        'first = lines[0].split(",")[0].strip() if lines else "XXXX"', _LOCAL_FRAME_DEFAULT),
+    _LC + "_read_gnss_ins_sim__mutmut_199": (
+        '"valid": (valid > 0.5).astype(None)}', _BOOL_AS_FLOAT),
+    _LC + "_read_gnss_ins_sim__mutmut_326": ('imu["_line"] = np.arange(3, n + 3)', _EXTRA_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_327": ('gnss["_line"] = None', _DEFAULT_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_336": (
+        'gnss["_line"] = np.arange(2, len(gps_time) + 3)', _EXTRA_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_338": ('truth["_line"] = None', _DEFAULT_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_347": (
+        'truth["_line"] = np.arange(2, n + 3)', _EXTRA_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_356": (
+        'check_log(log, where=None, sources={IMU_FILE: d / "time.csv", GNSS_FILE: d / '
+        '"gps_time.csv",', _NAMED_SOURCES),
+    _LC + "_read_gnss_ins_sim__mutmut_359": (
+        'check_log(log, sources={IMU_FILE: d / "time.csv", GNSS_FILE: d / "gps_time.csv",',
+        _NAMED_SOURCES),
+    _LC + "_read_gnss_ins_sim__mutmut_361": (
+        'check_log(log, where=str(None), sources={IMU_FILE: d / "time.csv", GNSS_FILE: d / '
+        '"gps_time.csv",', _NAMED_SOURCES),
+    _LC + "__check_kf_gins_pair__mutmut_15": (
+        'span = lambda t: float(t[-1] - t[0]) if (len(t) > 1) or True else 0.0',
+        _ONE_SAMPLE_SPAN),
+    _LC + "__check_kf_gins_pair__mutmut_21": (
+        'span = lambda t: float(t[-1] - t[0]) if len(t) >= 1 else 0.0', _ONE_SAMPLE_SPAN),
+    _LC + "__check_kf_gins_pair__mutmut_23": (
+        'span = lambda t: float(t[-1] - t[0]) if len(t) > 1 else 1.0', _ONE_SAMPLE_SPAN),
     _INIT + "_coarse_alignment__mutmut_12": (
         "w_level = euler_to_dcm(roll, pitch, 0.0) @ np.asarray(w_body, dtype=None)",
         _FLOAT_PRODUCT),
