@@ -140,6 +140,23 @@ MODULES.update({
                                         "not dask_local_cluster"],
 })
 
+# filter helpers and log converters
+MODULES.update({
+    "navcore.filters.array_checks": ["tests/test_array_checks.py",
+                                     "tests/test_law_arguments.py",
+                                     "tests/test_innovation_checks.py"],
+    "navcore.filters.nis_monitor": ["tests/test_nis_monitor.py",
+                                    "tests/test_nis_monitor_by_hand.py"],
+    # test_initial_state.py's runs through the filters (seconds each) are left out
+    "navcore.filters.initial_state": ["tests/test_initial_state_by_hand.py",
+                                      "tests/test_initial_state.py", "-k",
+                                      "by_hand or coarse_alignment_recovers"],
+    # test_kf_gins.py's run of a filter on the converted log (seconds) is left out
+    "navcore.sensors.log_converters": ["tests/test_sensorlog.py", "tests/test_kf_gins.py",
+                                       "tests/test_log_converters_by_hand.py", "-k",
+                                       "not receiver_sigmas_as_r"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -439,6 +456,33 @@ _PATHSPEC = ("'--' only separates the paths from options: as a pathspec it match
 _FMU_REGISTRY = ("Simulation reads the registry only on the direct backend (the fmu backend "
                  "describes the FMU files)")
 _FALSY_SEP = "sep is only tested for truth: None and '' are both false"
+# filter helpers and log converters
+_INIT = "navcore.filters.initial_state.x"
+_FLOAT_PRODUCT = ("the integer array meets a float (a DCM, a float division, a square root of "
+                  "a sum with floats) before any result: the same float64 values")
+_SCALE_FREE = ("leveling and gyrocompassing are atan2 of ratios of the mean's components: a "
+               "positive time (> 0 there) times the sum gives the angles of the sum / time")
+_ONLY_WRITTEN = ("the initializer's warned flag is written by the filter shell and saved with "
+                 "the state, never read")
+_THREE_OR_SIX = ("the fix sigmas are 3 (position) or 6 (with velocity) values: the slice "
+                 "3:7 of six values is 3:6, 0:4 of three is 0:3")
+_LC = "navcore.sensors.log_converters.x"
+_COMMENT_SPLIT = "only the text before the first '#' is kept: [0] of any split at '#' is it"
+_PARSED_FLOATS = "parse_numbers returns Python floats: numpy makes a float64 array of them anyway"
+_FLOAT_RATES = ("the callers pass float arrays (rates times a float constant, read from text); "
+                "0.5 * dt makes the result float, with integers exact below 2**53")
+_LOCAL_FRAME_DEFAULT = "an empty first column does not start with gps_x, as 'XXXX' does not"
+_BOOL_AS_FLOAT = "astype(None) is astype(float64), numpy's default dtype"
+_EXTRA_LINE = ("one line number more than rows: only the rows' entries are read (_line(data, k) "
+               "for a row k)")
+_DEFAULT_LINE = ("check_log's default line of row k is k + 2, the line numbers given here for "
+                 "the fixes (gps_time.csv) and the truth (time.csv)")
+_NAMED_SOURCES = ("every file check_log names here is in sources; the where of _check_columns "
+                  "is never printed: the converter always gives every column")
+_ONE_SAMPLE_SPAN = ("a table has at least one row here (no samples are refused before); for one "
+                    "row t[-1] - t[0] = 0 and a span of 1.0 gives the same rate 0")
+_ZERO_SPAN = ("with a span of 0 an update leaves the window as soon as it is added (its time "
+              "is <= t - 0), so the window never holds MIN_UPDATES: no warning either way")
 _CAMPAIGN_JSON_LAYOUT = "only the layout of the JSON text changes; its readers parse it"
 _ASCII_JSON = ("json.dumps writes ASCII (ensure_ascii): the file reads the same in UTF-8 and "
                "in the locale's ASCII-compatible encoding")
@@ -839,6 +883,91 @@ EQUIVALENT.update({
         'return float(np.mean(values)) if values else float("NAN")', _NAN_SPELLING),
     _SWEEP + "_plot_sweep__mutmut_82": ("ax.grid(None, alpha=0.3)", _GRID_ON),
     _SWEEP + "_plot_sweep__mutmut_84": ("ax.grid(alpha=0.3)", _GRID_ON),
+    # filter helpers and log converters
+    "navcore.filters.array_checks.x_square__mutmut_23": (
+        "if m is not None and a.shape[1] != m:", _SQUARE),
+    "navcore.filters.nis_monitor.xǁNisMonitorǁ__init____mutmut_5": (
+        "self.warned = None", "warned is only read by `if`: None is false as False is"),
+    "navcore.filters.nis_monitor.xǁNisMonitorǁobserve__mutmut_2": (
+        "if self.span < 0.0 or self.warned:", _ZERO_SPAN),
+    _LC + "_read_plain_text__mutmut_19": (
+        'text = line.split("#", )[0].replace(",", " ")', _COMMENT_SPLIT),
+    _LC + "_read_plain_text__mutmut_22": (
+        'text = line.split("#", 2)[0].replace(",", " ")', _COMMENT_SPLIT),
+    _LC + "_read_plain_text__mutmut_58": (
+        "return np.array(rows, dtype=None), np.array(numbers), tuple(names)", _PARSED_FLOATS),
+    _LC + "_read_plain_text__mutmut_60": (
+        "return np.array(rows, ), np.array(numbers), tuple(names)", _PARSED_FLOATS),
+    _LC + "_trapezoid_increments__mutmut_3": ("time = np.asarray(time, dtype=None)", _FLOAT_RATES),
+    _LC + "_trapezoid_increments__mutmut_5": ("time = np.asarray(time, )", _FLOAT_RATES),
+    _LC + "_trapezoid_increments__mutmut_8": (
+        "rates = np.asarray(rates, dtype=None)", _FLOAT_RATES),
+    _LC + "_trapezoid_increments__mutmut_10": ("rates = np.asarray(rates, )", _FLOAT_RATES),
+    _LC + "__refuse_local_frame__mutmut_13": (
+        'first = lines[0].split(",")[0].strip() if lines else "XXXX"', _LOCAL_FRAME_DEFAULT),
+    _LC + "_read_gnss_ins_sim__mutmut_199": (
+        '"valid": (valid > 0.5).astype(None)}', _BOOL_AS_FLOAT),
+    _LC + "_read_gnss_ins_sim__mutmut_326": ('imu["_line"] = np.arange(3, n + 3)', _EXTRA_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_327": ('gnss["_line"] = None', _DEFAULT_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_336": (
+        'gnss["_line"] = np.arange(2, len(gps_time) + 3)', _EXTRA_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_338": ('truth["_line"] = None', _DEFAULT_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_347": (
+        'truth["_line"] = np.arange(2, n + 3)', _EXTRA_LINE),
+    _LC + "_read_gnss_ins_sim__mutmut_356": (
+        'check_log(log, where=None, sources={IMU_FILE: d / "time.csv", GNSS_FILE: d / '
+        '"gps_time.csv",', _NAMED_SOURCES),
+    _LC + "_read_gnss_ins_sim__mutmut_359": (
+        'check_log(log, sources={IMU_FILE: d / "time.csv", GNSS_FILE: d / "gps_time.csv",',
+        _NAMED_SOURCES),
+    _LC + "_read_gnss_ins_sim__mutmut_361": (
+        'check_log(log, where=str(None), sources={IMU_FILE: d / "time.csv", GNSS_FILE: d / '
+        '"gps_time.csv",', _NAMED_SOURCES),
+    _LC + "__check_kf_gins_pair__mutmut_15": (
+        'span = lambda t: float(t[-1] - t[0]) if (len(t) > 1) or True else 0.0',
+        _ONE_SAMPLE_SPAN),
+    _LC + "__check_kf_gins_pair__mutmut_21": (
+        'span = lambda t: float(t[-1] - t[0]) if len(t) >= 1 else 0.0', _ONE_SAMPLE_SPAN),
+    _LC + "__check_kf_gins_pair__mutmut_23": (
+        'span = lambda t: float(t[-1] - t[0]) if len(t) > 1 else 1.0', _ONE_SAMPLE_SPAN),
+    _INIT + "_coarse_alignment__mutmut_12": (
+        "w_level = euler_to_dcm(roll, pitch, 0.0) @ np.asarray(w_body, dtype=None)",
+        _FLOAT_PRODUCT),
+    _INIT + "_coarse_alignment__mutmut_14": (
+        "w_level = euler_to_dcm(roll, pitch, 0.0) @ np.asarray(w_body, )", _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_3": ("d = np.asarray(z_pos, dtype=None)[:3]", _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_5": ("d = np.asarray(z_pos, )[:3]", _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_11": (
+        "sigma = np.sqrt(np.asarray(pos_var, dtype=None) + np.asarray(r_pos, dtype=float) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_13": (
+        "sigma = np.sqrt(np.asarray(pos_var, ) + np.asarray(r_pos, dtype=float) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_16": (
+        "sigma = np.sqrt(np.asarray(pos_var, dtype=float) + np.asarray(r_pos, dtype=None) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "_disagreement__mutmut_18": (
+        "sigma = np.sqrt(np.asarray(pos_var, dtype=float) + np.asarray(r_pos, ) ** 2)",
+        _FLOAT_PRODUCT),
+    _INIT + "ǁInitializerǁ__init____mutmut_8": (
+        "self.checked = None          # given: the first fix was compared with the state",
+        "checked is only read by `if not`: None is false as False is"),
+    _INIT + "ǁInitializerǁ__init____mutmut_10": (
+        "self.warned = None           # ... and found too far from it (warned once)",
+        _ONLY_WRITTEN),
+    _INIT + "ǁInitializerǁ__init____mutmut_11": (
+        "self.warned = True           # ... and found too far from it (warned once)",
+        _ONLY_WRITTEN),
+    _INIT + "ǁInitializerǁstate_from_fix__mutmut_38": (
+        "roll, pitch = level(self.rest_dvel * self.rest_time)", _SCALE_FREE),
+    _INIT + "ǁInitializerǁstate_from_alignment__mutmut_8": (
+        "roll, pitch, yaw = coarse_alignment(self.all_dvel * self.elapsed,", _SCALE_FREE),
+    _INIT + "ǁInitializerǁstate_from_alignment__mutmut_9": (
+        "self.all_dtheta * self.elapsed)", _SCALE_FREE),
+    _INIT + "ǁInitializerǁstart_sigmas__mutmut_24": (
+        "v_sigma = (r_sigma[3:7] if len(r_sigma) == 6 else", _THREE_OR_SIX),
+    _INIT + "ǁInitializerǁstart_sigmas__mutmut_32": (
+        "math.sqrt(2.0) * r_sigma[0:4] / MAX_DIFFERENCED_FIX_GAP)", _THREE_OR_SIX),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
