@@ -157,6 +157,16 @@ MODULES.update({
                                        "not receiver_sigmas_as_r"],
 })
 
+# Co-simulation master: its runs on the direct backend with toy components and with the tiny
+# FMUs of test_master.py (the master runs in the test process).  test_master.py's CSV test is
+# left out: polars, which writes the CSV, keeps a thread pool that does not survive mutmut's
+# fork, so in a mutant's process it hangs and every mutant it reaches times out
+MODULES.update({
+    "orchestrator.cosim.master": ["tests/test_master.py", "tests/test_jacobi.py",
+                                  "tests/test_exchange_by_hand.py",
+                                  "tests/test_master_by_hand.py", "-k", "not csv_header"],
+})
+
 # lines whose mutants are not run: raising or warning with a message (see the docstring)
 NOT_MUTATED_PATTERNS = [r"^\s*raise\s", r"\bwarn(ings\.warn)?\(", r"navfmu: (error|warning)"]
 
@@ -968,6 +978,61 @@ EQUIVALENT.update({
         "v_sigma = (r_sigma[3:7] if len(r_sigma) == 6 else", _THREE_OR_SIX),
     _INIT + "ǁInitializerǁstart_sigmas__mutmut_32": (
         "math.sqrt(2.0) * r_sigma[0:4] / MAX_DIFFERENCED_FIX_GAP)", _THREE_OR_SIX),
+})
+
+# Co-simulation master
+_MASTER = "orchestrator.cosim.master.x"
+_SIM = _MASTER + "ǁSimulationǁ"
+_WHOLE_ROW = ("the whole-row copy is a shortcut: a type it no longer takes, or takes as well, "
+              "is copied by take with the indices 0 .. n-1, the same values")
+_INDEX_IN_RANGE = ("every index taken is a position of the vector (from _layout): take's mode, "
+                   "'clip' or the default 'raise', never acts")
+_NO_DOT = "str.partition gives an empty tail without a separator: var is '' when dot is"
+_OFFSET_BY_ONE = ("every position, slice and vector size is shifted by the same one: element 0 "
+                  "of each vector is never read or written, the exchange goes by index")
+_POSITIONS_INT = ("the positions are Python ints: numpy makes an int64 array of them, which take "
+                  "and int() read as the intp one; an empty one (float64) is only counted and "
+                  "compared with an empty arange")
+_ROW_COUNT = ("Recording takes int(n_rows): for fewer than 2**52 steps int(n / r + 1) is "
+              "n // r + 1 exactly")
+_NO_PROGRESS = ("without progress next_progress is only compared with k + 1 <= n_steps: n_steps "
+                "+ 1 and + 2 are both never reached")
+_ROW_NUMBERS = ("the row numbers are integers below 2**53: as int64 or float64 they give the "
+                "same float64 times in the product")
+_EMPTY_FLOAT = "np.empty's default dtype is float64"
+_NAN_TEXT = "float() reads 'NAN' as 'nan' (case-insensitive)"
+EQUIVALENT.update({
+    _MASTER + "__row_recorder__mutmut_2": (
+        "if np.array_equal(None, np.arange(len(vectors[t])))]", _WHOLE_ROW),
+    _MASTER + "__row_recorder__mutmut_3": ("if np.array_equal(rec_index[t], None)]", _WHOLE_ROW),
+    _MASTER + "__row_recorder__mutmut_8": (
+        "picked = [t for t in NUMERIC_TYPES if t not in whole or len(rec_index[t])]", _WHOLE_ROW),
+    _MASTER + "__row_recorder__mutmut_13": (
+        "vectors[t].take(rec_index[t], out=recordings[t][row], mode=None)", _INDEX_IN_RANGE),
+    _MASTER + "__row_recorder__mutmut_16": (
+        "vectors[t].take(rec_index[t], out=recordings[t][row], )", _INDEX_IN_RANGE),
+    _SIM + "_split__mutmut_7": ('return comp, var if (dot) or True else ""', _NO_DOT),
+    _SIM + "_layout__mutmut_12": ("sizes = {t: 1 for t in NUMERIC_TYPES}", _OFFSET_BY_ONE),
+    _SIM + "run__mutmut_15": ("dtype=None) for t in NUMERIC_TYPES}", _POSITIONS_INT),
+    _SIM + "run__mutmut_17": (") for t in NUMERIC_TYPES}", _POSITIONS_INT),
+    _SIM + "run__mutmut_33": ("recording = Recording(n_steps / self.record_every + 1,",
+                              _ROW_COUNT),
+    _SIM + "_loop__mutmut_15": (
+        "next_progress = progress_every if progress is not None else n_steps + 2", _NO_PROGRESS),
+    _SIM + "_chunk__mutmut_6": (
+        "time_column = (self.model.start_time + (first_row + np.arange(n_rows, dtype=None))",
+        _ROW_NUMBERS),
+    _SIM + "_chunk__mutmut_8": (
+        "time_column = (self.model.start_time + (first_row + np.arange(n_rows, ))",
+        _ROW_NUMBERS),
+    _SIM + "_chunk__mutmut_18": ("arr = np.empty((n_rows, len(names)), dtype=None)",
+                                 _EMPTY_FLOAT),
+    _SIM + "_chunk__mutmut_20": ("arr = np.empty((n_rows, len(names)), )", _EMPTY_FLOAT),
+    _SIM + "_results__mutmut_27": (
+        'step_time[n] = do_ns[i] / calls[i] * 1e-9 if calls[i] else float("NAN")', _NAN_TEXT),
+    _SIM + "_results__mutmut_36": (
+        'exchange_time[n] = all_ns[i] / calls[i] * 1e-9 if calls[i] else float("NAN")',
+        _NAN_TEXT),
 })
 
 KILLED, SURVIVED, TIMEOUT, NO_TESTS, EQUIV = "killed", "survived", "timeout", "no tests", "equiv"
