@@ -25,6 +25,8 @@ def test_order_is_topological_with_ties_by_declaration():
 
 def test_a_self_connection_is_always_delayed():
     assert step_order(2, [(0, 0, "self"), (0, 1, "c01")]) == ([0, 1], ["self"])
+    # ... and holds nothing back: a component fed only by itself keeps its place
+    assert step_order(2, [(0, 0, "self")]) == ([0, 1], ["self"])
 
 
 def test_a_two_cycle_is_cut_at_its_earliest_declared_component():
