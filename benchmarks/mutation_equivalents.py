@@ -645,8 +645,8 @@ _FLOAT_INPUTS = ("the AHRS component passes float64 arrays built from its Real i
 _NAN_REFUSED = ("a zero f_b makes down, east and |east| nan, and nan > 0 is false: the second "
                 "test refuses it as the first does")
 _LAST_AXIS = "the stacked components are 1-D (one value per row): axis 1 is the last axis"
-_SERIES_PLACEHOLDER = ("the placeholder divisor of the series branch: np.where takes the series "
-                       "there and discards the quotient")
+_SERIES_STAND_IN = ("the stand-in divisor of the series branch: np.where takes the series "
+                    "there and discards the quotient")
 _NEVER_READ = "inclination is never read after __init__ (field_unit holds it), nor saved"
 _NIS_SET_FIRST = ("last_nis is read (the component's nis output) only after an update has set "
                   "it; a float either way, so a restored state is checked alike")
@@ -700,9 +700,9 @@ EQUIVALENT.update({
     _AHRS + "__quat_multiply_rows__mutmut_35": (
         "w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2), axis=+1)", _LAST_AXIS),
     _AHRS + "__bias_quats__mutmut_22": ("safe = np.where(t >= 1e-6, t, 1.0)",
-                                        _SERIES_PLACEHOLDER),
+                                        _SERIES_STAND_IN),
     _AHRS + "__bias_quats__mutmut_24": ("safe = np.where(t > 1e-6, t, 2.0)",
-                                        _SERIES_PLACEHOLDER),
+                                        _SERIES_STAND_IN),
     _AHRS + "ǁUkfAhrsEngineǁ__init____mutmut_10": ("self.inclination = None", _NEVER_READ),
     _AHRS + "ǁUkfAhrsEngineǁ__init____mutmut_63": ("self.last_nis = 1.0", _NIS_SET_FIRST),
     _AHRS + "ǁUkfAhrsEngineǁaccumulate__mutmut_7": (

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 
+from navcore.filters.innovation_stats import chi2_gate
 from navcore.filters.nis_monitor import NisMonitor
 
 #: chi2 upper 1 % points (a printed table, e.g. Abramowitz & Stegun table 26.8): dof 3, 6
@@ -28,7 +29,6 @@ def test_the_band_edge_is_the_tables_99_percent_point_of_the_updates_dof():
 
 
 def test_an_nis_exactly_at_its_edge_is_not_above_it():
-    from navcore.filters.innovation_stats import chi2_gate
     edge = chi2_gate(0.01, 3)
     assert edge == pytest.approx(EDGE_3, abs=1e-3)
     assert _feed(NisMonitor(10.0), [edge] * 40) == []

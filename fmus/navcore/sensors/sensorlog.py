@@ -352,14 +352,13 @@ def check_log(log: SensorLog, where="sensor log", sources=None) -> None:
     the line given by an optional ``"_line"`` array of the table (else the line the row will
     have in the written file); ``"_line"`` arrays are removed afterwards."""
     sources = sources or {}
-    for name, data in ((IMU_FILE, log.imu), (GNSS_FILE, log.gnss)):
-        if data is None:   # read_log would refuse the folder written without it
-            path = sources.get(name, f"{where}/{name}")
-            raise LogError(f"{path}: no data (a sensor log needs {IMU_FILE} and {GNSS_FILE})")
     for name, data in ((IMU_FILE, log.imu), (GNSS_FILE, log.gnss), (TRUTH_FILE, log.truth)):
-        if data is None:
-            continue
         path = sources.get(name, f"{where}/{name}")
+        if data is None:
+            if name == TRUTH_FILE:
+                continue
+            # read_log would refuse the folder written without it
+            raise LogError(f"{path}: no data (a sensor log needs {IMU_FILE} and {GNSS_FILE})")
         columns = [c for c in data if c != "_line"]
         _check_columns(f"{where}/{name}", set(columns))
         for column in columns:
