@@ -55,7 +55,10 @@ def pyins_gravity(lat, h):
 
 @pytest.fixture
 def pyins_gravity_in_navcore(monkeypatch):
+    # a compiled kernel binds the functions it calls when it compiles: the mechanization runs
+    # its interpreted source here (the same floats, tests/test_strapdown_kernels.py)
     monkeypatch.setattr(strapdown, "_gravity", pyins_gravity)
+    monkeypatch.setattr(strapdown, "update_rows", strapdown.update_rows.py_func)
 
 
 def _integrate(ref, imu):

@@ -3,7 +3,7 @@
 Wings, lowest first; a wing imports only the ones before it (``tests/test_layout.py``):
 
 * ``core``: the step-wise ``Component`` contract, declared state and its byte format, the
-  signal contracts, limits and times on a sample grid;
+  signal contracts, limits, times on a sample grid and the compiled kernels' decorator;
 * ``ins``: constants, the WGS-84 earth model, rotations and MRP, the strapdown mechanization and
   its exact inverse, the 15-state error model, motion profiles, the truth trajectory, the lever
   arm;

@@ -12,12 +12,13 @@ EARTH_RATE = 7.292115e-5
 
 
 class WrongCoriolisStrapdown(Strapdown):
-    def _nav_terms(self, v, dt):
-        zeta, g_cor = super()._nav_terms(v, dt)
+    def update(self, dtheta, dvel, dt):
+        v = self.v_ned.tolist()
         wn, wd = EARTH_RATE * math.cos(self.lat), -EARTH_RATE * math.sin(self.lat)
+        super().update(dtheta, dvel, dt)
         w_x_v = (-wd * v[1], wd * v[0] - wn * v[2], wn * v[1])
-        # g_cor holds -2 omega_ie x v; adding 4 omega_ie x v leaves +2 omega_ie x v
-        return zeta, tuple(g + 4.0 * c for g, c in zip(g_cor, w_x_v))
+        # the update adds -2 omega_ie x v dt; adding 4 omega_ie x v dt leaves +2 omega_ie x v dt
+        self.v_ned = self.v_ned + [4.0 * dt * c for c in w_x_v]
 
 
 class WrongCoriolisKfModel(components.Kf):

@@ -1,8 +1,9 @@
 """The component core, navcore's lowest wing: the step-wise ``Component`` contract every
 FMU wraps (``component``: parameters, inputs, outputs, limits, refused calls), declared state and
 its serialized byte format (``state``, ``state_format``), the exact text of FMI start values
-(``start_text``), the signal contracts shared between components (``signals``) and times on a
-sample grid with the one time tolerance (``timing``).
+(``start_text``), the signal contracts shared between components (``signals``), times on a
+sample grid with the one time tolerance (``timing``) and the decorator of the compiled kernels
+over a run axis, with their cache (``kernels``).
 
 Wing order: the lowest wing; imports only :mod:`navcore.errors`; every other wing may import it.
 """

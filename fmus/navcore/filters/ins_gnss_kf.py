@@ -27,7 +27,7 @@ import numpy as np
 
 from ..ins import earth
 from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
-    transition_matrix)
+    transition_rows, transition_template)
 from .innovation_stats import nis
 from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
 from ..ins.strapdown import Strapdown
@@ -99,12 +99,13 @@ class KfEngine:
         dvel_c = dvel - self.accel_bias * dt
         self.rate_ib = dtheta_c / dt
         nav = self.nav
-        C_prev = nav.C_bn
+        f_ned = nav.C_bn @ (dvel_c / dt)            # resolved with the attitude at the start
         nav.update(dtheta_c, dvel_c, dt)
-        f_ned = C_prev @ (dvel_c / dt)
         cfg = self.config
-        phi = transition_matrix(nav.lat, nav.h, nav.v_ned, nav.C_bn, f_ned, dt,
-                                cfg.gyro_bias_tau, cfg.accel_bias_tau)
+        phi = np.empty((1, N_STATES, N_STATES))
+        transition_rows(phi, nav.rows, f_ned.reshape(1, 3), np.full(1, dt),
+                        transition_template(dt, cfg.gyro_bias_tau, cfg.accel_bias_tau))
+        phi = phi[0]
         self.phi_acc = phi @ self.phi_acc
         q_acc = phi @ self.q_acc @ phi.T
         q_acc.ravel()[_DIAGONAL] += self.q_density * dt   # a view: q_acc is C-contiguous

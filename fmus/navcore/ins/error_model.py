@@ -29,7 +29,8 @@ import math
 
 import numpy as np
 
-from . import earth
+from ..core.kernels import jitable, kernel
+from . import earth, strapdown
 
 N_STATES = 15
 POS, VEL, ATT, BG, BA = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15))
@@ -56,37 +57,39 @@ _UNIT_ENTRIES = np.array([0 * 15 + 3, 1 * 15 + 4, 2 * 15 + 5], dtype=np.intp)
 _DIAGONAL = np.arange(N_STATES) * (N_STATES + 1)
 
 
+@jitable
 def _state_entries(lat, h, v_ned, C_bn, f_ned):
     """The entries of F at :data:`_STATE_ENTRIES` as Python floats (the model of the module
     docstring; radii and gravity as :func:`navcore.ins.earth.radii` /
     :func:`~navcore.ins.earth.gravity`
     compute them, with the same expressions)."""
     sl, cl = math.sin(lat), math.cos(lat)
-    s2 = sl ** 2
+    s2 = sl * sl      # not ** 2: CPython's pow and a compiled x ** 2 (x * x) round apart
     w = 1.0 - earth.E2 * s2
     rn = earth.A * (1.0 - earth.E2) / w ** 1.5
     re = earth.A / math.sqrt(w)
     g0 = earth.GAMMA_E * (1.0 + earth.SOMIGLIANA_K * s2) / math.sqrt(1.0 - earth.E2 * s2)
     g = g0 * (1.0 - 2.0 / earth.A * (1.0 + earth.F + earth.GRAVITY_M - 2.0 * earth.F * s2) * h
-              + 3.0 * h ** 2 / earth.A ** 2)
+              + 3.0 * (h * h) / (earth.A * earth.A))
     rn_h, re_h = rn + h, re + h
     tl = sl / cl
-    vn, ve, vd = v_ned
+    vn, ve = v_ned[0], v_ned[1]
     om = earth.OMEGA_IE
     wie_n, wie_d = om * cl, -om * sl
     wen_n, wen_e, wen_d = ve / re_h, -vn / rn_h, -ve * tl / re_h
     win_n, win_e, win_d = wie_n + wen_n, 0.0 + wen_e, wie_d + wen_d
     wc_n, wc_e, wc_d = 2 * wie_n + wen_n, 2 * 0.0 + wen_e, 2 * wie_d + wen_d
-    f0, f1, f2 = f_ned
-    c00, c01, c02, c10, c11, c12, c20, c21, c22 = C_bn
-    return [
+    f0, f1, f2 = f_ned[0], f_ned[1], f_ned[2]
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = (C_bn[0], C_bn[1], C_bn[2], C_bn[3], C_bn[4],
+                                                   C_bn[5], C_bn[6], C_bn[7], C_bn[8])
+    return (
         -f2, f1, f2, -f0, -f1, f0,
         c00, c01, c02, c10, c11, c12, c20, c21, c22,
         wc_d, -wc_e, -wc_d, wc_n, wc_e, -wc_n, 2.0 * g / math.sqrt(rn * re),
         win_d, -win_e, -win_d, win_n, win_e, -win_n,
         1.0 / re_h, -1.0 / rn_h, -tl / re_h, -om * sl / rn_h, -om * cl / rn_h,
         -c00, -c01, -c02, -c10, -c11, -c12, -c20, -c21, -c22,
-    ]
+    )
 
 
 def _bias_entries(tau_g, tau_a):
@@ -118,13 +121,39 @@ def system_matrix(lat, h, v_ned, C_bn, f_ned, tau_g=0.0, tau_a=0.0):
 def transition_matrix(lat, h, v_ned, C_bn, f_ned, dt, tau_g=0.0, tau_a=0.0):
     """First-order transition matrix ``I + F dt`` over one IMU interval of ``dt`` [s]
     (arguments as :func:`system_matrix`), equal to ``np.eye(15) + system_matrix(...) * dt``
-    to the last bit but built without the intermediate matrices (it runs every IMU step)."""
-    phi = _transition_template(float(dt), float(tau_g), float(tau_a)).copy()
-    entries = _state_entries(float(lat), float(h), np.asarray(v_ned).tolist(),
-                             np.asarray(C_bn).ravel().tolist(), np.asarray(f_ned).tolist())
-    # 0.0 + x turns the -0.0 of a zero entry into the +0.0 of np.eye(15) + F * dt
-    phi.put(_STATE_ENTRIES, [0.0 + x * dt for x in entries])
-    return phi.reshape(N_STATES, N_STATES)
+    to the last bit but built without the intermediate matrices (:func:`transition_rows` of
+    one run)."""
+    row = np.zeros((1, strapdown.N_COLUMNS))
+    row[0, 0], row[0, 2] = lat, h
+    row[0, 3:6] = np.reshape(v_ned, 3)
+    row[0, 6:15] = np.reshape(C_bn, 9)
+    out = np.empty((1, N_STATES, N_STATES))
+    transition_rows(out, row, np.asarray(f_ned, dtype=float).reshape(1, 3), np.full(1, float(dt)),
+                    transition_template(dt, tau_g, tau_a))
+    return out[0]
+
+
+@kernel
+def transition_rows(out, nav_rows, f_ned, dt, template):
+    """:func:`transition_matrix` of every run of a batch: ``out`` (B, 15, 15) from the
+    strapdown state rows ``nav_rows`` (B, 24; :data:`navcore.ins.strapdown.COLUMNS`, read
+    before or after the update as the caller decides), ``f_ned`` (B, 3), ``dt`` (B,) and the
+    state-independent ``template`` (225,) of :func:`transition_template` for that ``dt``."""
+    for b in range(out.shape[0]):
+        s = nav_rows[b]           # lat s[0], h s[2], v_ned s[3:6], C_bn by rows s[6:15]
+        entries = _state_entries(s[0], s[2], s[3:6], s[6:15], f_ned[b])
+        flat = out[b].reshape(N_STATES * N_STATES)
+        flat[:] = template
+        step = dt[b]
+        for i in range(len(entries)):
+            # 0.0 + x turns the -0.0 of a zero entry into the +0.0 of np.eye(15) + F * dt
+            flat[_STATE_ENTRIES[i]] = 0.0 + entries[i] * step
+
+
+def transition_template(dt, tau_g=0.0, tau_a=0.0):
+    """The entries of ``I + F dt`` that do not depend on the state (flat (225,), read-only;
+    cached per ``dt``, ``tau_g``, ``tau_a``)."""
+    return _transition_template(float(dt), float(tau_g), float(tau_a))
 
 
 @functools.lru_cache(maxsize=64)

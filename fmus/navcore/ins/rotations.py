@@ -14,16 +14,19 @@ Conventions (shared by all of navcore):
   the DCM of the same rotation.
 
 The public functions work on numpy arrays.  The underscore helpers work on Python floats and
-nested lists: the strapdown mechanization calls them once per IMU sample, where a numpy call
-on a 3-vector costs more than the arithmetic itself (``np.cross`` on two 3-vectors takes tens
-of microseconds).  The public functions are thin wrappers over the same helpers, so there is
-one implementation of each formula.
+nested rows (tuples or lists): the strapdown mechanization calls them once per IMU sample,
+where a numpy call on a 3-vector costs more than the arithmetic itself (``np.cross`` on two
+3-vectors takes tens of microseconds).  The public functions are thin wrappers over the same
+helpers, so there is one implementation of each formula; the helpers marked ``@jitable``
+are also compiled into the strapdown kernels (:mod:`navcore.core.kernels`) and return tuples.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+from ..core.kernels import jitable
 
 # Below this angle [rad] the Rodrigues coefficients are evaluated by their Taylor series;
 # truncation error of the kept terms is < theta^6/5040 ~ 2e-22 there, far below rounding.
@@ -33,6 +36,7 @@ _SMALL_ANGLE = 1e-3
 # ---------------------------------------------------------------------------------------
 # scalar helpers (Python floats, row lists)
 # ---------------------------------------------------------------------------------------
+@jitable
 def _rodrigues_delta_rows(x, y, z):
     """Rows of exp([phi x]) - I for phi = (x, y, z): a [phi x] + b [phi x]^2 with
     a = sin(t)/t, b = (1 - cos t)/t^2 = 2 sin^2(t/2)/t^2 (no cancellation at small t).  Kept
@@ -52,23 +56,22 @@ def _rodrigues_delta_rows(x, y, z):
     bxz = b * x * z
     byz = b * y * z
     ax, ay, az = a * x, a * y, a * z
-    return [
-        [-b * (y * y + z * z), bxy - az, bxz + ay],
-        [bxy + az, -b * (x * x + z * z), byz - ax],
-        [bxz - ay, byz + ax, -b * (x * x + y * y)],
-    ]
+    return (
+        (-b * (y * y + z * z), bxy - az, bxz + ay),
+        (bxy + az, -b * (x * x + z * z), byz - ax),
+        (bxz - ay, byz + ax, -b * (x * x + y * y)),
+    )
 
 
+@jitable
 def _rodrigues_rows(x, y, z):
     """Rows of exp([phi x]) = I + (exp([phi x]) - I) (see _rodrigues_delta_rows); adding 1 to
     the diagonal gives the same floats as 1 - b (y^2 + z^2) written out."""
-    d = _rodrigues_delta_rows(x, y, z)
-    d[0][0] += 1.0
-    d[1][1] += 1.0
-    d[2][2] += 1.0
-    return d
+    (d00, d01, d02), (d10, d11, d12), (d20, d21, d22) = _rodrigues_delta_rows(x, y, z)
+    return ((d00 + 1.0, d01, d02), (d10, d11 + 1.0, d12), (d20, d21, d22 + 1.0))
 
 
+@jitable
 def _quat_from_rows(m):
     """Shepperd's method (Shepperd 1978): pick the largest of 4w^2, 4x^2, 4y^2, 4z^2 to
     avoid dividing by a small number; returns (w, x, y, z) with w >= 0."""
@@ -93,6 +96,7 @@ def _quat_from_rows(m):
     return w, x, y, z
 
 
+@jitable
 def _rotvec_from_rows(m):
     """Rotation vector of a DCM given as rows, accurate for tiny angles (the vector part
     comes from the antisymmetric part of the matrix, the angle from atan2)."""
@@ -132,14 +136,24 @@ def _euler_from_rows(m):
     return roll, pitch, yaw
 
 
+@jitable
 def _matmul_rows(a, b):
+    """a b for 3x3 rows (a tuple of row tuples)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
     (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = b
-    return [[r0 * b00 + r1 * b10 + r2 * b20, r0 * b01 + r1 * b11 + r2 * b21,
-             r0 * b02 + r1 * b12 + r2 * b22] for r0, r1, r2 in a]
+    return (
+        (a00 * b00 + a01 * b10 + a02 * b20, a00 * b01 + a01 * b11 + a02 * b21,
+         a00 * b02 + a01 * b12 + a02 * b22),
+        (a10 * b00 + a11 * b10 + a12 * b20, a10 * b01 + a11 * b11 + a12 * b21,
+         a10 * b02 + a11 * b12 + a12 * b22),
+        (a20 * b00 + a21 * b10 + a22 * b20, a20 * b01 + a21 * b11 + a22 * b21,
+         a20 * b02 + a21 * b12 + a22 * b22),
+    )
 
 
+@jitable
 def _matTmul_rows(a, b):
-    """a^T b for row lists."""
+    """a^T b for 3x3 rows."""
     (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
     (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = b
     return [

@@ -44,8 +44,13 @@ reproduce it exactly: :meth:`Strapdown.inverse_update` solves steps 2 and 3 for 
 and ``dvel_k``.  Both directions share the private helpers below, so they are inverse to
 rounding.
 
-The arithmetic is done on Python floats: numpy calls on 3-vectors cost more than the
-arithmetic (``np.cross`` alone takes tens of microseconds), and this runs once per IMU sample.
+The arithmetic is written on floats: numpy calls on 3-vectors cost more than the arithmetic
+(``np.cross`` alone takes tens of microseconds), and this runs once per IMU sample.  The
+forward update runs as a compiled kernel over a leading run axis (:func:`update_rows`,
+:mod:`navcore.core.kernels`): a :class:`Strapdown` is one row of the kernel's state array
+(:data:`COLUMNS`), a batch of runs is many rows, and both execute the same code on the same
+floats.  The helpers the kernel calls stay plain Python functions for the interpreted callers
+(the exact inverse, the trajectory, the sensors).
 """
 from __future__ import annotations
 
@@ -53,6 +58,7 @@ import math
 
 import numpy as np
 
+from ..core.kernels import jitable, kernel
 from . import earth
 from .rotations import (_euler_from_rows, _euler_rows, _matmul_rows, _matTmul_rows,
     _rodrigues_delta_rows, _rodrigues_rows, _rotvec_from_rows)
@@ -70,6 +76,7 @@ _M = earth.GRAVITY_M
 POSITION_TOLERANCE = 1e-6
 
 
+@jitable
 def _radii(lat):
     """(R_N, R_E) [m] as earth.radii, on Python floats."""
     s = math.sin(lat)
@@ -78,13 +85,16 @@ def _radii(lat):
     return re * (1.0 - _E2) / w, re
 
 
+@jitable
 def _gravity(lat, h):
     """Normal gravity [m/s^2] as earth.gravity, on Python floats."""
-    s2 = math.sin(lat) ** 2
+    s = math.sin(lat)
+    s2 = s * s        # not s ** 2: CPython's pow and a compiled x ** 2 (x * x) round apart
     g0 = earth.GAMMA_E * (1.0 + _K_SOMIGLIANA * s2) / math.sqrt(1.0 - _E2 * s2)
     return g0 * (1.0 - 2.0 / _A * (1.0 + _F + _M - 2.0 * _F * s2) * h + 3.0 * h * h / (_A * _A))
 
 
+@jitable
 def _solve_skew(wx, wy, wz, r):
     """Solve (I + [w x]) x = r in closed form:
     (I + [w x])^-1 = (I - [w x] + w w^T) / (1 + |w|^2)."""
@@ -98,14 +108,16 @@ def _solve_skew(wx, wy, wz, r):
     )
 
 
+@jitable
 def _add_rows(a, b):
-    """a + b for 3x3 row lists."""
+    """a + b for 3x3 rows (tuples)."""
     (a0, a1, a2), (b0, b1, b2) = a, b
-    return [[a0[0] + b0[0], a0[1] + b0[1], a0[2] + b0[2]],
-            [a1[0] + b1[0], a1[1] + b1[1], a1[2] + b1[2]],
-            [a2[0] + b2[0], a2[1] + b2[1], a2[2] + b2[2]]]
+    return ((a0[0] + b0[0], a0[1] + b0[1], a0[2] + b0[2]),
+            (a1[0] + b1[0], a1[1] + b1[1], a1[2] + b1[2]),
+            (a2[0] + b2[0], a2[1] + b2[1], a2[2] + b2[2]))
 
 
+@jitable
 def integrate_position(lat, lon, h, v_prev, v_next, dt):
     """Position after ``dt`` by the trapezoid of two NED velocities [m/s].
 
@@ -129,6 +141,7 @@ def integrate_position(lat, lon, h, v_prev, v_next, dt):
     return float(lat_next), float(lon_next), float(h_next)
 
 
+@jitable
 def _mid_interval_terms(lat, h, v, vp, dt):
     """zeta = (omega_ie + omega_en) dt and g_cor = g - (2 omega_ie + omega_en) x v_mid of an
     interval of ``dt`` from latitude ``lat``, height ``h`` and velocity ``v`` (the previous
@@ -159,33 +172,158 @@ def _mid_interval_terms(lat, h, v, vp, dt):
     return zeta, g_cor
 
 
-class Strapdown:
+#: the columns of a strapdown state row (the form the kernels take, one row per run):
+#: position [rad, rad, m], NED velocity [m/s], C_bn by rows, and the memory of the
+#: two-sample algorithms: the velocity one update earlier and the previous increments
+COLUMNS = ("lat", "lon", "h", "vn", "ve", "vd", *(f"c{i}{j}" for i in range(3) for j in range(3)),
+           "vn_prev", "ve_prev", "vd_prev", "dtheta_prev_x", "dtheta_prev_y", "dtheta_prev_z",
+           "dvel_prev_x", "dvel_prev_y", "dvel_prev_z")
+N_COLUMNS = len(COLUMNS)
+_V, _C, _V_PREV = slice(3, 6), slice(6, 15), slice(15, 18)
+_DTHETA_PREV, _DVEL_PREV = slice(18, 21), slice(21, 24)
+
+
+@jitable
+def _update_row(s, dtheta, dvel, dt):
+    """:meth:`Strapdown.update` of one state row ``s`` (:data:`COLUMNS`), in place, with the
+    body increments ``dtheta`` [rad] and ``dvel`` [m/s] (3 floats each) over ``dt`` [s]."""
+    gx, gy, gz = dtheta[0], dtheta[1], dtheta[2]
+    fx, fy, fz = dvel[0], dvel[1], dvel[2]
+    v = (s[3], s[4], s[5])
+    C = ((s[6], s[7], s[8]), (s[9], s[10], s[11]), (s[12], s[13], s[14]))
+    zeta, g_cor = _mid_interval_terms(s[0], s[2], v, (s[15], s[16], s[17]), dt)
+    px, py, pz = s[18], s[19], s[20]
+    qx, qy, qz = s[21], s[22], s[23]
+
+    # coning: phi = dtheta + 1/12 dtheta_prev x dtheta
+    c12 = 1.0 / 12.0
+    phx = gx + c12 * (py * gz - pz * gy)
+    phy = gy + c12 * (pz * gx - px * gz)
+    phz = gz + c12 * (px * gy - py * gx)
+
+    # rotation + sculling: dv_rot = dvel + (dtheta/2 + dtheta_prev/12) x dvel
+    #                                + 1/12 dvel_prev x dtheta
+    wx, wy, wz = 0.5 * gx + c12 * px, 0.5 * gy + c12 * py, 0.5 * gz + c12 * pz
+    dvx = fx + (wy * fz - wz * fy) + c12 * (qy * gz - qz * gy)
+    dvy = fy + (wz * fx - wx * fz) + c12 * (qz * gx - qx * gz)
+    dvz = fz + (wx * fy - wy * fx) + c12 * (qx * gy - qy * gx)
+
+    # to NED at t_{k-1}, then the half-interval nav-frame rotation (I - 1/2 [zeta x])
+    c0, c1, c2 = C
+    ux = c0[0] * dvx + c0[1] * dvy + c0[2] * dvz
+    uy = c1[0] * dvx + c1[1] * dvy + c1[2] * dvz
+    uz = c2[0] * dvx + c2[1] * dvy + c2[2] * dvz
+    zx, zy, zz = zeta
+    v_next = (
+        v[0] + ux - 0.5 * (zy * uz - zz * uy) + g_cor[0] * dt,
+        v[1] + uy - 0.5 * (zz * ux - zx * uz) + g_cor[1] * dt,
+        v[2] + uz - 0.5 * (zx * uy - zy * ux) + g_cor[2] * dt,
+    )
+    lat, lon, h = integrate_position(s[0], s[1], s[2], v, v_next, dt)
+    # C_next = (I + N) C (I + B) = C + (C B + N (C + C B)), N, B: Rodrigues minus I;
+    # summing the small terms first keeps the rounding relative to the change, so a
+    # constant attitude stays constant to the last bit (no secular DCM drift).
+    CB = _matmul_rows(C, _rodrigues_delta_rows(phx, phy, phz))
+    NC = _matmul_rows(_rodrigues_delta_rows(-zx, -zy, -zz), _add_rows(C, CB))
+    C_next = _add_rows(C, _add_rows(CB, NC))
+    s[0], s[1], s[2] = lat, lon, h
+    s[15], s[16], s[17] = v
+    s[3], s[4], s[5] = v_next
+    for i in range(3):
+        s[6 + 3 * i], s[7 + 3 * i], s[8 + 3 * i] = C_next[i]
+    s[18], s[19], s[20] = gx, gy, gz
+    s[21], s[22], s[23] = fx, fy, fz
+
+
+@kernel
+def update_rows(rows, dtheta, dvel, dt):
+    """:meth:`Strapdown.update` of every run of a batch: ``rows`` (B, :data:`N_COLUMNS`) in
+    place, with the increments ``dtheta`` and ``dvel`` (B, 3) over ``dt`` (B,)."""
+    for b in range(rows.shape[0]):
+        _update_row(rows[b], dtheta[b], dvel[b], dt[b])
+
+
+def _columns(first, last):
+    """A property reading columns ``first:last`` of the state row as a tuple of floats and
+    writing a 3-sequence there."""
+    def get(self):
+        return tuple(self.rows[0, first:last].tolist())
+
+    def put(self, value):
+        self.rows[0, first:last] = value
+    return property(get, put)
+
+
+def _column(index):
+    """A property reading column ``index`` of the state row as a float."""
+    def get(self):
+        return float(self.rows[0, index])
+
+    def put(self, value):
+        self.rows[0, index] = value
+    return property(get, put)
+
+
+class _StateRow:
+    """One state row of the kernels (a batch of one run) behind a subclass's declared
+    state fields; the position columns as float attributes."""
+
+    # rows: the array behind the state fields
+    derived_fields = ("rows",)
+
+    lat = _column(0)
+    lon = _column(1)
+    h = _column(2)
+
+    def __init__(self, lat, lon, h):
+        self.rows = np.zeros((1, N_COLUMNS))
+        self.lat, self.lon, self.h = float(lat), float(lon), float(h)
+
+
+class Strapdown(_StateRow):
     """NED strapdown mechanization (see the module docstring for the equations).
 
     Public state: ``lat, lon`` [rad], ``h`` [m] (floats), ``v_ned`` [m/s] (ndarray, 3),
     ``C_bn`` (ndarray 3x3, body -> NED).  The memory of the two-sample algorithms (previous
-    increments, previous velocity) lives in plain attributes, so ``copy.deepcopy(self)`` or
-    ``self.__dict__`` captures the whole state.  Assigning new values to the public
-    attributes between updates is allowed (they are read at the start of every update).
+    increments, previous velocity) is state too.  All of it lives in ``rows``, the (1,
+    :data:`N_COLUMNS`) state array of the kernels (a batch of one run); the attributes read
+    copies of its columns and write into them, so ``copy.deepcopy(self)`` captures the whole
+    state and assigning new values between updates is allowed.
     """
 
     state_fields = ("lat", "lon", "h", "v_ned", "C_bn", "_v_prev", "_dtheta_prev",
                     "_dvel_prev")
 
+    _v_prev = _columns(15, 18)
+    _dtheta_prev = _columns(18, 21)
+    _dvel_prev = _columns(21, 24)
+
     def __init__(self, lat, lon, h, v_ned, C_bn):
-        self.lat = float(lat)
-        self.lon = float(lon)
-        self.h = float(h)
+        super().__init__(lat, lon, h)
         self.v_ned = np.array(v_ned, dtype=float).reshape(3)
         self.C_bn = np.array(C_bn, dtype=float).reshape(3, 3)
-        vals = [self.lat, self.lon, self.h, *self.v_ned.tolist(), *self.C_bn.ravel().tolist()]
+        vals = self.rows[0, :15].tolist()
         if not all(math.isfinite(x) for x in vals):
             raise ValueError(f"Strapdown: initial state has non-finite values: {vals}")
-        #: velocity one epoch before v_ned (for the mid-interval extrapolation)
-        self._v_prev = tuple(self.v_ned.tolist())
-        #: increments of the previous interval (zero before the first update)
-        self._dtheta_prev = (0.0, 0.0, 0.0)
-        self._dvel_prev = (0.0, 0.0, 0.0)
+        #: velocity one epoch before v_ned (for the mid-interval extrapolation); the
+        #: increments of the previous interval are zero before the first update
+        self.rows[0, _V_PREV] = self.rows[0, _V]
+
+    @property
+    def v_ned(self):
+        return self.rows[0, _V].copy()
+
+    @v_ned.setter
+    def v_ned(self, value):
+        self.rows[0, _V] = np.reshape(value, 3)
+
+    @property
+    def C_bn(self):
+        return self.rows[0, _C].reshape(3, 3).copy()
+
+    @C_bn.setter
+    def C_bn(self, value):
+        self.rows[0, _C] = np.reshape(value, 9)
 
     @classmethod
     def from_euler(cls, lat, lon, h, v_ned, roll, pitch, yaw):
@@ -196,62 +334,12 @@ class Strapdown:
         """(roll, pitch, yaw) [rad] of C_bn, yaw in (-pi, pi]."""
         return _euler_from_rows(self.C_bn.tolist())
 
-    # -- shared pieces of update / inverse_update ----------------------------------------
-    def _nav_terms(self, v, dt):
-        """zeta = (omega_ie + omega_en) dt and g_cor = g - (2 omega_ie + omega_en) x v_mid,
-        from the position and velocity extrapolated to mid-interval
-        (:func:`_mid_interval_terms` of this state)."""
-        return _mid_interval_terms(self.lat, self.h, v, self._v_prev, dt)
-
     # -- forward mechanization ---------------------------------------------------------
     def update(self, dtheta, dvel, dt):
         """Advance over one IMU interval of ``dt`` [s] with body increments ``dtheta``
-        [rad] and ``dvel`` [m/s] (sequences of 3 floats)."""
-        gx, gy, gz = float(dtheta[0]), float(dtheta[1]), float(dtheta[2])
-        fx, fy, fz = float(dvel[0]), float(dvel[1]), float(dvel[2])
-        dt = float(dt)
-        v = np.asarray(self.v_ned, dtype=float).tolist()
-        C = np.asarray(self.C_bn, dtype=float).tolist()
-        zeta, g_cor = self._nav_terms(v, dt)
-        px, py, pz = self._dtheta_prev
-        qx, qy, qz = self._dvel_prev
-
-        # coning: phi = dtheta + 1/12 dtheta_prev x dtheta
-        c12 = 1.0 / 12.0
-        phx = gx + c12 * (py * gz - pz * gy)
-        phy = gy + c12 * (pz * gx - px * gz)
-        phz = gz + c12 * (px * gy - py * gx)
-
-        # rotation + sculling: dv_rot = dvel + (dtheta/2 + dtheta_prev/12) x dvel
-        #                                + 1/12 dvel_prev x dtheta
-        wx, wy, wz = 0.5 * gx + c12 * px, 0.5 * gy + c12 * py, 0.5 * gz + c12 * pz
-        dvx = fx + (wy * fz - wz * fy) + c12 * (qy * gz - qz * gy)
-        dvy = fy + (wz * fx - wx * fz) + c12 * (qz * gx - qx * gz)
-        dvz = fz + (wx * fy - wy * fx) + c12 * (qx * gy - qy * gx)
-
-        # to NED at t_{k-1}, then the half-interval nav-frame rotation (I - 1/2 [zeta x])
-        c0, c1, c2 = C
-        ux = c0[0] * dvx + c0[1] * dvy + c0[2] * dvz
-        uy = c1[0] * dvx + c1[1] * dvy + c1[2] * dvz
-        uz = c2[0] * dvx + c2[1] * dvy + c2[2] * dvz
-        zx, zy, zz = zeta
-        v_next = (
-            v[0] + ux - 0.5 * (zy * uz - zz * uy) + g_cor[0] * dt,
-            v[1] + uy - 0.5 * (zz * ux - zx * uz) + g_cor[1] * dt,
-            v[2] + uz - 0.5 * (zx * uy - zy * ux) + g_cor[2] * dt,
-        )
-
-        self.lat, self.lon, self.h = integrate_position(self.lat, self.lon, self.h, v, v_next, dt)
-        # C_next = (I + N) C (I + B) = C + (C B + N (C + C B)), N, B: Rodrigues minus I;
-        # summing the small terms first keeps the rounding relative to the change, so a
-        # constant attitude stays constant to the last bit (no secular DCM drift).
-        CB = _matmul_rows(C, _rodrigues_delta_rows(phx, phy, phz))
-        NC = _matmul_rows(_rodrigues_delta_rows(-zx, -zy, -zz), _add_rows(C, CB))
-        self._v_prev = tuple(v)
-        self.v_ned = np.array(v_next)
-        self.C_bn = np.array(_add_rows(C, _add_rows(CB, NC)))
-        self._dtheta_prev = (gx, gy, gz)
-        self._dvel_prev = (fx, fy, fz)
+        [rad] and ``dvel`` [m/s] (sequences of 3 floats): :func:`update_rows` of this run."""
+        update_rows(self.rows, np.asarray(dtheta, dtype=float).reshape(1, 3),
+                    np.asarray(dvel, dtype=float).reshape(1, 3), np.full(1, dt, dtype=float))
 
     # -- exact inverse -----------------------------------------------------------------
     def inverse_update(self, lat, lon, h, v_ned, C_bn, dt):
@@ -285,14 +373,11 @@ class Strapdown:
         return self._inverse_to(lat, lon, h, v1, C1, dt)
 
     def _inverse_to(self, lat, lon, h, v1, C1, dt):
-        """:meth:`inverse_update` on checked floats: ``v1`` a 3-sequence, ``C1`` row lists
-        (the trajectory generator, which integrates the position itself, calls it directly)."""
-        v = np.asarray(self.v_ned, dtype=float).tolist()
-        dtheta, dvel = inverse_increments(self.lat, self.h, v, self._v_prev,
-                                          np.asarray(self.C_bn, dtype=float).tolist(),
-                                          self._dtheta_prev, self._dvel_prev, v1, C1, dt)
-        self._move_to(lat, lon, h, tuple(v), v1, C1, dtheta, dvel)
-        return np.array(dtheta), np.array(dvel)
+        """:meth:`inverse_update` on checked floats: ``v1`` a 3-sequence, ``C1`` rows (the
+        trajectory generator, which integrates the position itself, calls it directly):
+        :func:`inverse_rows` of this run."""
+        increments = _step_row(self.rows, lat, lon, h, v1, C1, dt)[0]
+        return increments[:3], increments[3:]
 
     def _move_to(self, lat, lon, h, v_prev, v1, C1, dtheta, dvel):
         """Take the state an update with increments ``dtheta``, ``dvel`` (3-tuples) from
@@ -337,6 +422,7 @@ class Strapdown:
         self.C_bn = np.array(_matmul_rows(_rodrigues_rows(*phi), self.C_bn.tolist()))
 
 
+@jitable
 def inverse_increments(lat, h, v, v_prev, C, dtheta_prev, dvel_prev, v1, C1, dt):
     """The increments ``(dtheta, dvel)`` (3-tuples) with which :meth:`Strapdown.update` takes
     the velocity ``v`` and attitude ``C`` (row lists) at latitude ``lat``, height ``h`` (with
@@ -370,29 +456,79 @@ def inverse_increments(lat, h, v, v_prev, C, dtheta_prev, dvel_prev, v1, C1, dt)
     return (gx, gy, gz), (fx, fy, fz)
 
 
-class InverseStrapdown:
-    """The memory of the exact inverse of :meth:`Strapdown.update` on plain floats, for a
-    sensor turning truth samples into increments: the position, velocity ``v`` and attitude
-    ``C`` (row lists) of the latest sample, the velocity before it and the latest increments.
-    :meth:`step_to` is :meth:`Strapdown.inverse_update` without the position check and
-    without the arrays of a :class:`Strapdown` (the same function, the same floats)."""
+@jitable
+def _inverse_row(s, target, dt, increments):
+    """The exact inverse of :func:`_update_row`: the increments ``(dtheta, dvel)`` (into
+    ``increments``, 6 floats) that take the state row ``s`` to ``target`` (its first 15
+    columns: position, velocity, attitude) over ``dt``; ``s`` then holds the state they
+    lead to (the position is the target's: the caller has integrated or checked it)."""
+    v = (s[3], s[4], s[5])
+    C = ((s[6], s[7], s[8]), (s[9], s[10], s[11]), (s[12], s[13], s[14]))
+    v1 = (target[3], target[4], target[5])
+    C1 = ((target[6], target[7], target[8]), (target[9], target[10], target[11]),
+          (target[12], target[13], target[14]))
+    dtheta, dvel = inverse_increments(s[0], s[2], v, (s[15], s[16], s[17]), C,
+                                      (s[18], s[19], s[20]), (s[21], s[22], s[23]), v1, C1, dt)
+    s[15], s[16], s[17] = v
+    for i in range(15):
+        s[i] = target[i]
+    s[18], s[19], s[20] = dtheta
+    s[21], s[22], s[23] = dvel
+    increments[0], increments[1], increments[2] = dtheta
+    increments[3], increments[4], increments[5] = dvel
+
+
+@kernel
+def inverse_rows(rows, targets, dt, increments):
+    """:func:`_inverse_row` of every run of a batch: ``rows`` (B, :data:`N_COLUMNS`) move to
+    ``targets`` (B, 15) over ``dt`` (B,); their increments go to ``increments`` (B, 6)."""
+    for b in range(rows.shape[0]):
+        _inverse_row(rows[b], targets[b], dt[b], increments[b])
+
+
+class InverseStrapdown(_StateRow):
+    """The memory of the exact inverse of :meth:`Strapdown.update`, for a sensor turning truth
+    samples into increments: the position, velocity ``v`` (a tuple) and attitude ``C`` (row
+    lists) of the latest sample, the velocity before it and the latest increments, in one
+    state row of the kernels (``rows``, as a :class:`Strapdown`'s).  :meth:`step_to` is
+    :meth:`Strapdown.inverse_update` without the position check (the same kernel, the same
+    floats)."""
 
     state_fields = ("lat", "lon", "h", "v", "C", "v_prev", "dtheta_prev", "dvel_prev")
 
+    v = _columns(3, 6)
+    v_prev = _columns(15, 18)
+    dtheta_prev = _columns(18, 21)
+    dvel_prev = _columns(21, 24)
+
     def __init__(self, lat, lon, h, v, C):
-        self.lat, self.lon, self.h = float(lat), float(lon), float(h)
-        self.v = tuple(float(x) for x in v)
-        self.C = [[float(x) for x in row] for row in C]
-        self.v_prev = self.v
-        self.dtheta_prev = self.dvel_prev = (0.0, 0.0, 0.0)
+        super().__init__(lat, lon, h)
+        self.v = self.v_prev = tuple(float(x) for x in v)
+        self.C = C
+
+    @property
+    def C(self):
+        return self.rows[0, _C].reshape(3, 3).tolist()
+
+    @C.setter
+    def C(self, value):
+        self.rows[0, _C] = np.reshape(value, 9)
 
     def step_to(self, lat, lon, h, v1, C1, dt):
         """The increments ``(dtheta, dvel)`` (3-tuples) from the latest sample to this one
         (position ``lat, lon, h``, velocity ``v1``, attitude rows ``C1``), which becomes the
         latest."""
-        dtheta, dvel = inverse_increments(self.lat, self.h, self.v, self.v_prev, self.C,
-                                          self.dtheta_prev, self.dvel_prev, v1, C1, dt)
-        self.lat, self.lon, self.h = lat, lon, h
-        self.v_prev, self.v, self.C = self.v, tuple(v1), C1
-        self.dtheta_prev, self.dvel_prev = dtheta, dvel
-        return dtheta, dvel
+        increments = _step_row(self.rows, lat, lon, h, v1, C1, dt)[0].tolist()
+        return tuple(increments[:3]), tuple(increments[3:])
+
+
+def _step_row(rows, lat, lon, h, v1, C1, dt):
+    """:func:`inverse_rows` of the one row ``rows`` (1, :data:`N_COLUMNS`) to the sample
+    ``lat, lon, h, v1, C1`` (floats, a 3-sequence, 3x3 rows) over ``dt``; the increments
+    (1, 6)."""
+    (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C1
+    target = np.array(((lat, lon, h, v1[0], v1[1], v1[2], c00, c01, c02, c10, c11, c12,
+                        c20, c21, c22),))
+    increments = np.empty((1, 6))
+    inverse_rows(rows, target, np.full(1, dt, dtype=float), increments)
+    return increments
