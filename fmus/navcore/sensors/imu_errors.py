@@ -35,7 +35,12 @@ this order and always all of them (a zero sigma just scales a draw to zero, so e
 error source never changes the realisation of another): 3 gyro biases, 3 accel biases,
 3 gyro scale factors, 3 accel scale factors, 6 gyro misalignments, 6 accel misalignments,
 9 g-sensitivity elements, 6 initial Gauss-Markov states.  Each :meth:`ImuErrorModel.apply`
-draws exactly 12 standard normals (6 white noise, 6 Gauss-Markov driving noise).
+uses exactly 12 standard normals (6 white noise, 6 Gauss-Markov driving noise), drawn for 64
+calls at a time: numpy's generator gives the same stream in blocks as one call at a time,
+and the block is part of the model's state.
+
+The per-sample arithmetic is a kernel over a run axis (:func:`apply_rows`,
+:mod:`navcore.core.kernels`); a model is a batch of one.
 """
 from __future__ import annotations
 
@@ -44,6 +49,7 @@ from typing import Any, Dict, List, Tuple
 
 import numpy as np
 
+from ..core.kernels import kernel
 from ..core.limits import Limits
 from ..errors import InputError, ParameterError
 from ..ins.constants import DPH, DPSH, G0, UG
@@ -177,8 +183,7 @@ class ImuErrorModel:
     model saves it and a deep copy continues bit for bit identically.
     """
 
-    state_fields = ("rng", "gm_bias", "_cached_dt", "_gm_phi", "_gm_drive", "_white_sigma_dt",
-                    "_vibration_sigma_dt")
+    state_fields = ("rng", "_normals", "_n_used", "gm_bias", "_cached_dt", "_coefficients")
     derived_fields = ("noise_intensity_gain", "noise_level_windows", "seed", "constant_bias",
                       "g_sensitivity", "gyro_matrix", "accel_matrix", "_increment_matrix",
                       "_reference_offset", "_level_bias",
@@ -211,6 +216,8 @@ class ImuErrorModel:
 
     #: random numbers drawn per apply() call (6 white noise, 6 Gauss-Markov driving noise)
     NORMALS_PER_APPLY = 12
+    #: apply() calls whose normals are drawn at once (the same sequence as one call at a time)
+    NORMALS_BLOCK = 64
 
     def __init__(self, params: Dict[str, Any], seed: int):
         check_known(params, self.PARAMETERS, "ImuErrorModel")
@@ -232,11 +239,15 @@ class ImuErrorModel:
         self._vibration_sigma = np.repeat([si["vib_gyro"], si["vib_accel"]], 3)
         self._vibration_on = bool(si["vib_gyro"] > 0.0 or si["vib_accel"] > 0.0)
 
-        # coefficients that depend on dt only, recomputed when dt changes; tuples of floats,
-        # as apply() uses them (they are state: a restored model keeps its dt and these)
+        # coefficients that depend on dt only, recomputed when dt changes, rows of the
+        # kernel's argument (state: a restored model keeps its dt and these): the Gauss-Markov
+        # phi and driving sigma, the white and the vibration sigma per sample
         self._cached_dt = None
-        self._gm_phi = (1.0,) * 6
-        self._gm_drive = self._white_sigma_dt = self._vibration_sigma_dt = (0.0,) * 6
+        self._coefficients = np.zeros((4, 1, 6))
+        self._coefficients[0] = 1.0
+        # the normals of the next apply() calls: row n_used is the next one's
+        self._normals = np.zeros((self.NORMALS_BLOCK, self.NORMALS_PER_APPLY))
+        self._n_used = self.NORMALS_BLOCK
 
     def _si_values(self, params: Dict[str, Any]) -> Dict[str, float]:
         """The numeric parameters, checked, in SI units (datasheet units converted once)."""
@@ -297,9 +308,8 @@ class ImuErrorModel:
         f_ref = np.array([0.0, 0.0, -level_reference_g * G0])
         self._reference_offset = np.concatenate((self.g_sensitivity @ f_ref,
                                                  (self.accel_matrix - np.eye(3)) @ f_ref))
-        #: constant bias minus the reference offset, as floats (the constant term of apply)
-        self._level_bias = tuple(c - r for c, r in zip(self.constant_bias.tolist(),
-                                                       self._reference_offset.tolist()))
+        #: constant bias minus the reference offset (the constant term of apply), one row
+        self._level_bias = (self.constant_bias - self._reference_offset).reshape(1, 6)
 
     def _init_gauss_markov(self, si: Dict[str, float], gm_initial: np.ndarray) -> None:
         """Gauss-Markov biases (gyro 3, accel 3): steady-state sigma and correlation time;
@@ -311,15 +321,15 @@ class ImuErrorModel:
                                     si["accel_gm_sigma"] if gm_on_accel else 0.0], 3)
         self._gm_tau = np.repeat([gyro_tau if gm_on_gyro else math.inf,
                                   accel_tau if gm_on_accel else math.inf], 3)
-        #: current Gauss-Markov bias state, gyro [rad/s] then accel [m/s^2]
-        self.gm_bias = self._gm_sigma * gm_initial     # stationary start
+        #: current Gauss-Markov bias state, gyro [rad/s] then accel [m/s^2], one row
+        self.gm_bias = (self._gm_sigma * gm_initial).reshape(1, 6)     # stationary start
 
     # -- queries ------------------------------------------------------------------------
     def true_biases(self) -> Tuple[np.ndarray, np.ndarray]:
         """Current total bias (constant + Gauss-Markov) of the gyro [rad/s] and the
         accelerometer [m/s^2], at the end of the latest interval.  Excludes the
         g-sensitivity, scale-factor and misalignment errors, which depend on the motion."""
-        total = self.constant_bias + self.gm_bias
+        total = self.constant_bias + self.gm_bias[0]
         return total[:3].copy(), total[3:].copy()
 
     def noise_factor(self, t: float) -> float:
@@ -333,11 +343,12 @@ class ImuErrorModel:
     # -- measurement --------------------------------------------------------------------
     def _set_dt(self, dt: float) -> None:
         phi = np.exp(-dt / self._gm_tau)
-        self._gm_phi = tuple(phi.tolist())
+        coefficients = self._coefficients[:, 0]
+        coefficients[0] = phi
         # exact discretisation: the stationary variance sigma^2 is preserved
-        self._gm_drive = tuple((self._gm_sigma * np.sqrt(1.0 - phi * phi)).tolist())
-        self._white_sigma_dt = tuple((self._white_density * math.sqrt(dt)).tolist())
-        self._vibration_sigma_dt = tuple((self._vibration_sigma * dt).tolist())
+        coefficients[1] = self._gm_sigma * np.sqrt(1.0 - phi * phi)
+        coefficients[2] = self._white_density * math.sqrt(dt)
+        coefficients[3] = self._vibration_sigma * dt
         self._cached_dt = dt
 
     def apply(self, t_end: float, dt: float, dtheta, dvel, intensity: float = 0.0):
@@ -371,28 +382,42 @@ class ImuErrorModel:
         if dt != self._cached_dt:
             self._set_dt(dt)
 
-        # The 6-vector arithmetic on Python floats: the same IEEE operations, in the same
-        # order, as the numpy expressions in the comments, at a fraction of their call cost.
-        z = self.rng.standard_normal(self.NORMALS_PER_APPLY).tolist()
-        gm_start = self.gm_bias.tolist()
-        # gm_end = phi * gm_start + drive * z[6:]
-        gm_end = [p * g + d * w for p, g, d, w in
-                  zip(self._gm_phi, gm_start, self._gm_drive, z[6:])]
-        self.gm_bias = np.array(gm_end)
-
+        n = self._n_used
+        if n == self.NORMALS_BLOCK:
+            self._normals = self.rng.standard_normal(self._normals.shape)
+            n = 0
+        self._n_used = n + 1
         window = self.noise_factor(t_end - 0.5 * dt) if self.noise_level_windows else 1.0
-        # white = white_sigma_dt * (window * (1 + gain * intensity))
+        # white = white_sigma_dt * (window * (1 + gain * intensity)); vibration at
+        # window * intensity when it is on and the caller reports a manoeuvre, else off (-1)
         scale = window * (1.0 + self.noise_intensity_gain * intensity)
-        white = [w * scale for w in self._white_sigma_dt]
-        if self._vibration_on and intensity > 0.0:
-            vib_scale = window * intensity
-            # independent Gaussian sources add in variance: one draw per axis suffices
-            white = [math.sqrt(w * w + v * v) for w, v in
-                     zip(white, [s * vib_scale for s in self._vibration_sigma_dt])]
+        vib_scale = window * intensity if self._vibration_on and intensity > 0.0 else -1.0
+        out = np.empty((1, 6))
+        phi, drive, white, vibration = self._coefficients
+        apply_rows(out, (self._increment_matrix @ x).reshape(1, 6), self._normals[n:n + 1],
+                   self._level_bias, self.gm_bias, phi, drive, white, vibration,
+                   np.array(((scale, vib_scale, dt),)))
+        return out[0, :3], out[0, 3:]
 
-        # out = M x + ((constant - reference) + (gm_start + gm_end) / 2) dt + white * z[:6]
-        out = [(o + (b + 0.5 * (g0 + g1)) * dt) + w * n for o, b, g0, g1, w, n in
-               zip((self._increment_matrix @ x).tolist(), self._level_bias, gm_start, gm_end,
-                   white, z)]
-        out = np.array(out)
-        return out[:3], out[3:]
+
+@kernel
+def apply_rows(out, ideal, z, level_bias, gm, phi, drive, white, vibration, factors):
+    """The arithmetic of :meth:`ImuErrorModel.apply` for every run of a batch (B rows each):
+    ``out`` the measured increments from ``ideal`` (the increment matrix times the ideal
+    increments), the normals ``z`` (6 white, then 6 Gauss-Markov driving), the constant term
+    ``level_bias``, the Gauss-Markov state ``gm`` (advanced in place), its ``phi`` and
+    ``drive``, the ``white`` and ``vibration`` sigmas per sample, and ``factors`` (B, 3): the
+    white-noise scale, the vibration scale (negative: off) and dt."""
+    for b in range(out.shape[0]):
+        scale, vib_scale, dt = factors[b, 0], factors[b, 1], factors[b, 2]
+        for i in range(6):
+            g0 = gm[b, i]
+            g1 = phi[b, i] * g0 + drive[b, i] * z[b, 6 + i]     # gm_end = phi gm + drive z
+            gm[b, i] = g1
+            w = white[b, i] * scale
+            if vib_scale >= 0.0:
+                # independent Gaussian sources add in variance: one draw per axis suffices
+                v = vibration[b, i] * vib_scale
+                w = math.sqrt(w * w + v * v)
+            # out = M x + ((constant - reference) + (gm_start + gm_end) / 2) dt + white z
+            out[b, i] = (ideal[b, i] + (level_bias[b, i] + 0.5 * (g0 + g1)) * dt) + w * z[b, i]
