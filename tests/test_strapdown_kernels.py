@@ -95,6 +95,7 @@ def test_the_state_row_holds_what_the_attributes_say():
     nav.update([0.01, 0.0, 0.0], [0.0, 0.0, -0.098], 0.01)
     assert np.array_equal(C_before, C)             # an attribute read is a copy
     assert nav._dtheta_prev == (0.01, 0.0, 0.0) and nav._v_prev == (10.0, -2.0, 0.5)
+    assert nav.solution() == (nav.lat, nav.lon, nav.h, *nav.v_ned.tolist(), *nav.euler())
 
 
 _PROBE = """

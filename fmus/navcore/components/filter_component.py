@@ -435,10 +435,8 @@ class InsGnssFilter(Component):
         nav = engine.nav
         out = self.out
         out["nav_time"] = self.nav_time
-        out["nav_lat"], out["nav_lon"], out["nav_h"] = nav.lat, nav.lon, nav.h
-        out["nav_vn"], out["nav_ve"], out["nav_vd"] = nav.v_ned.tolist()
-        out["nav_roll"], out["nav_pitch"], out["nav_yaw"] = nav.euler()
         update = out.update
+        update(zip(signals.NAV_SOLUTION_NAMES, nav.solution()))
         update(zip(signals.NAV_BG_NAMES, engine.gyro_bias.tolist()))
         update(zip(signals.NAV_BA_NAMES, engine.accel_bias.tolist()))
         update(zip(_STD_NAMES, np.sqrt(np.maximum(engine.covariance_diagonal(), 0.0)).tolist()))

@@ -8,10 +8,12 @@ compiled code on the same floats.  numba compiles IEEE double arithmetic as writ
 ``fastmath`` no multiply-add is fused and nothing is reassociated, and ``math.sin``/``cos``/
 ``sqrt``/``atan2`` call the same C library as CPython, so a kernel gives the floats the
 interpreted function gives, bit for bit (the tests of each kernel check it on the interpreted
-function, :attr:`py_func` of the kernel, which *is* the same source).
+function, :attr:`py_func` of the kernel, which *is* the same source).  One exception: a
+compiled ``x ** 2`` is ``x * x``, CPython's is ``pow(x, 2.0)``, and the two round apart about
+once in a thousand; kernels write squares as ``x * x``.
 
-Compiling costs about a second per process and kernel family; the machine code is therefore
-cached on disk, in ``$NAVFMU_KERNEL_CACHE`` or else the user's cache folder
+Compiling costs a few seconds per process (4.4 s for all kernels); the machine code is
+therefore cached on disk, in ``$NAVFMU_KERNEL_CACHE`` or else the user's cache folder
 (``$XDG_CACHE_HOME/navfmu/kernels``, by default ``~/.cache/navfmu/kernels``).  The cache is
 keyed by the *content* of every navcore source file, not by its path: an FMU unpacks navcore
 into a new temporary folder at every instantiation, and numba's own cache (keyed by path and

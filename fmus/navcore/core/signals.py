@@ -110,6 +110,8 @@ _NAV = (
     *(real(f"nav_bg_{a}", "rad/s", f"estimated gyro bias, body {a}") for a in AXES_BODY),
     *(real(f"nav_ba_{a}", "m/s2", f"estimated accelerometer bias, body {a}") for a in AXES_BODY),
 )
+#: the position, velocity and attitude outputs, in the order of ``Strapdown.solution()``
+NAV_SOLUTION_NAMES = tuple(p.name for p in _NAV[1:10])
 NAV_BG_NAMES = tuple(p.name for p in _NAV[10:13])
 NAV_BA_NAMES = tuple(p.name for p in _NAV[13:16])
 

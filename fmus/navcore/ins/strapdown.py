@@ -334,6 +334,11 @@ class Strapdown(_StateRow):
         """(roll, pitch, yaw) [rad] of C_bn, yaw in (-pi, pi]."""
         return _euler_from_rows(self.C_bn.tolist())
 
+    def solution(self):
+        """(lat, lon, h, vn, ve, vd, roll, pitch, yaw) as floats (one read of the row)."""
+        r = self.rows[0].tolist()
+        return (*r[:6], *_euler_from_rows((r[6:9], r[9:12], r[12:15])))
+
     # -- forward mechanization ---------------------------------------------------------
     def update(self, dtheta, dvel, dt):
         """Advance over one IMU interval of ``dt`` [s] with body increments ``dtheta``
@@ -382,12 +387,10 @@ class Strapdown(_StateRow):
     def _move_to(self, lat, lon, h, v_prev, v1, C1, dtheta, dvel):
         """Take the state an update with increments ``dtheta``, ``dvel`` (3-tuples) from
         velocity ``v_prev`` reaches: position, ``v1``, ``C1`` (row lists)."""
-        self.lat, self.lon, self.h = lat, lon, h
-        self._v_prev = v_prev
-        self.v_ned = np.array(v1)
-        self.C_bn = np.array(C1)
-        self._dtheta_prev = dtheta
-        self._dvel_prev = dvel
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C1
+        self.rows[0] = (lat, lon, h, v1[0], v1[1], v1[2], c00, c01, c02, c10, c11, c12,
+                        c20, c21, c22, v_prev[0], v_prev[1], v_prev[2], dtheta[0], dtheta[1],
+                        dtheta[2], dvel[0], dvel[1], dvel[2])
 
     # -- closed-loop feedback ----------------------------------------------------------
     def correct(self, dr_ned, dv_ned, phi_ned):
