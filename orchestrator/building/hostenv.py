@@ -8,8 +8,8 @@ machine.  A host process that is not Python therefore needs, on Linux:
   ``INSTSONAME``/``LDLIBRARY``), so the FMU binary finds the Python C API;
 * ``PYTHONHOME``: ``sys.base_prefix``, where the standard library and ``lib-dynload`` live;
 * ``PYTHONPATH``: the ``site-packages`` folders holding the packages the FMUs import beyond
-  the standard library (numpy and scipy; pythonfmu's Python side and navcore travel inside
-  every FMU under ``resources/``).
+  the standard library (numpy, scipy, numba and its llvmlite; pythonfmu's Python side and
+  navcore travel inside every FMU under ``resources/``).
 
 Only Linux hosts are covered (and tested, ``tests/test_chost.py``); README "Use in your
 simulator" says what is known for Windows.
@@ -27,7 +27,7 @@ from pathlib import Path
 from ..errors import NavfmuError
 
 #: packages outside the standard library that the FMUs' scripts import at run time
-RUNTIME_PACKAGES = ("numpy", "scipy")
+RUNTIME_PACKAGES = ("numpy", "scipy", "numba", "llvmlite")
 
 
 def libpython() -> Path:
