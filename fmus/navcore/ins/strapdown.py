@@ -184,13 +184,19 @@ _DTHETA_PREV, _DVEL_PREV = slice(18, 21), slice(21, 24)
 
 
 @jitable
+def _velocity_attitude(r):
+    """The velocity (3-tuple) and ``C_bn`` rows (3x3 tuple) of columns 3:15 of a state row
+    (or of an inverse step's target)."""
+    return (r[3], r[4], r[5]), ((r[6], r[7], r[8]), (r[9], r[10], r[11]), (r[12], r[13], r[14]))
+
+
+@jitable
 def _update_row(s, dtheta, dvel, dt):
     """:meth:`Strapdown.update` of one state row ``s`` (:data:`COLUMNS`), in place, with the
     body increments ``dtheta`` [rad] and ``dvel`` [m/s] (3 floats each) over ``dt`` [s]."""
     gx, gy, gz = dtheta[0], dtheta[1], dtheta[2]
     fx, fy, fz = dvel[0], dvel[1], dvel[2]
-    v = (s[3], s[4], s[5])
-    C = ((s[6], s[7], s[8]), (s[9], s[10], s[11]), (s[12], s[13], s[14]))
+    v, C = _velocity_attitude(s)
     zeta, g_cor = _mid_interval_terms(s[0], s[2], v, (s[15], s[16], s[17]), dt)
     px, py, pz = s[18], s[19], s[20]
     qx, qy, qz = s[21], s[22], s[23]
@@ -386,7 +392,7 @@ class Strapdown(_StateRow):
 
     def _move_to(self, lat, lon, h, v_prev, v1, C1, dtheta, dvel):
         """Take the state an update with increments ``dtheta``, ``dvel`` (3-tuples) from
-        velocity ``v_prev`` reaches: position, ``v1``, ``C1`` (row lists)."""
+        velocity ``v_prev`` reaches: position, ``v1``, ``C1`` (rows)."""
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C1
         self.rows[0] = (lat, lon, h, v1[0], v1[1], v1[2], c00, c01, c02, c10, c11, c12,
                         c20, c21, c22, v_prev[0], v_prev[1], v_prev[2], dtheta[0], dtheta[1],
@@ -428,7 +434,7 @@ class Strapdown(_StateRow):
 @jitable
 def inverse_increments(lat, h, v, v_prev, C, dtheta_prev, dvel_prev, v1, C1, dt):
     """The increments ``(dtheta, dvel)`` (3-tuples) with which :meth:`Strapdown.update` takes
-    the velocity ``v`` and attitude ``C`` (row lists) at latitude ``lat``, height ``h`` (with
+    the velocity ``v`` and attitude ``C`` (rows) at latitude ``lat``, height ``h`` (with
     the previous velocity ``v_prev`` and increments ``dtheta_prev``, ``dvel_prev``) to ``v1``
     and ``C1`` over ``dt`` (the equations of :meth:`Strapdown.inverse_update`)."""
     zeta, g_cor = _mid_interval_terms(lat, h, v, v_prev, dt)
@@ -465,11 +471,8 @@ def _inverse_row(s, target, dt, increments):
     ``increments``, 6 floats) that take the state row ``s`` to ``target`` (its first 15
     columns: position, velocity, attitude) over ``dt``; ``s`` then holds the state they
     lead to (the position is the target's: the caller has integrated or checked it)."""
-    v = (s[3], s[4], s[5])
-    C = ((s[6], s[7], s[8]), (s[9], s[10], s[11]), (s[12], s[13], s[14]))
-    v1 = (target[3], target[4], target[5])
-    C1 = ((target[6], target[7], target[8]), (target[9], target[10], target[11]),
-          (target[12], target[13], target[14]))
+    v, C = _velocity_attitude(s)
+    v1, C1 = _velocity_attitude(target)
     dtheta, dvel = inverse_increments(s[0], s[2], v, (s[15], s[16], s[17]), C,
                                       (s[18], s[19], s[20]), (s[21], s[22], s[23]), v1, C1, dt)
     s[15], s[16], s[17] = v
