@@ -125,7 +125,7 @@ def test_other_campaign_in_the_same_folder_is_refused(tmp_path):
 # kill and resume
 # ---------------------------------------------------------------------------------------
 COMMAND = [sys.executable, "-m", "orchestrator.cli", "montecarlo", SCENARIO, "--runs", "7",
-           "--filters", "Kf,Iakf", "--stop", "20", "--workers", "2"]
+           "--filters", "Kf,Iakf", "--stop", "20", "--batch", "1", "--workers", "2"]
 TOTAL = 14
 
 

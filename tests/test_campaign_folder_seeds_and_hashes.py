@@ -428,9 +428,11 @@ class StandInExecutor:
     def run(self, tasks, progress=None):
         self.progress.append(progress)
         for task in tasks:
-            job = task.args[0]
-            yield task.key, {"filter": job["filter"], "index": job["index"],
-                             "commit": job["commit"], "metrics": {}}
+            jobs = task.args[0]            # a batch's jobs, or one run's
+            records = [{"filter": job["filter"], "index": job["index"],
+                        "commit": job["commit"], "metrics": {}}
+                       for job in (jobs if isinstance(jobs, list) else [jobs])]
+            yield task.key, records if isinstance(jobs, list) else records[0]
 
 
 def test_the_driver_writes_the_records_it_gets_and_counts_them(tmp_path, monkeypatch):

@@ -325,7 +325,8 @@ def test_local_cluster_campaign_stops_on_ctrl_c_to_its_process_group(tmp_path, s
     finishes the campaign, running only the missing runs."""
     out = tmp_path / "mc"
     command = [sys.executable, "-m", "orchestrator.cli", "montecarlo", str(MODEL), "--runs",
-               "8", "--filters", "Kf", "--stop", "30", "--workers", "2", "--out", str(out)]
+               "8", "--filters", "Kf", "--stop", "30", "--batch", "1", "--workers", "2",
+               "--out", str(out)]
     proc = subprocess.Popen(command + ["--local-cluster"], env=_env(), cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)

@@ -47,6 +47,7 @@ from ..results import metrics as nav_metrics
 from ..results import mission_metrics
 from ..results import recorder
 from ..errors import NavfmuError
+from . import batching
 from .executor import Executor, Task
 from ..results.jsonsafe import jsonable
 from ..results.run_results import atomic_write
@@ -73,6 +74,9 @@ class CampaignSpec:
     seed_offsets: Tuple[Tuple[str, int], ...] = ()
     parameters: Tuple[Tuple[str, Any], ...] = ()
     series: Optional[str] = None
+    #: runs per batch on the direct backend (None: chosen, :mod:`.batching`); not part of
+    #: the campaign's identity: a batch's runs are its single runs, bit for bit
+    batch: Optional[int] = None
 
     def __post_init__(self):
         if isinstance(self.runs, bool) or not isinstance(self.runs, int) or self.runs < 1:
@@ -86,6 +90,7 @@ class CampaignSpec:
         if self.series is not None and self.series not in SERIES_FORMATS:
             raise NavfmuError(f"--series: expected one of {', '.join(SERIES_FORMATS)}, got "
                               f"{self.series!r}")
+        batching.check_batch(self.batch, self.backend)
         if self.samples not in nav_metrics.SAMPLES:
             raise NavfmuError(f"--samples: expected one of {', '.join(nav_metrics.SAMPLES)}, "
                               f"got {self.samples!r}")
@@ -109,7 +114,9 @@ def scenario_hash(model) -> str:
 NUMERIC_CODE = ("fmus/*.py", "fmus/navcore/**/*.py", "orchestrator/cosim/backends.py",
                 "orchestrator/cosim/fmu_instance.py", "orchestrator/cosim/direct_instance.py",
                 "orchestrator/cosim/component_description.py", "orchestrator/cosim/exchange.py",
-                "orchestrator/cosim/master.py", "orchestrator/results/metrics.py",
+                "orchestrator/cosim/master.py", "orchestrator/cosim/batch.py",
+                "orchestrator/cosim/batch_instance.py", "orchestrator/results/batch_recording.py",
+                "orchestrator/results/metrics.py",
                 "orchestrator/results/recorder.py", "orchestrator/model/ssp.py",
                 "orchestrator/model/ssp_xml.py", "orchestrator/campaigns/campaign.py",
                 "orchestrator/results/run_results.py")
@@ -204,44 +211,93 @@ def series_path(out: Path, filter_name: str, index: int, fmt: str) -> Path:
     return Path(out) / "series" / filter_name / f"run-{index:04d}.{fmt}"
 
 
+def _job_parameters(job: Dict[str, Any]) -> Dict[str, Any]:
+    parameters = dict(job["parameters"])
+    parameters.update({f"{c}.seed": s for c, s in job["seeds"].items()})
+    return parameters
+
+
+class _RunSinks:
+    """Where one run's rows go: its metrics, its mission metrics and (when asked and the
+    folder is visible here) its series file."""
+
+    def __init__(self, job: Dict[str, Any], overlap: int):
+        self.job = job
+        self.metrics = recorder.MetricsSink(window=job["window"], samples=job["samples"],
+                                            overlap=overlap)
+        out = Path(job["out"])
+        self.visible = out.is_dir()
+        series = None
+        if job["series"] and self.visible:
+            path = series_path(out, job["filter"], job["index"], job["series"])
+            path.parent.mkdir(parents=True, exist_ok=True)
+            series = (recorder.ParquetSink(path) if job["series"] == "parquet"
+                      else recorder.CsvSink(path))
+        self.mission = mission_metrics.MissionSink(window=job["window"])
+        self.tee = recorder.Tee([self.metrics, series, self.mission])
+
+    def record(self, header, wall_time_s: float) -> Dict[str, Any]:
+        """The run's record (written to its run file when the folder is visible here)."""
+        from ..running.scenarios import FILTER_COMPONENT
+
+        job = self.job
+        metrics = dict(self.metrics.metrics.get(FILTER_COMPONENT, {}))
+        if FILTER_COMPONENT in self.mission.metrics:
+            metrics["mission"] = self.mission.metrics[FILTER_COMPONENT]
+        record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
+                  "metrics": metrics, "stop_time": header.metadata["stop_time"],
+                  "wall_time_s": wall_time_s, "pid": os.getpid(),
+                  "commit": job.get("commit", "")}
+        if self.visible:
+            write_run(Path(job["out"]), record)
+        return record
+
+
 def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
     """Run one (filter, index) of a campaign; write its run file when the folder is visible
     here; return the record.  ``job`` is plain data (picklable for any executor)."""
     from ..cosim.master import Simulation
-    from ..running.scenarios import FILTER_COMPONENT, load_scenario, registry, swap_filter
+    from ..running.scenarios import load_scenario, registry, swap_filter
 
     interrupts.safe_point(f"campaign-run-{job['filter']}-{job['index']}")   # test hook
     t0 = time.perf_counter()
     model = swap_filter(load_scenario(job["ssd"]), job["filter"])
-    parameters = dict(job["parameters"])
-    parameters.update({f"{c}.seed": s for c, s in job["seeds"].items()})
     sim = Simulation(model, backend=job["backend"],
                      registry=registry() if job["backend"] == "direct" else None,
-                     parameters=parameters)
+                     parameters=_job_parameters(job))
+    sinks = _RunSinks(job, overlap=max(sim.decimation.values()) + 1)
+    header = sim.run(stop_time=job["stop_time"], sink=sinks.tee)
+    return sinks.record(header, time.perf_counter() - t0)
+
+
+def run_batch(jobs: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
+    """Run the jobs of one filter (other indices) as one batch on the direct backend
+    (:mod:`orchestrator.cosim.batch`): the records of :func:`run_one`, each run's file
+    written as soon as the batch ends.  A run that fails fails alone: the others' files are
+    written, then its error is raised, naming it (the first, when several failed)."""
+    from ..cosim.batch import BatchSimulation
+    from ..running.scenarios import load_scenario, registry, swap_filter
+
+    first = jobs[0]
+    for job in jobs:
+        interrupts.safe_point(f"campaign-run-{job['filter']}-{job['index']}")   # test hook
+    t0 = time.perf_counter()
+    model = swap_filter(load_scenario(first["ssd"]), first["filter"])
+    sim = BatchSimulation(model, registry(), [_job_parameters(job) for job in jobs])
     overlap = max(sim.decimation.values()) + 1
-    metrics_sink = recorder.MetricsSink(window=job["window"], samples=job["samples"],
-                                        overlap=overlap)
-    out = Path(job["out"])
-    visible = out.is_dir()
-    series_sink = None
-    if job["series"] and visible:
-        path = series_path(out, job["filter"], job["index"], job["series"])
-        path.parent.mkdir(parents=True, exist_ok=True)
-        series_sink = (recorder.ParquetSink(path) if job["series"] == "parquet"
-                       else recorder.CsvSink(path))
-    mission_sink = mission_metrics.MissionSink(window=job["window"])
-    header = sim.run(stop_time=job["stop_time"],
-                     sink=recorder.Tee([metrics_sink, series_sink, mission_sink]))
-    metrics = dict(metrics_sink.metrics.get(FILTER_COMPONENT, {}))
-    if FILTER_COMPONENT in mission_sink.metrics:
-        metrics["mission"] = mission_sink.metrics[FILTER_COMPONENT]
-    record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
-              "metrics": metrics,
-              "stop_time": header.metadata["stop_time"], "wall_time_s": time.perf_counter() - t0,
-              "pid": os.getpid(), "commit": job.get("commit", "")}
-    if visible:
-        write_run(out, record)
-    return record
+    sinks = [_RunSinks(job, overlap) for job in jobs]
+    outcomes = sim.run(stop_time=first["stop_time"], sinks=[s.tee for s in sinks])
+    wall = (time.perf_counter() - t0) / len(jobs)    # the batch's time, shared
+    records, failed = [], []
+    for job, run_sinks, outcome in zip(jobs, sinks, outcomes):
+        if isinstance(outcome, NavfmuError):
+            failed.append((job, outcome))
+        else:
+            records.append(run_sinks.record(outcome, wall))
+    if failed:
+        job, error = failed[0]
+        raise NavfmuError(f"run {job['index']} of {job['filter']}: {error}") from error
+    return records
 
 
 def write_run(out: Path, record: Dict[str, Any]) -> Path:
@@ -366,14 +422,29 @@ class Campaign:
         interrupts.safe_point("campaign-started")
         todo = self.missing()
         total = self.runs * len(self.spec.filters)
-        tasks = [Task(key=key, func=run_one, args=(self.job(*key),)) for key in todo]
         ran = 0
-        for (f, i), record in executor.run(tasks, progress=progress):
-            if read_run(self.out, f, i) is None:       # a worker that cannot see the folder
-                write_run(self.out, record)
-            ran += 1
-            interrupts.safe_point(f"campaign-ran-{ran}")
+        workers = getattr(executor, "workers", 1)
+        for _, result in executor.run(self.tasks(todo, workers), progress=progress):
+            for record in (result if isinstance(result, list) else [result]):
+                if read_run(self.out, record["filter"], record["index"]) is None:
+                    write_run(self.out, record)      # a worker that cannot see the folder
+                ran += 1
+                interrupts.safe_point(f"campaign-ran-{ran}")
         return {"done_before": total - len(todo), "ran": ran, "total": total}
+
+    def tasks(self, todo: List[Tuple[str, int]], workers: int) -> List[Task]:
+        """One task per run, or per batch of one filter's runs on the direct backend
+        (:mod:`.batching`); a batch's key is (filter, first index, last index)."""
+        tasks = []
+        for name, indices in batching.batches(todo, self.spec.batch, self.spec.backend,
+                                              workers):
+            if len(indices) == 1:
+                tasks.append(Task(key=(name, indices[0]), func=run_one,
+                                  args=(self.job(name, indices[0]),)))
+            else:
+                tasks.append(Task(key=(name, indices[0], indices[-1]), func=run_batch,
+                                  args=([self.job(name, i) for i in indices],)))
+        return tasks
 
     def records(self) -> Dict[str, List[Dict[str, Any]]]:
         """filter -> the records of runs 0 .. N-1 (all must exist)."""

@@ -238,6 +238,11 @@ def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, wo
                              log=lambda m: click.echo(m, err=True)))
 
 
+BATCH_HELP = ("Runs of one filter stepped together as one batch on the direct backend "
+              "(default: chosen from the runs, the workers and the free memory; 1: one "
+              "run at a time). Every run's numbers are those of its single run.")
+
+
 @cli.command()
 @click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--runs", type=int, required=True, help="Number of seeds (runs per filter).")
@@ -262,8 +267,9 @@ def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, wo
               help="Override a parameter (repeatable).")
 @click.option("--series", type=click.Choice(["parquet", "csv"]),
               help="Also keep every run's time series in this format.")
+@click.option("--batch", type=int, default=None, help=BATCH_HELP)
 def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
-               seed_offsets, backend, stop, window, samples, sets, series):
+               seed_offsets, backend, stop, window, samples, sets, series, batch):
     """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
     command again to finish a killed campaign)."""
     from ..campaigns import campaign, campaign_summary
@@ -274,7 +280,7 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
         scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
         stop_time=stop, window=parse_window(window), samples=samples,
         seed_offsets=campaign.parse_seed_offsets(seed_offsets),
-        parameters=tuple(parse_sets(sets).items()), series=series)
+        parameters=tuple(parse_sets(sets).items()), series=series, batch=batch)
     model_name = scenarios.load_scenario(scenario).name
     out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
     with progress_bars() as progress_bar:
@@ -303,7 +309,8 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
               "shorter for a quick look, the papers' tables need the full runs).")
 @click.option("--only-finished", is_flag=True, help="Run nothing: report the runs the "
               "campaigns in --out have finished (the first runs every filter has).")
-def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
+@click.option("--batch", type=int, default=None, help=BATCH_HELP)
+def report(out, runs, workers, scheduler, local_cluster, stop, only_finished, batch):
     """Campaigns of every scenario of models/ with every filter that fits it, and one
     Markdown report: the papers' tables with our numbers and intervals, figures,
     NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
@@ -314,7 +321,7 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished):
             out, runs=report_module.DEFAULT_RUNS if runs is None else runs, workers=workers,
             scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
             progress_factory=lambda name: progress_bar(name, unit="run"),
-            log=lambda m: click.echo(m, err=True), only_finished=only_finished)
+            log=lambda m: click.echo(m, err=True), only_finished=only_finished, batch=batch)
     click.echo(f"wrote {path}")
 
 

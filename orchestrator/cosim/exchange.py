@@ -102,18 +102,20 @@ class Slot:
     def copy_inputs(self, vectors, counter=None) -> None:
         """Copy this component's inputs from the signal vectors into its input buffers:
         every input (``counter`` None), or only those whose transfer period divides
-        ``counter`` (libcosim's transfer after macro step ``counter - 1``)."""
+        ``counter`` (libcosim's transfer after macro step ``counter - 1``).  The signal
+        vectors and the buffers may carry a leading run axis (a batch of runs,
+        :mod:`orchestrator.cosim.batch`): values move along the last axis."""
         for t, src in self.sources.items():
             if counter is None:
-                vectors[t].take(src, out=self.buffers[t], mode="clip")
+                vectors[t].take(src, axis=-1, out=self.buffers[t], mode="clip")
                 continue
             period = self.uniform[t]
             if period:
                 if counter % period == 0:
-                    vectors[t].take(src, out=self.buffers[t], mode="clip")
+                    vectors[t].take(src, axis=-1, out=self.buffers[t], mode="clip")
                 continue
             due = (counter % self.periods[t]) == 0
-            self.buffers[t][due] = vectors[t][src[due]]
+            self.buffers[t][..., due] = vectors[t][..., src[due]]
 
 
 class Timing:

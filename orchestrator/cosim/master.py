@@ -135,16 +135,17 @@ _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 def _row_recorder(vectors, rec_index, recordings):
     """``record(row)``: copy the recorded signals into row ``row`` of the recording buffers;
-    a type recorded whole, in vector order, is one row copy."""
+    a type recorded whole, in vector order, is one row copy.  The vectors may carry a leading
+    run axis (a batch, :mod:`orchestrator.cosim.batch`); the buffers' rows then do too."""
     whole = [t for t in NUMERIC_TYPES
-             if np.array_equal(rec_index[t], np.arange(len(vectors[t])))]
+             if np.array_equal(rec_index[t], np.arange(vectors[t].shape[-1]))]
     picked = [t for t in NUMERIC_TYPES if t not in whole and len(rec_index[t])]
 
     def record(row):
         for t in whole:
             recordings[t][row] = vectors[t]
         for t in picked:
-            vectors[t].take(rec_index[t], out=recordings[t][row], mode="clip")
+            vectors[t].take(rec_index[t], axis=-1, out=recordings[t][row], mode="clip")
 
     return record
 
@@ -344,6 +345,20 @@ class Simulation:
             views = [vectors[t][slice(*slices[n][t])] for t in NUMERIC_TYPES]
             inst.prepare(list(source_of[n]), out_names[n], *views)
 
+    def _rec_index(self, position) -> Dict[str, np.ndarray]:
+        """Per type, the positions of the recorded signals in the signal vector."""
+        return {t: np.array([position[(n, v)][1] for n in self.names
+                             for v in self.recorded[n] if position[(n, v)][0] == t],
+                            dtype=np.intp) for t in NUMERIC_TYPES}
+
+    def _exchange(self, instances, vectors, position, source_of, start: float, n_steps: int,
+                  timing: Timing):
+        """The exchange of the algorithm over prepared ``instances``."""
+        slots = slots_for(self.names, self.decimation, instances, position, source_of)
+        order = [self._index[n] for n in self.order]
+        return exchange_for(self.algorithm, slots, order, vectors, start, self.base_step,
+                            n_steps, timing)
+
     def run(self, stop_time: Optional[float] = None,
             progress: Optional[Callable[[int, int], None]] = None, sink=None) -> Results:
         """Run from the model's start time to ``stop_time`` (default: the model's).
@@ -357,9 +372,7 @@ class Simulation:
         stop = float(stop_time) if stop_time is not None else self.model.stop_time
         n_steps = self._n_steps(start, stop)
         vectors, position, slices, out_names, source_of = self._layout()
-        rec_index = {t: np.array([position[(n, v)][1] for n in self.names
-                                  for v in self.recorded[n] if position[(n, v)][0] == t],
-                                 dtype=np.intp) for t in NUMERIC_TYPES}
+        rec_index = self._rec_index(position)
         recording = Recording(n_steps // self.record_every + 1,
                               {t: len(rec_index[t]) for t in NUMERIC_TYPES}, _DTYPES,
                               lambda first, n, bufs: self._chunk(first, n, bufs, rec_index,
@@ -372,10 +385,8 @@ class Simulation:
             for d in self.components:
                 instances.append(d.make())
             self._prepare(instances, vectors, slices, out_names, source_of)
-            slots = slots_for(self.names, self.decimation, instances, position, source_of)
-            order = [self._index[n] for n in self.order]
-            exchange = exchange_for(self.algorithm, slots, order, vectors, start,
-                                    self.base_step, n_steps, timing)
+            exchange = self._exchange(instances, vectors, position, source_of, start, n_steps,
+                                      timing)
             for d, inst in zip(self.components, instances):
                 inst.set_parameters(self.parameter_values[d.spec.name])
             exchange.initialize(start, stop)

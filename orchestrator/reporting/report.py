@@ -30,6 +30,7 @@ from ..results import plots
 from ..results import recorder
 from ..campaigns import statistics as st
 from ..campaigns.campaign_summary import AXES, per_run_values
+from ..campaigns.batching import check_batch
 from ..campaigns.executor import Executor
 from ..errors import NavfmuError, SkippedParametersWarning, WiringError
 from ..results import mission_metrics
@@ -93,7 +94,8 @@ def discover(models: Path = MODELS) -> List[Dict[str, Any]]:
 
 def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None,
                  local_cluster=False, stop_time: Optional[float] = None, models: Path = MODELS,
-                 progress_factory=None, log=print, only_finished: bool = False) -> Path:
+                 progress_factory=None, log=print, only_finished: bool = False,
+                 batch: Optional[int] = None) -> Path:
     """Run (or resume) the campaigns and write ``out/report.md`` with ``out/figures/``.
 
     ``only_finished``: run nothing; report, per scenario, the first runs every filter of its
@@ -106,6 +108,7 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
         raise NavfmuError(f"--runs: expected a whole number >= 1, got {runs!r}")
     Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)  # checks them
     check_stop_time(stop_time, 0.0)
+    check_batch(batch, "direct")
     if only_finished and not list((out / "campaigns").glob(f"*/{camp.MANIFEST}")):
         raise NavfmuError(f"--only-finished: {out / 'campaigns'} holds no campaign to report "
                           "(run the report without --only-finished first)")
@@ -113,18 +116,19 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
         # every filter is swapped into every scenario here: skipped parameters are expected
         warnings.simplefilter("ignore", SkippedParametersWarning)
         return _build_report(out, runs, workers, scheduler, local_cluster, stop_time, models,
-                             progress_factory, log, only_finished)
+                             progress_factory, log, only_finished, batch)
 
 
 def _build_report(out, runs, workers, scheduler, local_cluster, stop_time, models,
-                  progress_factory, log, only_finished) -> Path:
+                  progress_factory, log, only_finished, batch) -> Path:
     t0 = time.perf_counter()
     sections = []
     for plan in discover(models):
         name = plan["model"].name
         # a scenario without a random source (a replayed log) gives the same run every time
         spec = camp.CampaignSpec(scenario=str(plan["path"]), filters=tuple(plan["filters"]),
-                                 runs=runs if plan["random"] else 1, stop_time=stop_time)
+                                 runs=runs if plan["random"] else 1, stop_time=stop_time,
+                                 batch=batch)
         folder = out / "campaigns" / name
         if only_finished:
             spec = _finished(spec, folder)

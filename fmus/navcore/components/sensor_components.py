@@ -20,6 +20,7 @@ from ..ins.rotations import dcm_to_rotvec, euler_to_dcm
 from .imu_measurement import ERROR_PARAMETERS, SEED_LIMITS, ImuMeasurement, ports_from_table
 from ..core.timing import samples_reached, time_tolerance
 from ..ins.trajectory import TrajectoryGenerator
+from .trajectory_imu_batch import TrajectoryImuBatch
 
 # ---------------------------------------------------------------------------------------
 class TrajectoryImu(ImuMeasurement, Component):
@@ -49,6 +50,8 @@ class TrajectoryImu(ImuMeasurement, Component):
     inputs = ()
     outputs = signals.TRUTH + signals.IMU + signals.MAG
     default_experiment = (0.0, 500.0, 0.01)
+    #: many runs of one profile in one call (navcore.core.batch)
+    batch_class = TrajectoryImuBatch
     state_fields = ("generator", "errors", "magnetometer", "n", "out")
     derived_fields = ("dt", "mag_on", "_no_mag", "start_time")
 

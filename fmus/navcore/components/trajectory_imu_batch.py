@@ -1,0 +1,114 @@
+"""TrajectoryImu's batch (:mod:`navcore.core.batch`): B runs of one motion profile with their
+own IMU and magnetometer errors.
+
+The runs of a batch fly the same profile on the same grid (parameters ``profile``,
+``imu_period`` and ``extend_profile`` equal to the first run's; a run that sets them
+otherwise fails, naming the parameter), so one trajectory generator gives every run's truth
+and ideal increments, and the IMU errors of all runs are applied in one kernel call
+(:class:`~navcore.sensors.imu_error_batch.ImuErrorBatch`).  A run with its magnetometer or
+vibration switched on takes its magnetometer sample through its own component's code.
+"""
+from __future__ import annotations
+
+import copy
+from typing import List
+
+import numpy as np
+
+from ..core import signals
+from ..core.batch import ComponentBatch
+from ..core.timing import samples_reached
+from ..errors import ParameterError
+from ..sensors.imu_error_batch import ImuErrorBatch
+from ..sensors.imu_errors import INTENSITY_REFERENCE_RATE
+
+#: the parameters every run of a batch shares (one trajectory)
+SHARED_PARAMETERS = ("profile", "imu_period", "extend_profile")
+_TRUTH_KEYS = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
+
+
+class TrajectoryImuBatch(ComponentBatch):
+    """B runs of :class:`~navcore.components.sensor_components.TrajectoryImu` (module
+    docstring)."""
+
+    def _started(self, start_time: float) -> np.ndarray:
+        members = self.members
+        failed = self._failures
+        ref = next((b for b in range(self.runs) if b not in failed), None)
+        out = np.zeros((self.runs, len(self.columns)))
+        if ref is None:
+            return out
+        first = members[ref]
+        for b, member in enumerate(members):
+            differ = [n for n in SHARED_PARAMETERS if member.params[n] != first.params[n]]
+            if differ and b not in failed:
+                self.fail(b, ParameterError(
+                    f"{self.model_name}: parameter '{differ[0]}' = {member.params[differ[0]]!r}"
+                    f" differs from the batch's first run ({first.params[differ[0]]!r}); the "
+                    "runs of a batch fly one trajectory"))
+        alive = [b not in failed for b in range(self.runs)]
+        # a failed run's row computes with a copy of the first run's models (never read)
+        self.models = [members[b] if alive[b] else copy.deepcopy(first)
+                       for b in range(self.runs)]
+        self.generator = first.generator
+        self.errors = ImuErrorBatch([m.errors for m in self.models])
+        self.mag_rows = [b for b, m in enumerate(self.models) if alive[b] and m.mag_on]
+        self.dt, self.start_time, self.n = first.dt, start_time, 0
+        for b, m in enumerate(self.models):
+            out[b] = [m.out[name] for name in self.columns]
+        self.out = out
+        c = self.columns
+        self._truth_cols = [c[f"truth_{k}"] for k in _TRUTH_KEYS]
+        self._imu_cols = [c[n] for n in signals.IMU_DTHETA_NAMES + signals.IMU_DVEL_NAMES]
+        self._rate_cols = [c[n] for n in signals.IMU_GYRO_NAMES + signals.IMU_ACCEL_NAMES]
+        self._mag_cols = [c["mag_time"]] + [c[n] for n in signals.MAG_NAMES]
+        return out.copy()
+
+    def _kept(self, rows: List[int]) -> None:
+        if not hasattr(self, "errors"):
+            return
+        self.models = [self.models[i] for i in rows]
+        self.errors.keep(rows)
+        self.mag_rows = [rows.index(b) for b in self.mag_rows if b in rows]
+        self.out = self.out[rows]
+
+    def check_stop_time(self, stop_time: float) -> None:
+        self._each(lambda b, member: member.check_stop_time(stop_time))
+
+    def advance(self, t, h, inputs) -> np.ndarray:
+        for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):
+            self._sample()
+        return self.out
+
+    def _sample(self) -> None:
+        truth, dtheta, dvel = self.generator.step()
+        self.n += 1
+        dt = self.dt
+        t_end = self.start_time + self.n * dt
+        intensity = self.generator.last_rate_norm / INTENSITY_REFERENCE_RATE
+        measured = self.errors.apply(t_end, dt, np.concatenate((dtheta, dvel)), intensity)
+        out = self.out
+        if self.mag_rows:
+            self._magnetometer(out, measured, t_end, dt, truth)
+        out[:, self.columns["truth_time"]] = self.start_time + truth["time"]
+        out[:, self._truth_cols] = [truth[k] for k in _TRUTH_KEYS]
+        out[:, self.columns["imu_time"]] = t_end
+        out[:, self.columns["imu_dt"]] = dt
+        out[:, self._imu_cols] = measured
+        out[:, self._rate_cols] = measured / dt
+
+    def _magnetometer(self, out, measured, t_end, dt, truth) -> None:
+        """The magnetometer rows, each by its run's own component (ImuMeasurement)."""
+        attitude = (truth["roll"], truth["pitch"], truth["yaw"])
+        for b in self.mag_rows:
+            member = self.models[b]
+            sample = {}
+            member._write_mag(sample, t_end, attitude)
+            out[b, self._mag_cols] = [sample["mag_time"]] + [sample[n]
+                                                             for n in signals.MAG_NAMES]
+            if member.magnetometer.vibrating(t_end):
+                measured[b, 3:] = measured[b, 3:] + member.magnetometer.accel_disturbance(
+                    t_end) * dt
+
+
+__all__ = ["TrajectoryImuBatch", "SHARED_PARAMETERS"]

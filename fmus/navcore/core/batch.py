@@ -1,0 +1,103 @@
+"""Batches: B runs of one component class stepped together, every run on its own row.
+
+A component class whose per-run work can be done for all runs in one call names a
+``batch_class`` (a subclass of :class:`ComponentBatch`); a caller that runs many seeds of one
+system (the master's batches, ``orchestrator.cosim.batch``) then steps that class's B runs
+with one call per communication step instead of B.  The contract is the component's
+(:mod:`navcore.core.component`) with a run axis:
+
+* one component object per run holds that run's parameters (set and checked by the
+  component's own :meth:`~navcore.core.component.Component.set_parameter`) and, after
+  :meth:`start`, whatever per-run state the batch keeps there;
+* ``start``, ``advance`` return the outputs as one ``(B, n_outputs)`` float array, columns
+  in the order of the class's ``outputs``; inputs come as ``name -> (B,) array``;
+* an error of one run does not raise: it is kept (:meth:`take_failures`, batch row -> the
+  error its single run would raise) and that run's row holds its last values until the
+  caller drops it (:meth:`keep`);
+* notices are per run (:meth:`take_notices`).
+
+Every run of a batch computes the floats of its single run: a batch class's tests compare
+each row with the component run alone, bit for bit.
+"""
+from __future__ import annotations
+
+from typing import Any, Dict, List, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import NavcoreError
+
+
+class ComponentBatch:
+    """B runs of ``component_class`` (module docstring); subclasses implement
+    :meth:`_started` and :meth:`advance`."""
+
+    def __init__(self, component_class, runs: int):
+        self.component_class = component_class
+        self.model_name = component_class.model_name
+        self.members: List[Any] = [component_class() for _ in range(runs)]
+        self.columns = {p.name: j for j, p in enumerate(component_class.outputs)}
+        self._failures: Dict[int, Exception] = {}
+
+    @property
+    def runs(self) -> int:
+        return len(self.members)
+
+    def _each(self, call) -> None:
+        """``call(b, member)`` for every run not failed; an error fails that run alone."""
+        for b, member in enumerate(self.members):
+            if b in self._failures:
+                continue
+            try:
+                call(b, member)
+            except NavcoreError as exc:
+                self._failures[b] = exc
+
+    def set_parameters(self, values: Sequence[Mapping[str, Any]]) -> None:
+        """``values[b]``: the parameters of run b, by name."""
+        def set_all(b, member):
+            for name, value in values[b].items():
+                member.set_parameter(name, value)
+        self._each(set_all)
+
+    def take_failures(self) -> Dict[int, Exception]:
+        """The runs that failed since the last call: batch row -> error."""
+        failures, self._failures = self._failures, {}
+        return failures
+
+    def fail(self, b: int, exc: Exception) -> None:
+        self._failures.setdefault(b, exc)
+
+    def keep(self, rows: Sequence[int]) -> None:
+        """Keep the runs of batch ``rows``, in that order."""
+        rows = list(rows)
+        self.members = [self.members[i] for i in rows]
+        self._kept(rows)
+
+    def _kept(self, rows: List[int]) -> None:
+        """Hook: compact the batch's own per-run arrays."""
+
+    def take_notices(self, b: int) -> List[str]:
+        return self.members[b].take_notices()
+
+    def start(self, start_time: float) -> np.ndarray:
+        """Start every run (each member's own ``start``: its parameters are validated
+        there) and the batch's shared part; the outputs at the start."""
+        self._each(lambda b, member: member.start(start_time))
+        return self._started(float(start_time))
+
+    def check_stop_time(self, stop_time: float) -> None:
+        self._each(lambda b, member: member.check_stop_time(stop_time))
+
+    def initial_inputs(self, inputs: Mapping[str, np.ndarray]):
+        """The inputs at the end of initialization mode (None: outputs unchanged)."""
+        return None
+
+    def _started(self, start_time: float) -> np.ndarray:
+        raise NotImplementedError
+
+    def advance(self, t: float, h: float, inputs: Mapping[str, np.ndarray]) -> np.ndarray:
+        raise NotImplementedError
+
+
+__all__ = ["ComponentBatch"]
