@@ -49,7 +49,10 @@ def _assert_same_run(single, batched):
 @pytest.mark.parametrize("scenario, filter_name, stop, algorithm", [
     ("aircraft_500s", "Kf", 30.0, "gauss-seidel"),
     ("aircraft_500s", "Iakf", 30.0, "jacobi"),
+    ("aircraft_500s", "InsOnly", 10.0, "gauss-seidel"),
     ("aircraft_outliers", "NewtonRobustKf", 30.0, "gauss-seidel"),
+    ("aircraft_outliers", "Igg3RobustKf", 30.0, "jacobi"),
+    ("mems_outages", "SageHusaFading", 60.0, "gauss-seidel"),
     ("uav_maneuver", "ImmUkf", 10.0, "jacobi"),
     ("uav_maneuver_mems", "CtfaUkf", 10.0, "gauss-seidel"),
     ("ahrs_turntable", "FuzzyUkfAhrs", 20.0, "gauss-seidel"),
@@ -68,14 +71,14 @@ def test_every_run_of_a_batch_records_the_arrays_of_its_single_run(
     assert not np.array_equal(outcomes[0].data["filter"], outcomes[1].data["filter"])
 
 
-def test_the_trajectory_of_a_batch_is_stepped_natively_once_for_all_runs():
+def test_the_trajectory_and_the_kf_of_a_batch_are_stepped_natively():
     assert sensor_components.TrajectoryImu.batch_class is not None
     model = load_scenario(MODELS / "aircraft_500s")
     sim = BatchSimulation(model, registry(), _seed_sets(model, 4))
     kinds = {d.spec.name: type(sim._batch_instance(d, 4, {})).__name__
              for d in sim.components}
     assert kinds == {"trajectory": "NativeBatchInstance", "gnss": "LoopBatchInstance",
-                     "filter": "LoopBatchInstance"}
+                     "filter": "NativeBatchInstance"}
 
 
 def test_streamed_runs_of_a_batch_give_the_chunks_of_their_single_runs(tmp_path):

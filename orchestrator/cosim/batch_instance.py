@@ -20,6 +20,7 @@ from typing import Any, Dict, List, Mapping, Sequence
 
 import numpy as np
 
+from navcore.core.batch import BatchInputs
 from navcore.errors import NavcoreError
 
 from .backends import Instance
@@ -247,11 +248,11 @@ class NativeBatchInstance(BatchInstance):
         if outputs is not None:
             self._outputs = outputs
 
-    def _inputs(self) -> Dict[str, np.ndarray]:
-        inputs: Dict[str, np.ndarray] = {}
+    def _inputs(self) -> BatchInputs:
+        values: Dict[str, np.ndarray] = {}
         for names, buf in self._in_names:
-            inputs.update(zip(names, buf.T.copy()))
-        return inputs
+            values.update(zip(names, buf.T.copy()))
+        return BatchInputs(values, self.real_in.copy(), self.input_names["Real"])
 
     def set_inputs(self, real_values=None, int_values=None, bool_values=None) -> None:
         self._copy_in(real_values, int_values, bool_values)

@@ -25,6 +25,7 @@ from ..filters.initial_state import (INIT_CHECK_SIGMAS, INIT_MODES, INIT_PARAMET
                                      Initializer, disagreement)
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from ..filters.latency import SolutionHistory
+from .filter_batch import InsGnssFilterBatch
 from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
 from ..filters.recovery import RECOVERY_PARAMETERS
 from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
@@ -121,6 +122,8 @@ class InsGnssFilter(Component):
     """
 
     engine_class = KfEngine
+    #: many runs in one call (navcore.core.batch): the Kf family's IMU intervals
+    batch_class = InsGnssFilterBatch
     extra_parameters = ()
     extra_outputs = ()
     #: engine attributes written, under the same names, to outputs after every update
@@ -211,6 +214,13 @@ class InsGnssFilter(Component):
             integrated = True
             while self.pending and self.pending[0][0] <= self.nav_time + self._half_interval():
                 self._apply(self.pending.pop(0))
+        self._take_epoch(inputs)
+        if integrated or out["updated"]:   # otherwise the engine, so the solution, is unchanged
+            self._write_solution()
+        return out
+
+    def _take_epoch(self, inputs):
+        """A new GNSS epoch (``gnss_epoch`` changed): its fix, when valid, is received."""
         epoch = inputs["gnss_epoch"]
         if epoch != self.last_epoch:
             self.last_epoch = epoch
@@ -218,9 +228,6 @@ class InsGnssFilter(Component):
                 if not self.initializer.checked:
                     self._check_given_state(inputs)
                 self._receive_fix(inputs)
-        if integrated or out["updated"]:   # otherwise the engine, so the solution, is unchanged
-            self._write_solution()
-        return out
 
     def _new_interval(self, inputs):
         """The increment (imu_time, dtheta, dvel, imu_dt) of a new IMU interval, one that
@@ -445,6 +452,9 @@ class InsGnssFilter(Component):
             raise DivergenceError(f"{self.model_name}: output '{bad}' became non-finite at "
                                   f"t = {self.nav_time} s (the filter diverged)")
 
+
+
+InsGnssFilterBatch.shell = InsGnssFilter
 
 
 def _fix_of(inputs):

@@ -25,6 +25,8 @@ class Ukf(InsGnssFilter):
                    "with a nonlinear rotation-vector large-misalignment error model, fixed Q and "
                    "R, closed-loop feedback.")
     engine_class = UkfEngine
+    #: no batch of its own yet: a batch runs one Ukf per run
+    batch_class = None
     #: paper 000's UAV flight (uav_maneuver: 60 min, IMU at 50 Hz)
     default_experiment = (0.0, 3600.0, 0.02)
     extra_parameters = (

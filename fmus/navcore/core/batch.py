@@ -21,11 +21,27 @@ each row with the component run alone, bit for bit.
 """
 from __future__ import annotations
 
-from typing import Any, Dict, List, Mapping, Sequence
+from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
 import numpy as np
 
 from ..errors import NavcoreError
+from .limits import FINITE
+
+
+class BatchInputs(dict):
+    """The inputs of a batch's step: ``name -> (B,) array``, and the Real ones also as one
+    ``(B, n)`` matrix (:attr:`real`, its columns named by :attr:`real_names`)."""
+
+    def __init__(self, values, real: np.ndarray, real_names: Tuple[str, ...]):
+        super().__init__(values)
+        self.real = real
+        self.real_names = real_names
+
+    def real_columns(self, names: Tuple[str, ...]) -> np.ndarray:
+        """The Real inputs ``names`` as a (B, len(names)) matrix."""
+        index = [self.real_names.index(n) for n in names]
+        return self.real[:, index]
 
 
 class ComponentBatch:
@@ -71,8 +87,28 @@ class ComponentBatch:
     def keep(self, rows: Sequence[int]) -> None:
         """Keep the runs of batch ``rows``, in that order."""
         rows = list(rows)
+        self._all_members = self.members
         self.members = [self.members[i] for i in rows]
         self._kept(rows)
+        del self._all_members
+
+    def accepted_rows(self, values: np.ndarray, names: Tuple[str, ...]) -> np.ndarray:
+        """Per run (row of ``values``, one column per input of ``names``), whether every
+        input lies in its port's range and is finite (what
+        :meth:`~navcore.core.component.Component.check_inputs` enforces; a run refused here
+        gets its own component's error from its own code)."""
+        cache = self.__dict__.setdefault("_ranges", {})
+        ranges = cache.get(names)
+        if ranges is None:
+            ports = self.component_class._input_ports()
+            limits = [ports[n].limits if n in ports else FINITE for n in names]
+            ranges = cache[names] = tuple(np.array(a) for a in zip(*[
+                (x.low, x.high, x.low_open or not np.isfinite(x.low),
+                 x.high_open or not np.isfinite(x.high)) for x in limits]))
+        low, high, low_open, high_open = ranges
+        ok = np.where(low_open, values > low, values >= low)
+        ok &= np.where(high_open, values < high, values <= high)
+        return ok.all(axis=1)
 
     def _kept(self, rows: List[int]) -> None:
         """Hook: compact the batch's own per-run arrays."""

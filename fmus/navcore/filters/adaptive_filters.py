@@ -320,9 +320,9 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
         self.rejected = np.zeros(self.m, dtype=bool)
         self.n_rejected = 0
 
-    def propagate(self, dtheta, dvel, dt):
-        """As :meth:`KfEngine.propagate`, counting time for the history's epoch index."""
-        super().propagate(dtheta, dvel, dt)
+    def advance_clocks(self, dt):
+        """Count time for the history's epoch index."""
+        super().advance_clocks(dt)
         self.time += dt
 
     def _next_epoch(self):

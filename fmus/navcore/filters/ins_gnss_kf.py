@@ -30,7 +30,7 @@ from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_de
     transition_rows, transition_template)
 from .innovation_stats import nis
 from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
-from ..ins.strapdown import Strapdown
+from ..ins.strapdown import Strapdown, update_rows
 
 #: measurement modes and their dimension
 MEASUREMENTS = {"position": 3, "position_velocity": 6}
@@ -66,6 +66,30 @@ class UpdateResult:
     outlier: bool = False
 
 
+def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, dtheta, dvel,
+                   dt, template):
+    """:meth:`KfEngine.propagate` of every run of a batch (arrays with a leading run axis of
+    B: the strapdown rows (B, 24), advanced in place; the biases, increments (B, 3); the
+    accumulated transition and process noise (B, 15, 15); the noise densities (B, 15)) over
+    one interval ``dt`` shared by the runs, with the transition ``template`` of that dt.
+    Returns the new (Phi_acc, Q_acc, body rate).  numpy's stacked products give each run the
+    floats of its own 2-D product (``tests/test_kf_batch.py``)."""
+    dtheta_c = dtheta - gyro_bias * dt
+    dvel_c = dvel - accel_bias * dt
+    rate_ib = dtheta_c / dt
+    runs = len(nav_rows)
+    C_bn = nav_rows[:, 6:15].reshape(runs, 3, 3)
+    f_ned = (C_bn @ (dvel_c / dt)[:, :, None])[:, :, 0]   # with the attitude at the start
+    dts = np.full(runs, dt)
+    update_rows(nav_rows, dtheta_c, dvel_c, dts)
+    phi = np.empty((runs, N_STATES, N_STATES))
+    transition_rows(phi, nav_rows, f_ned, dts, template)
+    phi_acc = phi @ phi_acc
+    q_acc = phi @ q_acc @ np.ascontiguousarray(phi.transpose(0, 2, 1))
+    q_acc.reshape(runs, -1)[:, _DIAGONAL] += q_density * dt   # a view: C-contiguous
+    return phi_acc, q_acc, rate_ib
+
+
 class KfEngine:
     """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
 
@@ -94,22 +118,20 @@ class KfEngine:
 
     # -- time update -------------------------------------------------------------------
     def propagate(self, dtheta, dvel, dt):
-        """Mechanize one IMU interval with bias-compensated increments and propagate P."""
-        dtheta_c = dtheta - self.gyro_bias * dt
-        dvel_c = dvel - self.accel_bias * dt
-        self.rate_ib = dtheta_c / dt
-        nav = self.nav
-        f_ned = nav.C_bn @ (dvel_c / dt)            # resolved with the attitude at the start
-        nav.update(dtheta_c, dvel_c, dt)
+        """Mechanize one IMU interval with bias-compensated increments and propagate P
+        (:func:`propagate_rows` of this run), then :meth:`advance_clocks`."""
         cfg = self.config
-        phi = np.empty((1, N_STATES, N_STATES))
-        transition_rows(phi, nav.rows, f_ned.reshape(1, 3), np.full(1, dt),
-                        transition_template(dt, cfg.gyro_bias_tau, cfg.accel_bias_tau))
-        phi = phi[0]
-        self.phi_acc = phi @ self.phi_acc
-        q_acc = phi @ self.q_acc @ phi.T
-        q_acc.ravel()[_DIAGONAL] += self.q_density * dt   # a view: q_acc is C-contiguous
-        self.q_acc = q_acc
+        phi_acc, q_acc, rate_ib = propagate_rows(
+            self.nav.rows, self.gyro_bias.reshape(1, 3), self.accel_bias.reshape(1, 3),
+            self.phi_acc[None], self.q_acc[None], self.q_density[None],
+            np.reshape(dtheta, (1, 3)), np.reshape(dvel, (1, 3)), dt,
+            transition_template(dt, cfg.gyro_bias_tau, cfg.accel_bias_tau))
+        self.phi_acc, self.q_acc, self.rate_ib = phi_acc[0], q_acc[0], rate_ib[0]
+        self.advance_clocks(dt)
+
+    def advance_clocks(self, dt):
+        """What else an IMU interval of ``dt`` advances (a subclass's time counters): pure
+        sums of the intervals, so a batch may add them later in the same order."""
 
     def predicted_parts(self):
         """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}."""

@@ -39,6 +39,8 @@ from __future__ import annotations
 
 from typing import List, Tuple
 
+import numpy as np
+
 from ..core import state as _state
 from ..core.timing import time_tolerance
 
@@ -47,6 +49,16 @@ CHECKPOINT_INTERVAL = 0.1
 
 #: one stored IMU interval: (imu_time, dtheta (3,), dvel (3,), imu_dt)
 Increment = Tuple[float, object, object, float]
+
+
+def checkpoint_due(time, last, dt, keep, dense):
+    """Whether an interval of ``dt`` ending at ``time`` is checkpointed after the checkpoint
+    at ``last`` (every :data:`CHECKPOINT_INTERVAL` if ``dense``, else every ``keep``
+    seconds); numpy arrays of ``last``, ``keep``, ``dense`` give it for every run of a
+    batch."""
+    spacing = np.where(dense, CHECKPOINT_INTERVAL, keep) if isinstance(dense, np.ndarray) \
+        else (CHECKPOINT_INTERVAL if dense else keep)
+    return time - last >= spacing - time_tolerance(dt, time)
 
 
 class SolutionHistory:
@@ -75,10 +87,21 @@ class SolutionHistory:
         fix within ``keep`` seconds of the new time can need."""
         time = increment[0]
         self.increments.append(increment)
-        spacing = CHECKPOINT_INTERVAL if dense else keep
-        if time - self.checkpoints[-1][0] >= spacing - time_tolerance(increment[3], time):
+        if checkpoint_due(time, self.checkpoints[-1][0], increment[3], keep, dense):
             self.checkpoints.append((time, _state.capture(engine, "checkpoint")))
-        horizon = time - keep
+        self._forget_before(time - keep)
+
+    def extend(self, increments: List[Increment], keep: float) -> None:
+        """Store intervals integrated one after the other, none of which is due for a
+        checkpoint: the history :meth:`record` leaves after each of them (what is
+        forgotten depends only on the latest time, as the horizon only advances)."""
+        self.increments.extend(increments)
+        if increments:
+            self._forget_before(increments[-1][0] - keep)
+
+    def _forget_before(self, horizon: float) -> None:
+        """Forget what no fix after ``horizon`` can need: every checkpoint but the latest
+        one at or before it, and the increments up to that checkpoint."""
         cps = self.checkpoints
         if len(cps) > 1 and cps[1][0] <= horizon:
             while len(cps) > 1 and cps[1][0] <= horizon:

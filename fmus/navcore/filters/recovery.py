@@ -201,8 +201,8 @@ class GuardedEngine:
     def init_guard(self, *, recovery, recovery_epochs):
         self.guard = RecoveryGuard(self.m, recovery=recovery, recovery_epochs=recovery_epochs)
 
-    def propagate(self, dtheta, dvel, dt):
-        super().propagate(dtheta, dvel, dt)
+    def advance_clocks(self, dt):
+        super().advance_clocks(dt)
         self.guard.advance(dt)
 
 

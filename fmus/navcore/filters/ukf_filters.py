@@ -291,6 +291,7 @@ class UkfEngine(KfEngine):
         self._sum_dv += C_prev @ dvel_c
         if self._T >= self.predict_interval - _TIME_EPS:
             self._predict()
+        self.advance_clocks(dt)
 
     def _interval(self):
         T = self._T

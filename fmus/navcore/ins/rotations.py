@@ -126,13 +126,21 @@ def _euler_rows_of(sr, cr, sp, cp, sy, cy):
     ]
 
 
-def _euler_from_rows(m):
-    roll = math.atan2(m[2][1], m[2][2])
+def euler_from_columns(c00, c10, c20, c21, c22):
+    """ZYX Euler angles (lists of roll, pitch, yaw) of many DCMs given by their elements
+    ``C[i][j]`` as sequences: Python's ``math`` on each (numpy's vectorized ``arctan2`` and
+    ``hypot`` round otherwise)."""
+    roll = list(map(math.atan2, c21, c22))
     # atan2 instead of asin: exact near +-90 deg and immune to |C20| > 1 by rounding
-    pitch = math.atan2(-m[2][0], math.hypot(m[2][1], m[2][2]))
-    yaw = math.atan2(m[1][0], m[0][0])
-    if yaw <= -math.pi:
-        yaw = math.pi
+    pitch = list(map(math.atan2, [-x for x in c20], map(math.hypot, c21, c22)))
+    yaw = [math.pi if y <= -math.pi else y for y in map(math.atan2, c10, c00)]
+    return roll, pitch, yaw
+
+
+def _euler_from_rows(m):
+    """ZYX Euler angles of one DCM given by rows (:func:`euler_from_columns`)."""
+    (roll,), (pitch,), (yaw,) = euler_from_columns((m[0][0],), (m[1][0],), (m[2][0],),
+                                                   (m[2][1],), (m[2][2],))
     return roll, pitch, yaw
 
 

@@ -1,0 +1,265 @@
+"""The Kalman filters' batch (:mod:`navcore.core.batch`): B runs of one INS/GNSS filter of the
+Kf family (:mod:`navcore.components.kf_components`) with their IMU intervals propagated in
+one call.
+
+Every run keeps its own component object (its parameters, engine, latency history,
+initializer, NIS monitor: the single run's code).  What a batch does for all runs at once is
+the work of every IMU interval, when every run takes the same interval (the runs of a batch
+share their trajectory, so their time tags agree):
+
+* the mechanization and covariance propagation by :func:`~navcore.filters.ins_gnss_kf.
+  propagate_rows`, the function each engine's own ``propagate`` calls with one run, on the
+  runs' state stacked here (the strapdown rows are the engines' own: each engine's
+  ``nav.rows`` is a view of its row);
+* the solution outputs (position, velocity, attitude from the rows, biases, the sigmas of
+  the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`.
+
+Everything else is the run's own component, called for that run only: a new GNSS epoch
+(its fix applied, held or rolled back), a checkpoint of its latency history falling due, a
+run not started yet (initial state from the data), a fix waiting in the future, an input it
+refuses, an IMU interval that is not the runs' common one.  Before such a call the run's
+engine is given the batch's values (:meth:`_lend`: its propagated parts, the IMU intervals
+its history and its clocks have not seen yet, in order) and after it the batch takes the
+engine's (:meth:`_adopt`), so the run computes exactly what it computes alone.
+"""
+from __future__ import annotations
+
+from typing import Dict, List
+
+import numpy as np
+
+from ..core import signals
+from ..core.batch import ComponentBatch
+from ..core.timing import same_time
+from ..filters.ins_gnss_kf import KfEngine, propagate_rows
+from ..filters.latency import checkpoint_due
+from ..ins.error_model import transition_template
+from ..ins.strapdown import solution_columns
+
+_IMU = ("imu_time", "imu_dt", "imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x",
+        "imu_dvel_y", "imu_dvel_z")
+_STD_NAMES = tuple(p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_"))
+_STACKED = ("gyro_bias", "accel_bias", "phi_acc", "q_acc", "rate_ib", "P")
+
+
+class InsGnssFilterBatch(ComponentBatch):
+    """B runs of a Kf-family filter (module docstring)."""
+
+    def _started(self, start_time: float) -> np.ndarray:
+        runs = self.runs
+        self.out = np.zeros((runs, len(self.columns)))
+        alive = [b for b in range(runs) if b not in self._failures]
+        first = self.members[alive[0]] if alive else None
+        # an engine that propagates otherwise (a subclass's own law) runs its own code
+        self._native = first is not None and self._propagates_like_kf(first)
+        self._taus = len({(m.engine.config.gyro_bias_tau, m.engine.config.accel_bias_tau)
+                          for b, m in enumerate(self.members) if b in alive}) == 1
+        self.rows = np.zeros((runs, 24))
+        self._views = [None] * runs             # each engine's nav.rows: its row here
+        self.stack = {name: np.zeros((runs,) + np.shape(getattr(first.engine, name)))
+                      for name in _STACKED} if first is not None else {}
+        self.q_density = np.zeros((runs, 15))
+        # per run, what decides whether its own code runs this step (kept by _sync)
+        self.own = np.ones(runs, dtype=bool)    # not started yet, or a fix held back
+        self.last_epoch = np.zeros(runs, dtype=np.int64)
+        self.last_checkpoint = np.full(runs, np.inf)
+        self.max_fix_age = np.zeros(runs)
+        self.dense = np.zeros(runs, dtype=bool)
+        self.seen: List[int] = [0] * runs       # log entries each run's engine has seen
+        self.log: List[tuple] = []              # (imu_time, dtheta (B,3), dvel (B,3), dt)
+        self.first_entry = 0                    # log index of self.log[0]
+        self.nav_time = start_time
+        self._template = (None, None)
+        c = self.columns
+        names = signals.NAV_SOLUTION_NAMES + signals.NAV_BG_NAMES + signals.NAV_BA_NAMES \
+            + _STD_NAMES
+        first_col = c[names[0]]
+        # the solution outputs are consecutive columns (signals.FILTER_OUTPUTS)
+        assert [c[n] for n in names] == list(range(first_col, first_col + len(names)))
+        self._solution_col = first_col
+        for b in alive:
+            self._adopt(b)
+        return self.out.copy()
+
+    #: the component class whose stepping the batch does for all runs (set by
+    #: navcore.components.filter_component) and the methods of it the batch stands for
+    shell = None
+    SHELL_METHODS = ("step", "_new_interval", "_integrate", "_take_epoch", "_write_solution")
+
+    def _propagates_like_kf(self, member) -> bool:
+        """The batch stands for the run's own code only where that is the shell's and the
+        Kf engine's (a subclass that steps or propagates otherwise runs its own code)."""
+        engine = type(member.engine)
+        return (engine.propagate is KfEngine.propagate
+                and engine.covariance_diagonal is KfEngine.covariance_diagonal
+                and all(getattr(type(member), name) is getattr(self.shell, name)
+                        for name in self.SHELL_METHODS))
+
+    # -- the runs' own objects and the batch's stacks ------------------------------------
+    def _adopt(self, b: int) -> None:
+        """Take run b's engine and outputs into the batch (after its own code ran)."""
+        member = self.members[b]
+        engine = member.engine
+        nav = engine.nav
+        if nav.rows is not self._views[b]:      # a new engine (a start, a rollback)
+            self.rows[b] = nav.rows[0]
+            nav.rows = self._views[b] = self.rows[b:b + 1]
+        for name, stacked in self.stack.items():
+            stacked[b] = getattr(engine, name)
+        self.q_density[b] = engine.q_density
+        self.seen[b] = self.first_entry + len(self.log)
+        self.out[b] = [member.out[name] for name in self.columns]
+        self._sync(b)
+
+    def _sync(self, b: int) -> None:
+        """Run b's flags that the batch reads every step, from its own objects."""
+        member = self.members[b]
+        self.own[b] = not member.initializer.done or bool(member.pending)
+        self.last_epoch[b] = member.last_epoch
+        self.last_checkpoint[b] = (member.history.checkpoints[-1][0] if member.applies_fixes
+                                   else np.inf)
+        self.max_fix_age[b] = member.max_fix_age
+        self.dense[b] = member.late_fixes
+
+    def _lend(self, b: int) -> None:
+        """Give run b's engine, history and clocks what the batch did since its last turn."""
+        member = self.members[b]
+        engine = member.engine
+        for name, stacked in self.stack.items():
+            setattr(engine, name, stacked[b].copy())
+        entries = self.log[self.seen[b] - self.first_entry:]
+        if type(engine).advance_clocks is not KfEngine.advance_clocks:
+            for entry in entries:
+                engine.advance_clocks(entry[3])
+        if entries:
+            member.nav_time, member.imu_dt = entries[-1][0], entries[-1][3]
+        if entries and member.applies_fixes:
+            # only the latest interval can be due for a checkpoint: the batch lends a run
+            # at every interval that is (_checkpoints)
+            # (views: the log's arrays are never written after they are logged)
+            increments = [(t, dtheta[b], dvel[b], dt) for t, dtheta, dvel, dt in entries]
+            history = member.history
+            history.extend(increments[:-1], member.max_fix_age + entries[-1][3])
+            history.record(increments[-1], engine, member.max_fix_age + entries[-1][3],
+                           member.late_fixes)
+        self.seen[b] = self.first_entry + len(self.log)
+        self._sync(b)
+
+    def _by_itself(self, b: int, call) -> None:
+        """``call(member)`` for run b on its own objects; an error fails that run alone."""
+        self._lend(b)
+        try:
+            call(self.members[b])
+        except Exception as exc:          # the run's own error (InputError, divergence)
+            self.fail(b, exc)
+            return
+        self._adopt(b)
+
+    def _kept(self, rows: List[int]) -> None:
+        if not hasattr(self, "rows"):
+            return
+        members = self.members        # already the kept ones; self.seen not yet
+        self.members = self._all_members
+        for old in rows:
+            self._lend(old)
+        self.members = members
+        for name in ("rows", "q_density", "out", "own", "last_epoch", "last_checkpoint",
+                     "max_fix_age", "dense"):
+            setattr(self, name, getattr(self, name)[rows])
+        self.stack = {k: v[rows] for k, v in self.stack.items()}
+        self.seen = [self.first_entry + len(self.log)] * len(rows)
+        self._views = [None] * len(rows)
+        for b, member in enumerate(members):
+            member.engine.nav.rows = self._views[b] = self.rows[b:b + 1]
+
+    def _trim_log(self) -> None:
+        """Forget the log entries every run has seen."""
+        oldest = min(self.seen)
+        if oldest > self.first_entry:
+            del self.log[:oldest - self.first_entry]
+            self.first_entry = oldest
+
+    # -- stepping -------------------------------------------------------------------------
+    def _inputs_of(self, b: int, inputs) -> Dict[str, float]:
+        return {name: values[b].item() for name, values in inputs.items()}
+
+    def advance(self, t, h, inputs) -> np.ndarray:
+        imu = inputs.real_columns(_IMU)
+        interval = self._common_interval(imu)
+        if interval is None:
+            for b in range(self.runs):
+                if b not in self._failures:
+                    self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
+            self.nav_time = self.members[0].nav_time
+            return self.out
+        imu_time, dt = interval
+        self._propagate(imu, imu_time, dt)
+        self._write_solutions()
+        for b in np.flatnonzero(inputs["gnss_epoch"] != self.last_epoch).tolist():
+            if b not in self._failures:
+                self._by_itself(b, lambda m, b=b: self._epoch(m, self._inputs_of(b, inputs)))
+        self._trim_log()
+        return self.out
+
+    @staticmethod
+    def _epoch(member, inputs) -> None:
+        """The part of :meth:`InsGnssFilter.step` after the integration, for a new epoch."""
+        member.out["updated"] = False
+        member._take_epoch(inputs)
+        member._write_solution()
+
+    def _common_interval(self, imu: np.ndarray):
+        """(imu_time, imu_dt) when every run integrates that same new interval now; None
+        when any run needs its own code for this step."""
+        if not self._native or not self._taus or self._failures or self.own.any():
+            return None
+        imu_time, dt = imu[0, 0].item(), imu[0, 1].item()
+        if not ((imu[:, 0] == imu_time).all() and (imu[:, 1] == dt).all()):
+            return None
+        nav_time = self.nav_time
+        if not (imu_time > nav_time + 0.5 * dt and dt > 0
+                and same_time(imu_time - dt, nav_time, dt)):
+            return None
+        if not self.accepted_rows(imu, _IMU).all():
+            return None
+        return imu_time, dt
+
+    def _propagate(self, imu: np.ndarray, imu_time: float, dt: float) -> None:
+        stack = self.stack
+        dtheta, dvel = imu[:, 2:5], imu[:, 5:8]
+        key, template = self._template
+        if key != dt:            # the runs' time constants are one (_common_interval)
+            cfg = self.members[0].engine.config
+            template = transition_template(dt, cfg.gyro_bias_tau, cfg.accel_bias_tau)
+            self._template = (dt, template)
+        stack["phi_acc"], stack["q_acc"], stack["rate_ib"] = propagate_rows(
+            self.rows, stack["gyro_bias"], stack["accel_bias"], stack["phi_acc"],
+            stack["q_acc"], self.q_density, dtheta, dvel, dt, template)
+        self.log.append((imu_time, dtheta, dvel, dt))
+        self.nav_time = imu_time
+        due = checkpoint_due(imu_time, self.last_checkpoint, dt, self.max_fix_age + dt,
+                             self.dense)
+        for b in np.flatnonzero(due).tolist():    # its latency history checkpoints now
+            self._lend(b)
+
+    def _write_solutions(self) -> None:
+        """The solution outputs of every run (InsGnssFilter._write_solution's values)."""
+        out = self.out
+        stack = self.stack
+        phi = stack["phi_acc"]
+        diagonal = (np.einsum("bij,bij->bi", phi @ stack["P"], phi)
+                    + np.diagonal(stack["q_acc"], axis1=1, axis2=2))
+        c = self._solution_col
+        position_velocity, euler = solution_columns(self.rows)
+        out[:, c:c + 6] = position_velocity
+        out[:, c + 6:c + 9] = np.array(euler).T
+        out[:, c + 9:c + 12] = stack["gyro_bias"]
+        out[:, c + 12:c + 15] = stack["accel_bias"]
+        out[:, c + 15:c + 15 + len(_STD_NAMES)] = np.sqrt(np.maximum(diagonal, 0.0))
+        out[:, self.columns["nav_time"]] = self.nav_time
+        out[:, self.columns["updated"]] = 0.0
+        for b in np.flatnonzero(~np.isfinite(out).all(axis=1)).tolist():
+            self._by_itself(b, lambda m: m._write_solution())
+
+
+__all__ = ["InsGnssFilterBatch"]

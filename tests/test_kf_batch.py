@@ -1,0 +1,166 @@
+"""The Kalman filters' batch (navcore.components.filter_batch) against each filter alone.
+
+Without any master: the inputs each filter sees are recorded from direct runs of
+``aircraft_500s`` (one per seed), some runs' fixes are then delivered late (a rollback), from
+the future (held back) or invalid, and B filters stepped alone are compared with one batch
+of B stepped on the same inputs, output for output, bit for bit, every step.  The batched
+propagation is also checked on its own against each engine's ``propagate``.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from navcore.components.kf_components import Iakf, Kf, NewtonRobustKf
+from navcore.core.batch import BatchInputs
+from navcore.filters.ins_gnss_kf import KfConfig, KfEngine, propagate_rows
+from navcore.ins.error_model import transition_template
+from navcore.ins.strapdown import Strapdown
+from orchestrator.cosim.master import Simulation
+from orchestrator.running.scenarios import load_scenario, registry
+
+from campaign_helpers import MODELS
+
+STOP = 12.0
+
+
+def _engines(runs, rng):
+    engines = []
+    for b in range(runs):
+        config = KfConfig(p0=rng.uniform(0.1, 5.0, 15) * 1e-3, gyro_arw=1e-5 * (b + 1),
+                          accel_vrw=1e-4, gyro_bias_sigma=1e-6, gyro_bias_tau=300.0,
+                          accel_bias_sigma=1e-4, accel_bias_tau=300.0,
+                          r_sigma=np.full(6, 3.0))
+        nav = Strapdown.from_euler(0.6 + 0.01 * b, 2.0, 300.0 * b, rng.normal(0, 50, 3),
+                                   *rng.uniform(-0.5, 0.5, 3))
+        engine = KfEngine(config, nav)
+        engine.gyro_bias = rng.normal(0, 1e-5, 3)
+        engine.accel_bias = rng.normal(0, 1e-3, 3)
+        engines.append(engine)
+    return engines
+
+
+def test_the_batched_propagation_gives_each_engine_the_floats_of_its_own():
+    """Compared with the engines' own ``propagate`` (which calls the same function with one
+    run): this checks that numpy's stacked products round as each run's alone."""
+    rng = np.random.default_rng(7)
+    alone, batched = _engines(6, rng), _engines(6, np.random.default_rng(7))
+    rows = np.concatenate([e.nav.rows for e in batched])
+    stack = {n: np.stack([getattr(e, n) for e in batched])
+             for n in ("gyro_bias", "accel_bias", "phi_acc", "q_acc")}
+    q_density = np.stack([e.q_density for e in batched])
+    dt = 0.01
+    template = transition_template(dt, 300.0, 300.0)
+    for _ in range(300):
+        dtheta, dvel = rng.normal(0, 1e-3, (6, 3)), rng.normal(0, 0.1, (6, 3))
+        for b, engine in enumerate(alone):
+            engine.propagate(dtheta[b], dvel[b], dt)
+        stack["phi_acc"], stack["q_acc"], rate = propagate_rows(
+            rows, stack["gyro_bias"], stack["accel_bias"], stack["phi_acc"], stack["q_acc"],
+            q_density, dtheta, dvel, dt, template)
+    for b, engine in enumerate(alone):
+        np.testing.assert_array_equal(rows[b], engine.nav.rows[0])
+        np.testing.assert_array_equal(stack["phi_acc"][b], engine.phi_acc)
+        np.testing.assert_array_equal(stack["q_acc"][b], engine.q_acc)
+        np.testing.assert_array_equal(rate[b], engine.rate_ib)
+
+
+def _filter_parameters():
+    """The scenario's parameters of its filter (initial state, noise)."""
+    model = load_scenario(MODELS / "aircraft_500s")
+    return Simulation(model, backend="direct", registry=registry()).parameter_values["filter"]
+
+
+def _recorded_inputs(runs):
+    """Per run, the filter's inputs at every base step (list of dicts), from direct runs."""
+    model = load_scenario(MODELS / "aircraft_500s")
+    names = [p.name for p in Kf.inputs]
+    per_run = []
+    for b in range(runs):
+        res = Simulation(model, backend="direct", registry=registry(),
+                         parameters={"trajectory.seed": 3 + b, "gnss.seed": 40 + b}
+                         ).run(stop_time=STOP)
+        source = {**{c: res.column("trajectory", c) for c in res.columns["trajectory"]},
+                  **{c: res.column("gnss", c) for c in res.columns["gnss"]}}
+        steps = [{n: float(source[n][k]) if n in source else 0.0 for n in names}
+                 for k in range(1, len(res.time))]
+        for step in steps:
+            for n in ("gnss_epoch",):
+                step[n] = int(step[n])
+            step["gnss_valid"] = bool(step["gnss_valid"])
+        per_run.append(steps)
+    return per_run
+
+
+def _disturb(per_run):
+    """Run 1: every fix reaches the filter 30 base steps late (rollbacks); run 2: the fix
+    of epoch 3 is invalid and that of epoch 5 is stamped 0.2 s ahead (held back)."""
+    late = per_run[1]
+    for k in range(len(late) - 1, 29, -1):
+        for n in late[k]:
+            if n.startswith("gnss_"):
+                late[k][n] = late[k - 30][n]
+    for step in per_run[2]:
+        if step["gnss_epoch"] == 3:
+            step["gnss_valid"] = False
+        if step["gnss_epoch"] == 5:
+            step["gnss_time"] = step["gnss_time"] + 0.2
+
+
+def _batch_inputs(steps):
+    names = tuple(steps[0])
+    real = tuple(n for n in names if isinstance(steps[0][n], float))
+    values = {n: np.array([s[n] for s in steps]) for n in names}
+    return BatchInputs(values, np.array([[s[n] for n in real] for s in steps]), real)
+
+
+@pytest.mark.parametrize("component_class", [Kf, Iakf, NewtonRobustKf])
+def test_a_batch_of_filters_steps_each_run_as_it_steps_alone(component_class):
+    per_run = _recorded_inputs(3)
+    _disturb(per_run)
+    parameters = _filter_parameters()
+    alone = [component_class(**parameters) for _ in per_run]
+    batch = component_class.batch_class(component_class, len(per_run))
+    batch.set_parameters([parameters] * len(per_run))
+    first = batch.start(0.0)
+    columns = [p.name for p in component_class.outputs]
+    for b, component in enumerate(alone):
+        out = component.start(0.0)
+        assert first[b].tolist() == [float(out[n]) for n in columns]
+    h = 0.01
+    ages = []
+    for k in range(len(per_run[0])):
+        t = k * h
+        outs = batch.advance(t, h, _batch_inputs([steps[k] for steps in per_run]))
+        ages.append(outs[2, columns.index("fix_age")])
+        for b, component in enumerate(alone):
+            out = component.advance(t, h, per_run[b][k])
+            assert outs[b].tolist() == [float(out[n]) for n in columns], (k, b)
+        assert batch.take_failures() == {}
+    assert alone[1].late_fixes and alone[2].out["n_stale_fixes"] == 0
+    assert min(ages) < -0.15            # run 2 held a fix from the future
+    for b, component in enumerate(alone):
+        assert batch.take_notices(b) == component.take_notices()
+
+
+def test_a_run_that_diverges_inside_a_batch_fails_alone():
+    per_run = _recorded_inputs(3)
+    parameters = _filter_parameters()
+    batch = Kf.batch_class(Kf, 3)
+    batch.set_parameters([parameters] * 3)
+    batch.start(0.0)
+    alone = Kf(**parameters)
+    alone.start(0.0)
+    h = 0.01
+    for k in range(200):
+        batch.advance(k * h, h, _batch_inputs([steps[k] for steps in per_run]))
+        alone.advance(k * h, h, per_run[0][k])
+        if k == 100:
+            batch.rows[1, 4] = np.nan          # run 1's east velocity
+    failures = batch.take_failures()
+    assert list(failures) == [1]
+    assert "non-finite" in str(failures[1]) and "diverged" in str(failures[1])
+    batch.keep([0, 2])
+    out = batch.advance(200 * h, h, _batch_inputs([per_run[b][200] for b in (0, 2)]))
+    expected = alone.advance(200 * h, h, per_run[0][200])
+    assert out[0].tolist() == [float(expected[p.name]) for p in Kf.outputs]
