@@ -114,7 +114,22 @@ def _batch_inputs(steps):
     return BatchInputs(values, np.array([[s[n] for n in real] for s in steps]), real)
 
 
-@pytest.mark.parametrize("component_class", [Kf, Iakf, NewtonRobustKf])
+class _HalvedRateStrapdown(Strapdown):
+    """A mechanization of a user's own: integrates half the angle increment."""
+
+    def update(self, dtheta, dvel, dt):
+        super().update([0.5 * x for x in dtheta], dvel, dt)
+
+
+class _OwnMechanizationKf(Kf):
+    """A Kf whose engine flies its own strapdown: the batch runs its own code."""
+
+    def make_engine(self, config, nav):
+        nav.__class__ = _HalvedRateStrapdown
+        return super().make_engine(config, nav)
+
+
+@pytest.mark.parametrize("component_class", [Kf, Iakf, NewtonRobustKf, _OwnMechanizationKf])
 def test_a_batch_of_filters_steps_each_run_as_it_steps_alone(component_class):
     per_run = _recorded_inputs(3)
     _disturb(per_run)
@@ -137,6 +152,7 @@ def test_a_batch_of_filters_steps_each_run_as_it_steps_alone(component_class):
             out = component.advance(t, h, per_run[b][k])
             assert outs[b].tolist() == [float(out[n]) for n in columns], (k, b)
         assert batch.take_failures() == {}
+    assert batch._native == (component_class is not _OwnMechanizationKf)
     assert alone[1].late_fixes and alone[2].out["n_stale_fixes"] == 0
     assert min(ages) < -0.15            # run 2 held a fix from the future
     for b, component in enumerate(alone):

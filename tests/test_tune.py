@@ -19,10 +19,10 @@ MODEL = Path(__file__).resolve().parent.parent / "models" / "ahrs_turntable"
 PARAMS = ["fuzzy_e_z_right", "fuzzy_de_z_right"]
 
 
-def _tune(workers, seed=3):
+def _tune(workers, seed=3, batch=None):
     return tuner.run_tune(MODEL, "filter", PARAMS, generations=2, population=3,
                           workers=workers, seed=seed, stop_time=6.0, backend="direct",
-                          log=lambda m: None)
+                          log=lambda m: None, batch=batch)
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +37,16 @@ def test_same_seed_same_parameters_with_one_or_two_workers(serial):
     assert all(b <= a for a, b in zip(serial["best_so_far"], serial["best_so_far"][1:]))
     for name, (lo, hi) in serial["ranges"].items():
         assert lo <= serial["best_values"][name] <= hi
+
+
+def test_candidates_evaluated_in_batches_cost_what_they_cost_one_by_one(serial):
+    """The serial tune batches its 3 candidates (the default on the direct backend); one
+    candidate per task gives the same costs, bit for bit."""
+    one_by_one = _tune(1, batch=1)
+    for key in ("best_values", "best_so_far", "generation_best", "generation_mean"):
+        assert one_by_one[key] == serial[key]
+    with pytest.raises(NavfmuError, match="--batch"):
+        tuner.run_tune(MODEL, "filter", PARAMS, backend="fmu", batch=2, log=lambda m: None)
 
 
 def test_self_consistency_ranges_come_from_the_declared_parameter_spec(serial):
@@ -112,6 +122,7 @@ def test_the_tuned_values_are_never_worse_than_the_current_ones(monkeypatch):
 
     monkeypatch.setattr(tuner, "evaluate", spike)
     res = tuner.run_tune(MODEL, "filter", PARAMS, generations=3, population=4, workers=1,
-                         seed=3, stop_time=6.0, backend="direct", log=lambda m: None)
+                         seed=3, stop_time=6.0, backend="direct", log=lambda m: None,
+                         batch=1)          # one candidate per task: through evaluate
     assert res["best_cost"] == 1.0
     np.testing.assert_allclose([res["best_values"][n] for n in PARAMS], current, rtol=1e-12)

@@ -164,7 +164,7 @@ def test_the_summary_of_a_tune(monkeypatch):
     monkeypatch.setattr(tuner, "evaluate", stub)
     progress, lines = [], []
     names = ["r_accel_mps2", "fuzzy_window"]
-    res = tuner.run_tune(MODEL, "filter", names, generations=3, population=4, seed=1,
+    res = tuner.run_tune(MODEL, "filter", names, batch=1, generations=3, population=4, seed=1,
                          ranges={"r_accel_mps2": (0.1, 0.9), "fuzzy_window": (2, 40)},
                          train_seeds=[5, 6], stop_time=2.0, window=(1.0, 2.0),
                          progress=lambda done, total: progress.append((done, total)),
@@ -195,7 +195,7 @@ def test_the_summary_of_a_tune(monkeypatch):
 def test_without_training_seeds_the_model_s_own_noise_is_used(monkeypatch):
     stub = StubCost()
     monkeypatch.setattr(tuner, "evaluate", stub)
-    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], generations=1,
+    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], batch=1, generations=1,
                          population=2, log=lambda m: None)
     assert stub.calls[0][0].train_seeds == (None,) and stub.calls[0][0].seed_parameters == ()
     assert res["window"] is None and res["workers"] == 1 and res["backend"] == "direct"
@@ -205,7 +205,7 @@ def test_the_outputs_of_a_tune_bind_with_one_line(monkeypatch, tmp_path):
     """The written parameter set holds the best values and the other bindings (it replaces
     the component's bindings); tune.json is the summary."""
     monkeypatch.setattr(tuner, "evaluate", StubCost())
-    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], generations=1,
+    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], batch=1, generations=1,
                          population=2, log=lambda m: None)
     written = tuner.write_tune_outputs(res, tmp_path / "out" / "deeper")
     assert [p.relative_to(tmp_path).as_posix() for p in written] == [
@@ -281,7 +281,8 @@ def test_defaults_executor_options_fmu_build_and_the_current_values_first(monkey
     monkeypatch.setattr(tuner, "ensure_fmus", lambda model, log: built.append((model, log)))
     InlineExecutor.made.clear()
     say = []
-    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], workers=3, scheduler="tcp://x:1",
+    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], batch=1,
+                         workers=3, scheduler="tcp://x:1",
                          ranges={"r_accel_mps2": (0.01, 0.05)}, backend="fmu", log=say.append)
     assert InlineExecutor.made == [{"workers": 3, "scheduler": "tcp://x:1"}]
     assert len(built) == 1 and built[0][0].name == "ahrs_turntable" and built[0][1] == say.append
@@ -293,10 +294,10 @@ def test_defaults_executor_options_fmu_build_and_the_current_values_first(monkey
     assert res["cost"].startswith("attitude RMS over the window")
     assert {s.ssd for s in seen} == {res["ssd"]} and {s.backend for s in seen} == {"fmu"}
     # the same seed gives the same generations (the GA's seed is the one asked)
-    again = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], workers=3,
+    again = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], batch=1, workers=3,
                            ranges={"r_accel_mps2": (0.01, 0.05)}, log=lambda m: None)
     assert again["generation_mean"] == res["generation_mean"]
-    other = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], workers=3, seed=1,
+    other = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], batch=1, workers=3, seed=1,
                            ranges={"r_accel_mps2": (0.01, 0.05)}, log=lambda m: None)
     assert other["generation_mean"] != res["generation_mean"]
 
@@ -304,7 +305,7 @@ def test_defaults_executor_options_fmu_build_and_the_current_values_first(monkey
 def test_outputs_go_into_an_existing_folder_and_to_a_chosen_parameter_set(monkeypatch,
                                                                           tmp_path):
     monkeypatch.setattr(tuner, "evaluate", StubCost())
-    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], generations=1,
+    res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], batch=1, generations=1,
                          population=2, log=lambda m: None)
     tuner.write_tune_outputs(res, tmp_path)
     chosen = tmp_path / "elsewhere.ssv"

@@ -9,8 +9,10 @@ over the training seeds.  A training seed ``s`` is given to every component para
 ``seed``, so the tuner sees other sensor noise than the model's own runs if asked to.
 
 Evaluations run through :class:`orchestrator.campaigns.executor.Executor` (serial, local process
-pool, Dask), one task per candidate; results depend only on the candidates, so the same ``--seed``
-gives the same tuned values with any number of workers.
+pool, Dask), one task per candidate, or on the direct backend one task per batch of candidates
+(all their training runs stepped together, :mod:`orchestrator.cosim.batch`: the numbers of the
+single runs); results depend only on the candidates, so the same ``--seed`` gives the same
+tuned values with any number of workers and any batch size.
 
 Parameter ranges: a ``--range name=lo:hi`` option, else the parameter's declared limits
 (``Port.limits`` of our components, when both ends are finite), else, for another FMU, the
@@ -40,6 +42,7 @@ import numpy as np
 from ..results import metrics as nav_metrics
 from ..model.ssv_writer import ssv_text
 from ..errors import NavfmuError
+from . import batching
 from .executor import Executor, Task
 from .genetic import GeneticAlgorithm, decode
 from ..results.run_results import atomic_write
@@ -142,26 +145,51 @@ def _values(spec: TuneSpec, types, x) -> Dict[str, Any]:
             for n, t, v in zip(spec.names, types, x)}
 
 
+def _run_parameters(spec: TuneSpec, values: Dict[str, Any], seed) -> Dict[str, Any]:
+    parameters = {f"{spec.component}.{k}": v for k, v in values.items()}
+    if seed is not None:
+        parameters.update({p: seed for p in spec.seed_parameters})
+    return parameters
+
+
+def _fitness(spec: TuneSpec, results) -> float:
+    """The attitude fitness of one run's results (paper 003 eq. 20)."""
+    names = nav_metrics.filters_of(results)
+    target = FILTER_COMPONENT if FILTER_COMPONENT in names else (names or [None])[0]
+    if target is None:
+        raise NavfmuError(f"{spec.ssd}: no filter component to measure the fitness of")
+    errors = nav_metrics.navigation_errors(results, target)
+    return nav_metrics.attitude_fitness(errors, nav_metrics.window_mask(errors, spec.window))
+
+
 def evaluate(spec: TuneSpec, values: Dict[str, Any]) -> float:
     """Cost of one candidate: mean attitude fitness over the training seeds (a task)."""
     model = load_scenario(spec.ssd)
     costs = []
     for seed in spec.train_seeds:
-        parameters = {f"{spec.component}.{k}": v for k, v in values.items()}
-        if seed is not None:
-            parameters.update({p: seed for p in spec.seed_parameters})
         sim = Simulation(model, backend=spec.backend,
                          registry=registry() if spec.backend == "direct" else None,
-                         parameters=parameters)
-        results = sim.run(stop_time=spec.stop_time)
-        names = nav_metrics.filters_of(results)
-        target = FILTER_COMPONENT if FILTER_COMPONENT in names else (names or [None])[0]
-        if target is None:
-            raise NavfmuError(f"{spec.ssd}: no filter component to measure the fitness of")
-        errors = nav_metrics.navigation_errors(results, target)
-        costs.append(nav_metrics.attitude_fitness(errors, nav_metrics.window_mask(
-            errors, spec.window)))
+                         parameters=_run_parameters(spec, values, seed))
+        costs.append(_fitness(spec, sim.run(stop_time=spec.stop_time)))
     return float(np.mean(costs))
+
+
+def evaluate_batch(spec: TuneSpec, candidates: List[Dict[str, Any]]) -> List[float]:
+    """:func:`evaluate` of several candidates (a task): every (candidate, training seed) run
+    in one batch on the direct backend (:mod:`orchestrator.cosim.batch`, the numbers of the
+    single runs); a run that fails raises its own error after the batch."""
+    from ..cosim.batch import BatchSimulation
+
+    model = load_scenario(spec.ssd)
+    sets = [_run_parameters(spec, values, seed) for values in candidates
+            for seed in spec.train_seeds]
+    outcomes = BatchSimulation(model, registry(), sets).run(stop_time=spec.stop_time)
+    for outcome in outcomes:
+        if isinstance(outcome, NavfmuError):
+            raise outcome
+    seeds = len(spec.train_seeds)
+    return [float(np.mean([_fitness(spec, r) for r in outcomes[i * seeds:(i + 1) * seeds]]))
+            for i in range(len(candidates))]
 
 
 def _seed_parameters(model: SystemModel, backend: str) -> Tuple[str, ...]:
@@ -176,14 +204,30 @@ def _seed_parameters(model: SystemModel, backend: str) -> Tuple[str, ...]:
     return tuple(found)
 
 
+def _costs(ex: Executor, spec: TuneSpec, candidates, batch: Optional[int],
+           workers: int) -> List[float]:
+    """The cost of every candidate of a generation: one task per candidate, or per batch of
+    candidates on the direct backend (:mod:`.batching`)."""
+    size = batching.batch_size(batch, spec.backend, len(candidates), workers)
+    if size == 1:
+        costs = ex.map([Task(i, evaluate, (spec, c)) for i, c in enumerate(candidates)])
+        return [costs[i] for i in range(len(candidates))]
+    groups = [candidates[i:i + size] for i in range(0, len(candidates), size)]
+    costs = ex.map([Task(i, evaluate_batch, (spec, g)) for i, g in enumerate(groups)])
+    return [c for i in range(len(groups)) for c in costs[i]]
+
+
 def run_tune(scenario, component: str, names: Sequence[str], generations: int = 5,
              population: int = 10, workers: int = 1, seed: int = 0,
              ranges: Optional[Dict[str, Tuple[float, float]]] = None,
              train_seeds: Sequence[int] = (), backend: str = "direct",
              stop_time: Optional[float] = None, window=None, scheduler=None,
              crossover_probability: float = 0.8, mutation_probability: float = 0.2,
-             progress=None, log=print) -> Dict[str, Any]:
-    """Run the GA (see the module docstring); returns the JSON-ready summary."""
+             progress=None, log=print, batch: Optional[int] = None) -> Dict[str, Any]:
+    """Run the GA (see the module docstring); returns the JSON-ready summary.  ``batch``:
+    candidates per batch on the direct backend (None: chosen, :mod:`.batching`)."""
+    batching.check_batch(batch, backend)
+    batch_size = batch
     model = load_scenario(scenario)
     if component not in [c.name for c in model.components]:
         raise NavfmuError(f"--component: {model.path} has no component '{component}'")
@@ -200,10 +244,8 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
     total = population * generations
     with Executor(workers=workers, scheduler=scheduler) as ex:
         def batch(rows):
-            tasks = [Task(i, evaluate, (spec, _values(spec, types, decode(r, lo, hi))))
-                     for i, r in enumerate(rows)]
-            costs = ex.map(tasks)
-            return [costs[i] for i in range(len(rows))]
+            candidates = [_values(spec, types, decode(r, lo, hi)) for r in rows]
+            return _costs(ex, spec, candidates, batch_size, workers)
 
         def generation_done(g, _result):
             if progress is not None:

@@ -353,12 +353,17 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished, ba
               help="Output folder (default: navfmu-results/<scenario>/tune).")
 @click.option("--ssv", type=click.Path(dir_okay=False), callback=nonempty_path,
               help="Write the tuned parameter set here (default: OUT/<component>_tuned.ssv).")
+@click.option("--batch", type=int, default=None, help=BATCH_HELP.replace(
+    "Runs of one filter", "Candidates of a generation (all their training runs)"))
 def tune(scenario, component, params, ranges, generations, population, workers, scheduler,
-         seed, train_seeds, backend, stop, window, out, ssv):
+         seed, train_seeds, backend, stop, window, out, ssv, batch):
     """Tune numeric parameters of a component of SCENARIO with paper 003's genetic
     algorithm; each cost evaluation is a co-simulation (attitude RMS, eq. 20)."""
     from ..campaigns import tune as tuner
 
+    from ..campaigns.batching import check_batch
+
+    check_batch(batch, backend)
     names = [p.strip() for p in params.split(",") if p.strip()]
     try:
         seeds = [int(s) for s in train_seeds.split(",") if s.strip()]
@@ -378,7 +383,7 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
                                  population=population, workers=workers, seed=seed,
                                  ranges=tuner.parse_ranges(ranges), train_seeds=seeds,
                                  backend=backend, stop_time=stop, window=parse_window(window),
-                                 scheduler=scheduler,
+                                 scheduler=scheduler, batch=batch,
                                  progress=progress_bar("tune", unit="individual"),
                                  log=lambda m: click.echo(m, err=True))
     click.echo(f"best cost {summary['best_cost']:.5f} deg after {summary['evaluations']} "

@@ -249,10 +249,12 @@ class NativeBatchInstance(BatchInstance):
             self._outputs = outputs
 
     def _inputs(self) -> BatchInputs:
-        values: Dict[str, np.ndarray] = {}
+        real = self.real_in.copy()         # the batch may keep what it is given
+        values: Dict[str, np.ndarray] = dict(zip(self.input_names["Real"], real.T))
         for names, buf in self._in_names:
-            values.update(zip(names, buf.T.copy()))
-        return BatchInputs(values, self.real_in.copy(), self.input_names["Real"])
+            if buf is not self.real_in:
+                values.update(zip(names, buf.T.copy()))
+        return BatchInputs(values, real, self.input_names["Real"])
 
     def set_inputs(self, real_values=None, int_values=None, bool_values=None) -> None:
         self._copy_in(real_values, int_values, bool_values)

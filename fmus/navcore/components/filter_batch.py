@@ -34,7 +34,7 @@ from ..core.timing import same_time
 from ..filters.ins_gnss_kf import KfEngine, propagate_rows
 from ..filters.latency import checkpoint_due
 from ..ins.error_model import transition_template
-from ..ins.strapdown import solution_columns
+from ..ins.strapdown import Strapdown, solution_columns
 
 _IMU = ("imu_time", "imu_dt", "imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x",
         "imu_dvel_y", "imu_dvel_z")
@@ -92,6 +92,7 @@ class InsGnssFilterBatch(ComponentBatch):
         engine = type(member.engine)
         return (engine.propagate is KfEngine.propagate
                 and engine.covariance_diagonal is KfEngine.covariance_diagonal
+                and type(member.engine.nav).update is Strapdown.update
                 and all(getattr(type(member), name) is getattr(self.shell, name)
                         for name in self.SHELL_METHODS))
 

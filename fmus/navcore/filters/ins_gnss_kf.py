@@ -67,13 +67,15 @@ class UpdateResult:
 
 
 def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, dtheta, dvel,
-                   dt, template):
+                   dt, template, mechanize=None):
     """:meth:`KfEngine.propagate` of every run of a batch (arrays with a leading run axis of
     B: the strapdown rows (B, 24), advanced in place; the biases, increments (B, 3); the
     accumulated transition and process noise (B, 15, 15); the noise densities (B, 15)) over
     one interval ``dt`` shared by the runs, with the transition ``template`` of that dt.
     Returns the new (Phi_acc, Q_acc, body rate).  numpy's stacked products give each run the
-    floats of its own 2-D product (``tests/test_kf_batch.py``)."""
+    floats of its own 2-D product (``tests/test_kf_batch.py``).  ``mechanize(dtheta_c,
+    dvel_c)``, when given, advances the rows instead of :func:`update_rows` (a strapdown
+    subclass's own ``update``)."""
     dtheta_c = dtheta - gyro_bias * dt
     dvel_c = dvel - accel_bias * dt
     rate_ib = dtheta_c / dt
@@ -81,7 +83,10 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     C_bn = nav_rows[:, 6:15].reshape(runs, 3, 3)
     f_ned = (C_bn @ (dvel_c / dt)[:, :, None])[:, :, 0]   # with the attitude at the start
     dts = np.full(runs, dt)
-    update_rows(nav_rows, dtheta_c, dvel_c, dts)
+    if mechanize is None:
+        update_rows(nav_rows, dtheta_c, dvel_c, dts)
+    else:
+        mechanize(dtheta_c, dvel_c)
     phi = np.empty((runs, N_STATES, N_STATES))
     transition_rows(phi, nav_rows, f_ned, dts, template)
     phi_acc = phi @ phi_acc
@@ -121,11 +126,14 @@ class KfEngine:
         """Mechanize one IMU interval with bias-compensated increments and propagate P
         (:func:`propagate_rows` of this run), then :meth:`advance_clocks`."""
         cfg = self.config
+        nav = self.nav
+        mechanize = None if type(nav).update is Strapdown.update else (
+            lambda dtheta_c, dvel_c: nav.update(dtheta_c[0], dvel_c[0], dt))
         phi_acc, q_acc, rate_ib = propagate_rows(
-            self.nav.rows, self.gyro_bias.reshape(1, 3), self.accel_bias.reshape(1, 3),
+            nav.rows, self.gyro_bias.reshape(1, 3), self.accel_bias.reshape(1, 3),
             self.phi_acc[None], self.q_acc[None], self.q_density[None],
             np.reshape(dtheta, (1, 3)), np.reshape(dvel, (1, 3)), dt,
-            transition_template(dt, cfg.gyro_bias_tau, cfg.accel_bias_tau))
+            transition_template(dt, cfg.gyro_bias_tau, cfg.accel_bias_tau), mechanize)
         self.phi_acc, self.q_acc, self.rate_ib = phi_acc[0], q_acc[0], rate_ib[0]
         self.advance_clocks(dt)
 
