@@ -188,7 +188,10 @@ def test_a_campaign_in_batches_writes_the_run_files_of_single_runs(tmp_path):
 
 def test_the_batch_size_follows_the_option_the_backend_and_the_workers(monkeypatch):
     monkeypatch.setattr(batching, "available_memory", lambda: None)
-    assert batching.batch_size(None, "direct", 20, 2) == 10
+    assert batching.batch_size(None, "direct", 20, 1, filters=3) == 20    # one per filter
+    assert batching.batch_size(None, "direct", 20, 2, filters=3) == 10    # 6 tasks, 2 workers
+    assert batching.batch_size(None, "direct", 3, 2, filters=4) == 3      # the report's
+    assert batching.batch_size(None, "direct", 20, 2) == 5
     assert batching.batch_size(None, "direct", 500, 1) == batching.MAX_BATCH
     assert batching.batch_size(None, "fmu", 20, 1) == 1
     assert batching.batch_size(4, "direct", 20, 1) == 4

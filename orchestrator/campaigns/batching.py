@@ -2,8 +2,10 @@
 backend, the missing runs of each filter go in batches of B consecutive indices, one task
 each; the FMU backend keeps one run per task (one run per FMU instance).
 
-B is ``--batch`` when given, else chosen here: as many runs as spread the filter's missing
-runs evenly over the workers, at most :data:`MAX_BATCH`, and no more than a quarter of the
+B is ``--batch`` when given, else chosen here: the missing runs go in about
+``max(filters, 2 x workers)`` batches (one per filter when the runs are done one task at a
+time; with a pool, enough tasks to keep every worker busy to the end), a filter's runs split
+evenly among its batches, at most :data:`MAX_BATCH` runs, and no more than a quarter of the
 memory available now holds at :data:`RUN_MEMORY_BYTES` per run.
 """
 from __future__ import annotations
@@ -41,13 +43,17 @@ def available_memory() -> Optional[int]:
         return None
 
 
-def batch_size(batch: Optional[int], backend: str, missing: int, workers: int) -> int:
-    """Runs per batch for a filter with ``missing`` runs to do on ``workers`` workers."""
+def batch_size(batch: Optional[int], backend: str, missing: int, workers: int,
+               filters: int = 1) -> int:
+    """Runs per batch for a filter with ``missing`` runs to do, one of ``filters``, on
+    ``workers`` workers (module docstring)."""
     if backend != "direct":
         return 1
     if batch is not None:
         return batch
-    size = min(MAX_BATCH, max(1, math.ceil(missing / max(1, workers))))
+    tasks = max(filters, 2 * workers) if workers > 1 else filters
+    per_filter = max(1, math.ceil(tasks / max(1, filters)))
+    size = min(MAX_BATCH, max(1, math.ceil(missing / per_filter)))
     memory = available_memory()
     if memory is not None:
         size = min(size, max(1, memory // 4 // RUN_MEMORY_BYTES))
@@ -64,7 +70,7 @@ def batches(todo: Sequence[Tuple[str, int]], batch: Optional[int], backend: str,
         by_filter.setdefault(name, []).append(index)
     groups = []
     for name, indices in by_filter.items():
-        size = batch_size(batch, backend, len(indices), workers)
+        size = batch_size(batch, backend, len(indices), workers, len(by_filter))
         groups.extend((name, indices[i:i + size]) for i in range(0, len(indices), size))
     position = {pair: k for k, pair in enumerate(todo)}
     return sorted(groups, key=lambda group: position[(group[0], group[1][0])])
