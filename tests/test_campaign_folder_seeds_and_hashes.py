@@ -444,10 +444,11 @@ def test_the_driver_writes_the_records_it_gets_and_counts_them(tmp_path, monkeyp
     campaign.prepare()
     cp.write_run(tmp_path, {"filter": "Iakf", "index": 1, "commit": "old"})
     ex = StandInExecutor()
-    marker = object()
-    counts = campaign.run(ex, progress=marker)
+    steps = []
+    counts = campaign.run(ex, progress=lambda done, total: steps.append((done, total)))
     assert counts == {"done_before": 1, "ran": 3, "total": 4}
-    assert ex.progress == [marker]
+    assert steps[0] == (0, 3) and steps[-1] == (3, 3)     # in runs, not tasks
+    assert [d for d, _ in steps] == sorted(d for d, _ in steps)
     assert points == ["campaign-started", "campaign-ran-1", "campaign-ran-2", "campaign-ran-3"]
     assert cp.read_run(tmp_path, "Iakf", 1)["commit"] == "old"       # not run again
     assert [cp.read_run(tmp_path, f, i)["commit"] for f, i in
@@ -457,15 +458,16 @@ def test_the_driver_writes_the_records_it_gets_and_counts_them(tmp_path, monkeyp
 def test_a_campaign_s_executor_options_and_summary_file(tmp_path, monkeypatch):
     monkeypatch.setattr(cp, "Executor", StandInExecutor)
     StandInExecutor.made.clear()
-    marker = object()
-    summary = cp.run_campaign(_spec(runs=1), tmp_path / "a", progress=marker,
+    steps = []
+    summary = cp.run_campaign(_spec(runs=1), tmp_path / "a",
+                              progress=lambda done, total: steps.append((done, total)),
                               log=lambda m: None)
     cp.run_campaign(_spec(runs=1), tmp_path / "b", workers=3, scheduler="tcp://x:1",
                     local_cluster=True, log=lambda m: None)
     assert [e.options for e in StandInExecutor.made] == [
         {"workers": 1, "scheduler": None, "local_cluster": False},
         {"workers": 3, "scheduler": "tcp://x:1", "local_cluster": True}]
-    assert StandInExecutor.made[0].progress == [marker]
+    assert steps == [(0, 1), (1, 1)]                # the campaign's progress, in runs
     written = json.loads((tmp_path / "a" / "summary.json").read_text())
     assert summary["counts"] == {"done_before": 0, "ran": 1, "total": 1}
     assert written == json.loads(json.dumps({k: v for k, v in summary.items()

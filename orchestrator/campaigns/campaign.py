@@ -417,19 +417,24 @@ class Campaign:
                 if read_run(self.out, f, i) is None]
 
     def run(self, executor: Executor, progress=None) -> Dict[str, int]:
-        """Run the missing runs; returns counts ``done_before`` and ``ran``."""
+        """Run the missing runs; returns counts ``done_before`` and ``ran``.  ``progress(runs
+        done, runs to do)`` counts runs (a batch's runs count when the batch ends)."""
         _remove_stale_temporaries(self.out)
         interrupts.safe_point("campaign-started")
         todo = self.missing()
         total = self.runs * len(self.spec.filters)
         ran = 0
         workers = getattr(executor, "workers", 1)
-        for _, result in executor.run(self.tasks(todo, workers), progress=progress):
+        if progress is not None:
+            progress(0, len(todo))
+        for _, result in executor.run(self.tasks(todo, workers)):
             for record in (result if isinstance(result, list) else [result]):
                 if read_run(self.out, record["filter"], record["index"]) is None:
                     write_run(self.out, record)      # a worker that cannot see the folder
                 ran += 1
                 interrupts.safe_point(f"campaign-ran-{ran}")
+            if progress is not None:
+                progress(ran, len(todo))
         return {"done_before": total - len(todo), "ran": ran, "total": total}
 
     def tasks(self, todo: List[Tuple[str, int]], workers: int) -> List[Task]:
