@@ -141,7 +141,7 @@ def test_a_sweep_hands_one_task_per_level_filter_and_seed(monkeypatch):
     seeds = [{"gnss.seed": 1}, {"gnss.seed": 2}]
     progress = []
     results = sweep.sweep(Path(AIRCRAFT), ["Kf", "Iakf"], [1, 0.5], ["gnss.pos_sigma_n"],
-                          seeds, stop_time=3.0, workers=2,
+                          seeds, stop_time=3.0, workers=2, batch=1,
                           progress=lambda done, total: progress.append((done, total)))
     ex, = _RecordingExecutor.made
     assert ex.workers == 2 and ex.closed
@@ -155,6 +155,17 @@ def test_a_sweep_hands_one_task_per_level_filter_and_seed(monkeypatch):
     assert type(calls[0][0]) is str and type(calls[0][2]) is float
     assert calls[0][4] is not seeds[0]
     assert progress == [(i, 8) for i in range(1, 9)]
+
+
+def test_a_sweep_in_batches_gives_the_points_of_single_runs():
+    """The points of a filter as batches (the default on one worker: all of a filter's
+    points in one) against one run per point: the same results, exactly."""
+    args = (AIRCRAFT, ["Kf", "Iakf"], [1.0, 2.0], ["gnss.pos_sigma_n"],
+            [{"gnss.seed": 1}, {"gnss.seed": 2}])
+    batched = sweep.sweep(*args, stop_time=3.0)
+    one_by_one = sweep.sweep(*args, stop_time=3.0, batch=1)
+    assert list(batched) == list(one_by_one) and batched == one_by_one
+    assert batched[(2.0, "Kf", 0)] != batched[(1.0, "Kf", 0)]
 
 
 def test_a_sweep_without_seeds_runs_each_point_once_on_one_worker(monkeypatch):

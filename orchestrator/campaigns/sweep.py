@@ -12,12 +12,13 @@ the scenario declares phases.  :func:`sweep_table` turns the results into a Mark
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from ..results import metric_comparisons
 from ..results import metrics as nav_metrics
+from . import batching
 from .executor import Executor, Task
 from ..results.phases import phase_statistics
 
@@ -57,6 +58,13 @@ def run_point(scenario: str, filter: str, level: float, scaled: Dict[str, float]
         run = scenarios.simulate_scenario(model, filter=filter, backend="direct",
                                           stop_time=stop_time, parameters=parameters,
                                           build=False, log=lambda m: None)
+    return _point(run, model)
+
+
+def _point(run, model) -> Dict[str, Any]:
+    """A sweep point's result from its run (module docstring)."""
+    from orchestrator.running import scenarios
+
     metrics = run.metrics[scenarios.FILTER_COMPONENT]
     out = {"rms_3d": {g: metric_comparisons.rms_3d(metrics, g) for g in GROUPS}, "phases": {}}
     stats = phase_statistics([run], scenarios.paper_reference(model), nav_metrics.filters_of)
@@ -65,21 +73,63 @@ def run_point(scenario: str, filter: str, level: float, scaled: Dict[str, float]
     return out
 
 
+def run_points(scenario: str, filter: str, points: Sequence[Tuple[float, Dict[str, Any]]],
+               scaled: Dict[str, float], stop_time: Optional[float]) -> List[Dict[str, Any]]:
+    """:func:`run_point` of several ``(level, fixed)`` points of one filter, run as one batch
+    (:mod:`orchestrator.cosim.batch`: the numbers of the single runs); a run that fails
+    raises its own error after the batch."""
+    import warnings
+
+    from orchestrator.cosim.batch import BatchSimulation
+    from orchestrator.running import scenarios
+
+    model = scenarios.swap_filter(scenarios.load_scenario(scenario), filter)
+    sets = []
+    for level, fixed in points:
+        parameters = dict(fixed)
+        parameters.update({name: level * value for name, value in scaled.items()})
+        sets.append(parameters)
+    with warnings.catch_warnings():       # the baseline skips the adaptive filters' settings
+        warnings.simplefilter("ignore", UserWarning)
+        outcomes = BatchSimulation(model, scenarios.registry(), sets).run(stop_time=stop_time)
+    label = scenarios.filter_label(model)
+    points_out = []
+    for outcome in outcomes:
+        if isinstance(outcome, Exception):
+            raise outcome
+        points_out.append(_point(scenarios.measured_run(label, model, outcome), model))
+    return points_out
+
+
 def sweep(scenario: str, filters: Sequence[str], levels: Sequence[float],
           scaled_names: Sequence[str], seeds: Sequence[Dict[str, Any]] = ({},),
-          stop_time: Optional[float] = None, workers: int = 1, progress=None):
-    """Results keyed ``(level, filter, seed index)`` (module docstring)."""
+          stop_time: Optional[float] = None, workers: int = 1, progress=None,
+          batch: Optional[int] = None):
+    """Results keyed ``(level, filter, seed index)`` (module docstring).  ``batch``: points
+    of a filter per batch (None: chosen, :mod:`.batching`; 1: one task per point)."""
     from orchestrator.running import scenarios
 
     base = base_values(scenarios.load_scenario(scenario), scaled_names)
-    tasks = [Task((float(k), f, i), run_point, (str(scenario), f, float(k), base, dict(s),
-                                                 stop_time))
-             for k in levels for f in filters for i, s in enumerate(seeds)]
+    keys = [(float(k), f, i) for k in levels for f in filters for i in range(len(seeds))]
+    size = batching.batch_size(batch, "direct", len(levels) * len(seeds), workers,
+                               len(filters))
+    if size == 1:
+        tasks = [Task(key, run_point, (str(scenario), key[1], key[0], base,
+                                       dict(seeds[key[2]]), stop_time)) for key in keys]
+    else:
+        tasks = []
+        for f in filters:
+            mine = [key for key in keys if key[1] == f]
+            for j in range(0, len(mine), size):
+                group = tuple(mine[j:j + size])
+                tasks.append(Task(group, run_points, (
+                    str(scenario), f, [(k, dict(seeds[i])) for k, _, i in group], base,
+                    stop_time)))
     results = {}
     with Executor(workers=workers) as ex:
         for key, value in ex.run(tasks, progress=progress):
-            results[key] = value
-    return results
+            results.update(zip(key, value) if size > 1 else [(key, value)])
+    return {key: results[key] for key in keys}
 
 
 def _mean_over_seeds(results, level, filt, get):

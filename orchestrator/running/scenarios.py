@@ -167,7 +167,14 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
         return run
     results = sim.run(stop_time=stop_time, progress=progress)
     report_warnings(results)
-    run = Run(label, model, results, time_origin=origin)
+    return measured_run(label, model, results, window, time_origin=origin)
+
+
+def measured_run(label: str, model: SystemModel, results: Results, window=None,
+                 time_origin: float = 0.0) -> Run:
+    """The :class:`Run` of ``results`` with the metrics of every filter (none without a
+    truth): what :func:`simulate_scenario` returns for rows kept in memory."""
+    run = Run(label, model, results, time_origin=time_origin)
     if not has_truth(results):
         return run
     vehicle = mission_metrics.find_vehicle(results)
