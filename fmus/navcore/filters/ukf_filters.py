@@ -91,7 +91,7 @@ from .imm import ImmBank, imm_combine
 from .innovation_stats import nis
 from .ins_gnss_kf import KfEngine, UpdateResult
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
-from ..ins.strapdown import Strapdown, _gravity, _radii, update_rows
+from ..ins.strapdown import _gravity, _radii
 from .unscented import UnscentedKalmanFilter
 
 #: tolerance on accumulated time when deciding that a prediction interval is complete [s]
@@ -154,40 +154,6 @@ def _nav_rates(lat, h, vn, ve, rn, re):
     w_in = (w * cl + en_n, en_e, -w * sl + en_d)
     w_cor = (2.0 * w * cl + en_n, en_e, -2.0 * w * sl + en_d)
     return w_in, w_cor
-
-
-#: the interval sums of :class:`UkfEngine` (state), in the order of :func:`accumulate_rows`
-INTERVAL_SUMS = ("_T", "_sum_lat", "_sum_h", "_sum_v", "_sum_C", "_sum_dv")
-
-
-def accumulate_rows(nav_rows, gyro_bias, accel_bias, dtheta, dvel, dt, sums, mechanize=None):
-    """The per-interval part of :meth:`UkfEngine.propagate` for every run of a batch (B
-    rows; ``sums`` the :data:`INTERVAL_SUMS` with a leading run axis): bias-compensate,
-    mechanize (the rows advance in place; ``mechanize(dtheta_c, dvel_c)`` instead of
-    :func:`update_rows` when given) and add the interval's trapezoids to the sums.  Returns
-    (body rate, new sums)."""
-    T, sum_lat, sum_h, sum_v, sum_C, sum_dv = sums
-    dtheta_c = dtheta - gyro_bias * dt
-    dvel_c = dvel - accel_bias * dt
-    rate_ib = dtheta_c / dt
-    runs = len(nav_rows)
-    C_prev = nav_rows[:, 6:15].reshape(runs, 3, 3).copy()
-    lat0, h0, v0 = nav_rows[:, 0].copy(), nav_rows[:, 2].copy(), nav_rows[:, 3:6].copy()
-    if mechanize is None:
-        update_rows(nav_rows, dtheta_c, dvel_c, np.full(runs, dt))
-    else:
-        mechanize(dtheta_c, dvel_c)
-    half = 0.5 * dt
-    return rate_ib, (T + dt, sum_lat + half * (lat0 + nav_rows[:, 0]),
-                     sum_h + half * (h0 + nav_rows[:, 2]), sum_v + half * (v0 + nav_rows[:, 3:6]),
-                     sum_C + half * (C_prev + nav_rows[:, 6:15].reshape(runs, 3, 3)),
-                     sum_dv + (C_prev @ dvel_c[:, :, None])[:, :, 0])
-
-
-def prediction_due(T, predict_interval):
-    """Whether an interval of ``T`` seconds completes the prediction interval (arrays: for
-    every run of a batch)."""
-    return T >= predict_interval - _TIME_EPS
 
 
 class NominalInterval:
@@ -308,30 +274,24 @@ class UkfEngine(KfEngine):
 
     def propagate(self, dtheta, dvel, dt):
         """Mechanize one IMU interval with bias-compensated increments; accumulate the interval
-        means (:func:`accumulate_rows` of this run) and run the UKF prediction when
-        ``predict_interval`` is complete."""
+        means and run the UKF prediction when ``predict_interval`` is complete."""
+        dtheta_c = dtheta - self.gyro_bias * dt
+        dvel_c = dvel - self.accel_bias * dt
+        self.rate_ib = dtheta_c / dt
         nav = self.nav
-        mechanize = None if type(nav).update is Strapdown.update else (
-            lambda dtheta_c, dvel_c: nav.update(dtheta_c[0], dvel_c[0], dt))
-        rate_ib, sums = accumulate_rows(
-            nav.rows, self.gyro_bias[None], self.accel_bias[None], np.reshape(dtheta, (1, 3)),
-            np.reshape(dvel, (1, 3)), dt,
-            tuple(np.array([getattr(self, n)]) for n in INTERVAL_SUMS), mechanize)
-        self.rate_ib = rate_ib[0]
-        for name, value in zip(INTERVAL_SUMS, sums):
-            setattr(self, name, value[0].item() if value.ndim == 1 else value[0])
-        if self.predict_due():
+        C_prev = nav.C_bn
+        lat0, h0, v0 = nav.lat, nav.h, nav.v_ned
+        nav.update(dtheta_c, dvel_c, dt)
+        half = 0.5 * dt
+        self._T += dt
+        self._sum_lat += half * (lat0 + nav.lat)
+        self._sum_h += half * (h0 + nav.h)
+        self._sum_v += half * (v0 + nav.v_ned)
+        self._sum_C += half * (C_prev + nav.C_bn)
+        self._sum_dv += C_prev @ dvel_c
+        if self._T >= self.predict_interval - _TIME_EPS:
             self._predict()
         self.advance_clocks(dt)
-
-    def predict_due(self):
-        """The prediction interval is complete (:func:`prediction_due`)."""
-        return prediction_due(self._T, self.predict_interval)
-
-    def prediction_covariance(self):
-        """P of the latest prediction (or update): the part of :meth:`covariance_diagonal`
-        that changes only there."""
-        return self.ukf.P
 
     def _interval(self):
         T = self._T
@@ -362,8 +322,7 @@ class UkfEngine(KfEngine):
 
     def covariance_diagonal(self):
         """Diagonal of P at the last prediction plus the noise of the pending interval."""
-        return (np.diagonal(self.prediction_covariance())
-                + self.q_scale * self.q_density * self._T)
+        return np.diagonal(self.ukf.P) + self.q_scale * self.q_density * self._T
 
     def covariance(self):
         return self.ukf.P.copy()
@@ -509,8 +468,8 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
 
         self.bank.predict_all(predict_models)
 
-    def prediction_covariance(self):
-        return self.bank.P
+    def covariance_diagonal(self):
+        return np.diagonal(self.bank.P) + self.q_scale * self.q_density * self._T
 
     def covariance(self):
         return self.bank.P.copy()
