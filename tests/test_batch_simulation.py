@@ -139,6 +139,24 @@ def test_a_run_failing_inside_a_batch_fails_alone_with_its_own_error(tmp_path):
         assert paths[b].read_bytes() == alone.read_bytes()
 
 
+def test_parameter_values_are_converted_and_refused_per_run_as_alone():
+    """A natively batched component converts each run's values as a single run does (a
+    whole float seed is an Integer) and refuses one that does not convert for that run only,
+    with the single run's message; an input's value set with the parameters holds there."""
+    model = load_scenario(MODELS / "aircraft_500s")
+    sets = _seed_sets(model, 3)
+    sets[0]["trajectory.seed"] = 12.0
+    sets[1]["trajectory.seed"] = 1.5
+    for p in sets:
+        p["filter.gnss_std_n"] = 2.5               # an input, unconnected here
+    outcomes = BatchSimulation(model, registry(), sets).run(stop_time=2.0)
+    with pytest.raises(NavfmuError) as alone:
+        _single(model, sets[1], 2.0)
+    assert isinstance(outcomes[1], NavfmuError) and str(outcomes[1]) == str(alone.value)
+    for b in (0, 2):
+        _assert_same_run(_single(model, sets[b], 2.0), outcomes[b])
+
+
 def test_a_batch_whose_runs_all_fail_returns_every_error():
     model = load_scenario(MODELS / "aircraft_500s")
     sets = [dict(p, **{"filter.p0_pos": -1.0}) for p in _seed_sets(model, 2)]

@@ -51,14 +51,21 @@ def run_point(scenario: str, filter: str, level: float, scaled: Dict[str, float]
     from orchestrator.running import scenarios
 
     model = scenarios.load_scenario(scenario)
-    parameters = dict(fixed)
-    parameters.update({name: level * value for name, value in scaled.items()})
+    parameters = _point_parameters(level, scaled, fixed)
     with warnings.catch_warnings():       # the baseline skips the adaptive filters' settings
         warnings.simplefilter("ignore", UserWarning)
         run = scenarios.simulate_scenario(model, filter=filter, backend="direct",
                                           stop_time=stop_time, parameters=parameters,
                                           build=False, log=lambda m: None)
     return _point(run, model)
+
+
+def _point_parameters(level: float, scaled: Dict[str, float],
+                      fixed: Dict[str, Any]) -> Dict[str, Any]:
+    """The overrides of one point: the fixed ones, and the scaled ones at ``level``."""
+    parameters = dict(fixed)
+    parameters.update({name: level * value for name, value in scaled.items()})
+    return parameters
 
 
 def _point(run, model) -> Dict[str, Any]:
@@ -84,11 +91,7 @@ def run_points(scenario: str, filter: str, points: Sequence[Tuple[float, Dict[st
     from orchestrator.running import scenarios
 
     model = scenarios.swap_filter(scenarios.load_scenario(scenario), filter)
-    sets = []
-    for level, fixed in points:
-        parameters = dict(fixed)
-        parameters.update({name: level * value for name, value in scaled.items()})
-        sets.append(parameters)
+    sets = [_point_parameters(level, scaled, fixed) for level, fixed in points]
     with warnings.catch_warnings():       # the baseline skips the adaptive filters' settings
         warnings.simplefilter("ignore", UserWarning)
         outcomes = BatchSimulation(model, scenarios.registry(), sets).run(stop_time=stop_time)
@@ -111,24 +114,22 @@ def sweep(scenario: str, filters: Sequence[str], levels: Sequence[float],
 
     base = base_values(scenarios.load_scenario(scenario), scaled_names)
     keys = [(float(k), f, i) for k in levels for f in filters for i in range(len(seeds))]
-    size = batching.batch_size(batch, "direct", len(levels) * len(seeds), workers,
-                               len(filters))
-    if size == 1:
-        tasks = [Task(key, run_point, (str(scenario), key[1], key[0], base,
-                                       dict(seeds[key[2]]), stop_time)) for key in keys]
-    else:
-        tasks = []
-        for f in filters:
-            mine = [key for key in keys if key[1] == f]
-            for j in range(0, len(mine), size):
-                group = tuple(mine[j:j + size])
-                tasks.append(Task(group, run_points, (
-                    str(scenario), f, [(k, dict(seeds[i])) for k, _, i in group], base,
-                    stop_time)))
+    tasks = []      # a filter's points in batches, as a campaign's runs
+    for f, indices in batching.batches([(key[1], j) for j, key in enumerate(keys)], batch,
+                                       "direct", workers):
+        group = tuple(keys[j] for j in indices)
+        if len(group) == 1:
+            (k, _, i), = group
+            tasks.append(Task(group[0], run_point, (str(scenario), f, k, base,
+                                                    dict(seeds[i]), stop_time)))
+        else:
+            tasks.append(Task(group, run_points, (
+                str(scenario), f, [(k, dict(seeds[i])) for k, _, i in group], base,
+                stop_time)))
     results = {}
     with Executor(workers=workers) as ex:
         for key, value in ex.run(tasks, progress=progress):
-            results.update(zip(key, value) if size > 1 else [(key, value)])
+            results.update(zip(key, value) if isinstance(value, list) else [(key, value)])
     return {key: results[key] for key in keys}
 
 

@@ -16,6 +16,7 @@ and after the macro step the master drops it from every instance (:meth:`keep`).
 """
 from __future__ import annotations
 
+from abc import abstractmethod
 from typing import Any, Dict, List, Mapping, Sequence
 
 import numpy as np
@@ -23,8 +24,8 @@ import numpy as np
 from navcore.core.batch import BatchInputs
 from navcore.errors import NavcoreError
 
-from .backends import Instance
-from .direct_instance import DirectInstance
+from .backends import Instance, coerce
+from .direct_instance import DirectInstance, parameter_error, simulation_error
 from ..errors import NavfmuError
 
 _BUFFERS = ("real_in", "int_in", "bool_in", "real_out", "int_out", "bool_out")
@@ -76,9 +77,9 @@ class BatchInstance(Instance):
     def set_parameters(self, values: Mapping[str, Any]) -> None:
         self.set_run_parameters([values] * self.runs)
 
+    @abstractmethod
     def set_run_parameters(self, values: Sequence[Mapping[str, Any]]) -> None:
         """Parameters per run (``values[b]`` for batch row b)."""
-        raise NotImplementedError
 
     def get_state(self):
         raise NavfmuError(f"component '{self.name}': a batch of runs has no saved state "
@@ -183,14 +184,20 @@ class NativeBatchInstance(BatchInstance):
                  failures: Dict[int, NavfmuError]):
         super().__init__(name, variables, source, batch.model_name, batch.runs, failures)
         self.batch = batch
-        self._direct_error = DirectInstance(batch.component_class(), name, source)._error
         self.time = None
         self._outputs = None          # (B, n_outputs), columns in the class's output order
+        #: per run, every input's value before any connection: its declared start, or the
+        #: value set for it with the parameters (as a DirectInstance keeps them)
+        self._start_inputs = [{p.name: p.default() for p in batch.component_class.inputs}
+                              for _ in range(batch.runs)]
 
     def _bound(self) -> None:
         self._in_names = [(self.input_names[t], buf) for t, buf in
-                          (("Real", self.real_in), ("Integer", self.int_in),
-                           ("Boolean", self.bool_in)) if self.input_names[t]]
+                          (("Integer", self.int_in), ("Boolean", self.bool_in))
+                          if self.input_names[t]]
+        connected = set(sum(self.input_names.values(), ()))
+        self._held_inputs = {name: np.array([run[name] for run in self._start_inputs])
+                             for name in self._start_inputs[0] if name not in connected}
         columns = self.batch.columns
         self._out_columns = [(np.array([columns[n] for n in self.output_names[t]],
                                        dtype=np.intp), buf)
@@ -200,34 +207,51 @@ class NativeBatchInstance(BatchInstance):
 
     def _kept(self, rows: List[int]) -> None:
         self.batch.keep(rows)
+        self._start_inputs = [self._start_inputs[i] for i in rows]
         if self._outputs is not None:
             self._outputs = self._outputs[rows]
+
+    def _error(self, what: str, exc: Exception, time, at: bool = True):
+        return simulation_error(self.name, self.model_name, what, exc, time, at)
 
     def _collect(self, what: str, time, at: bool = True) -> None:
         """Move the batch's per-run errors of the latest call into the shared failures."""
         for b, exc in self.batch.take_failures().items():
             if b not in self.failures:
-                self.failures[b] = self._direct_error(what, exc, time, at)
+                self.failures[b] = self._error(what, exc, time, at)
 
     def _call(self, what: str, time, call, at: bool = True):
         try:
             result = call()
         except NavcoreError as exc:       # one error for every run (none told which)
             for b in range(self.runs):
-                self.failures.setdefault(b, self._direct_error(what, exc, time, at))
+                self.failures.setdefault(b, self._error(what, exc, time, at))
             return None
         self._collect(what, time, at)
         return result
 
     def set_run_parameters(self, values: Sequence[Mapping[str, Any]]) -> None:
-        self.batch.set_parameters(values)
+        """As :meth:`DirectInstance.set_parameters` for each run: every value converted to
+        its variable's type (:func:`~orchestrator.cosim.backends.coerce`), an input's value
+        kept as that run's start value, a parameter set on that run's component."""
+        parameters = []
+        for b, run in enumerate(values):
+            mine = {}
+            try:
+                for name, value in run.items():
+                    var = self.variable(name, ("parameter", "input"))
+                    value = coerce(self.name, var, value, self.source)
+                    if var.causality == "input":
+                        self._start_inputs[b][name] = value
+                    else:
+                        mine[name] = value
+            except NavfmuError as exc:           # this run's value: this run fails
+                self.failures.setdefault(b, exc)
+            parameters.append(mine)
+        self.batch.set_parameters(parameters)
         for b, exc in self.batch.take_failures().items():
-            text = str(exc)
-            prefix = f"{self.model_name}: "
-            if text.startswith(prefix):
-                text = text[len(prefix):]
-            self.failures.setdefault(b, NavfmuError(
-                f"component '{self.name}' ({self.model_name}): {text}"))
+            self.failures.setdefault(b, parameter_error(self.name, self.model_name, exc))
+        self._bound()
 
     def enter_initialization(self, start_time, stop_time) -> None:
         self.time = start_time
@@ -250,10 +274,10 @@ class NativeBatchInstance(BatchInstance):
 
     def _inputs(self) -> BatchInputs:
         real = self.real_in.copy()         # the batch may keep what it is given
-        values: Dict[str, np.ndarray] = dict(zip(self.input_names["Real"], real.T))
+        values: Dict[str, np.ndarray] = dict(self._held_inputs)
+        values.update(zip(self.input_names["Real"], real.T))
         for names, buf in self._in_names:
-            if buf is not self.real_in:
-                values.update(zip(names, buf.T.copy()))
+            values.update(zip(names, buf.T.copy()))
         return BatchInputs(values, real, self.input_names["Real"])
 
     def set_inputs(self, real_values=None, int_values=None, bool_values=None) -> None:

@@ -29,6 +29,32 @@ def _output_writer(buf: np.ndarray, names: Sequence[str]):
     return write
 
 
+def _without_model(model_name: str, exc: Exception) -> str:
+    """A component's message without its leading ``"<model name>: "``."""
+    text = str(exc)
+    prefix = f"{model_name}: "
+    return text[len(prefix):] if text.startswith(prefix) else text
+
+
+def parameter_error(name: str, model_name: str, exc: Exception) -> NavfmuError:
+    """A parameter value component ``name`` refused, naming the component."""
+    return NavfmuError(f"component '{name}' ({model_name}): {_without_model(model_name, exc)}")
+
+
+def simulation_error(name: str, model_name: str, what: str, exc: Exception,
+                     time: Optional[float], at: bool = True) -> SimulationError:
+    """Same shape as :meth:`FmuInstance._fail`: the component's message first, the failed
+    call (``what``, at ``time`` when ``at``) on the next line."""
+    when = f" at t = {time:.9g} s" if time is not None and at else ""
+    if isinstance(exc, NavcoreError):
+        text = _without_model(model_name, exc)
+    else:                                  # an arithmetic error: the state diverged
+        text = numerical_failure(exc)
+    return SimulationError(f"component '{name}' ({model_name}): {text}\n"
+                           f"  ({what} failed{when})", component=name, time=time,
+                           log=(str(exc),))
+
+
 class DirectInstance(Instance):
     """A Python object following the ``navcore.core.component.Component`` contract, stepped
     directly (no FMI): class attributes ``parameters``/``inputs``/``outputs`` (tuples of
@@ -75,18 +101,7 @@ class DirectInstance(Instance):
 
     def _error(self, what: str, exc: Exception, time: Optional[float],
                at: bool = True) -> SimulationError:
-        """Same shape as :meth:`FmuInstance._fail`: the component's message first, the
-        failed call on the next line."""
-        when = f" at t = {time:.9g} s" if time is not None and at else ""
-        text = str(exc)
-        if not isinstance(exc, self._errors):  # an arithmetic error: the state diverged
-            text = numerical_failure(exc)
-        prefix = f"{self.model_name}: "
-        if text.startswith(prefix):
-            text = text[len(prefix):]
-        return SimulationError(f"component '{self.name}' ({self.model_name}): {text}\n"
-                               f"  ({what} failed{when})", component=self.name, time=time,
-                               log=(str(exc),))
+        return simulation_error(self.name, self.model_name, what, exc, time, at)
 
     def _prepared(self) -> None:
         self._in_real = self.input_names["Real"]
@@ -110,10 +125,7 @@ class DirectInstance(Instance):
             try:
                 self.component.set_parameter(name, value)
             except self._errors as exc:
-                text = str(exc)
-                if text.startswith(f"{self.model_name}: "):
-                    text = text[len(self.model_name) + 2:]
-                raise NavfmuError(f"component '{self.name}' ({self.model_name}): {text}") from None
+                raise parameter_error(self.name, self.model_name, exc) from None
 
     def enter_initialization(self, start_time: float, stop_time: Optional[float]) -> None:
         self.time = start_time
@@ -195,4 +207,4 @@ class DirectInstance(Instance):
             hook()
 
 
-__all__ = ["DirectInstance"]
+__all__ = ["DirectInstance", "parameter_error", "simulation_error"]

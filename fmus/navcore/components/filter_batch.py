@@ -81,10 +81,14 @@ class InsGnssFilterBatch(ComponentBatch):
             self._adopt(b)
         return self.out.copy()
 
-    #: the component class whose stepping the batch does for all runs (set by
-    #: navcore.components.filter_component) and the methods of it the batch stands for
-    shell = None
+    #: the methods of the filter shell (the class that names this batch) it stands for
     SHELL_METHODS = ("step", "_new_interval", "_integrate", "_take_epoch", "_write_solution")
+
+    @property
+    def shell(self):
+        """The class of the component's hierarchy that names this batch class."""
+        return next(c for c in self.component_class.__mro__
+                    if c.__dict__.get("batch_class") is type(self))
 
     def _propagates_like_kf(self, member) -> bool:
         """The batch stands for the run's own code only where that is the shell's and the
@@ -136,7 +140,7 @@ class InsGnssFilterBatch(ComponentBatch):
             member.nav_time, member.imu_dt = entries[-1][0], entries[-1][3]
         if entries and member.applies_fixes:
             # only the latest interval can be due for a checkpoint: the batch lends a run
-            # at every interval that is (_checkpoints)
+            # at every interval that is (_propagate)
             # (views: the log's arrays are never written after they are logged)
             increments = [(t, dtheta[b], dvel[b], dt) for t, dtheta, dvel, dt in entries]
             history = member.history
@@ -159,11 +163,9 @@ class InsGnssFilterBatch(ComponentBatch):
     def _kept(self, rows: List[int]) -> None:
         if not hasattr(self, "rows"):
             return
-        members = self.members        # already the kept ones; self.seen not yet
-        self.members = self._all_members
-        for old in rows:
+        for old in rows:        # every kept run up to date: the log restarts for them
             self._lend(old)
-        self.members = members
+        members = [self.members[i] for i in rows]
         for name in ("rows", "q_density", "out", "own", "last_epoch", "last_checkpoint",
                      "max_fix_age", "dense"):
             setattr(self, name, getattr(self, name)[rows])

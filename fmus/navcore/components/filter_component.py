@@ -453,10 +453,6 @@ class InsGnssFilter(Component):
                                   f"t = {self.nav_time} s (the filter diverged)")
 
 
-
-InsGnssFilterBatch.shell = InsGnssFilter
-
-
 def _fix_of(inputs):
     """The fix of the GNSS inputs: (gnss_time, lat, lon, h, v_ned, receiver sigmas NED)."""
     return (inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"], inputs["gnss_h"],

@@ -72,9 +72,6 @@ class TrajectoryImuBatch(ComponentBatch):
         self.mag_rows = [rows.index(b) for b in self.mag_rows if b in rows]
         self.out = self.out[rows]
 
-    def check_stop_time(self, stop_time: float) -> None:
-        self._each(lambda b, member: member.check_stop_time(stop_time))
-
     def advance(self, t, h, inputs) -> np.ndarray:
         for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):
             self._sample()

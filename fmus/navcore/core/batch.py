@@ -21,6 +21,7 @@ each row with the component run alone, bit for bit.
 """
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
 import numpy as np
@@ -44,7 +45,7 @@ class BatchInputs(dict):
         return self.real[:, index]
 
 
-class ComponentBatch:
+class ComponentBatch(ABC):
     """B runs of ``component_class`` (module docstring); subclasses implement
     :meth:`_started` and :meth:`advance`."""
 
@@ -87,10 +88,8 @@ class ComponentBatch:
     def keep(self, rows: Sequence[int]) -> None:
         """Keep the runs of batch ``rows``, in that order."""
         rows = list(rows)
-        self._all_members = self.members
-        self.members = [self.members[i] for i in rows]
         self._kept(rows)
-        del self._all_members
+        self.members = [self.members[i] for i in rows]
 
     def accepted_rows(self, values: np.ndarray, names: Tuple[str, ...]) -> np.ndarray:
         """Per run (row of ``values``, one column per input of ``names``), whether every
@@ -111,7 +110,8 @@ class ComponentBatch:
         return ok.all(axis=1)
 
     def _kept(self, rows: List[int]) -> None:
-        """Hook: compact the batch's own per-run arrays."""
+        """Hook: compact the batch's own per-run arrays (``self.members`` are still all
+        the runs; batch row ``i`` becomes ``rows.index(i)``)."""
 
     def take_notices(self, b: int) -> List[str]:
         return self.members[b].take_notices()
@@ -129,11 +129,13 @@ class ComponentBatch:
         """The inputs at the end of initialization mode (None: outputs unchanged)."""
         return None
 
+    @abstractmethod
     def _started(self, start_time: float) -> np.ndarray:
-        raise NotImplementedError
+        """The batch's shared part, built after every run's own ``start``; the outputs."""
 
+    @abstractmethod
     def advance(self, t: float, h: float, inputs: Mapping[str, np.ndarray]) -> np.ndarray:
-        raise NotImplementedError
+        """Step every run from ``t`` to ``t + h``; the outputs (module docstring)."""
 
 
 __all__ = ["ComponentBatch"]
