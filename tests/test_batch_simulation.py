@@ -54,6 +54,7 @@ def _assert_same_run(single, batched):
     ("aircraft_outliers", "Igg3RobustKf", 30.0, "jacobi"),
     ("mems_outages", "SageHusaFading", 60.0, "gauss-seidel"),
     ("uav_maneuver", "ImmUkf", 10.0, "jacobi"),
+    ("uav_maneuver", "Ukf", 20.0, "gauss-seidel"),
     ("uav_maneuver_mems", "CtfaUkf", 10.0, "gauss-seidel"),
     ("ahrs_turntable", "FuzzyUkfAhrs", 20.0, "gauss-seidel"),
     ("uav_mission", "Kf", 10.0, "gauss-seidel"),
@@ -71,9 +72,10 @@ def test_every_run_of_a_batch_records_the_arrays_of_its_single_run(
     assert not np.array_equal(outcomes[0].data["filter"], outcomes[1].data["filter"])
 
 
-def test_the_trajectory_and_the_kf_of_a_batch_are_stepped_natively():
+@pytest.mark.parametrize("filter_name", ["Kf", "Ukf"])
+def test_the_trajectory_and_the_filter_of_a_batch_are_stepped_natively(filter_name):
     assert sensor_components.TrajectoryImu.batch_class is not None
-    model = load_scenario(MODELS / "aircraft_500s")
+    model = swap_filter(load_scenario(MODELS / "aircraft_500s"), filter_name)
     sim = BatchSimulation(model, registry(), _seed_sets(model, 4))
     kinds = {d.spec.name: type(sim._batch_instance(d, 4, {})).__name__
              for d in sim.components}

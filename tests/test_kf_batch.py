@@ -1,4 +1,5 @@
-"""The Kalman filters' batch (navcore.components.filter_batch) against each filter alone.
+"""The INS/GNSS filters' batches (navcore.components.filter_batch: the Kf and the UKF
+families) against each filter alone.
 
 Without any master: the inputs each filter sees are recorded from direct runs of
 ``aircraft_500s`` (one per seed), some runs' fixes are then delivered late (a rollback), from
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 
 from navcore.components.kf_components import Iakf, Kf, NewtonRobustKf
+from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.core.batch import BatchInputs
 from navcore.filters.ins_gnss_kf import KfConfig, KfEngine, propagate_rows
 from navcore.ins.error_model import transition_template
@@ -129,7 +131,8 @@ class _OwnMechanizationKf(Kf):
         return super().make_engine(config, nav)
 
 
-@pytest.mark.parametrize("component_class", [Kf, Iakf, NewtonRobustKf, _OwnMechanizationKf])
+@pytest.mark.parametrize("component_class", [Kf, Iakf, NewtonRobustKf, _OwnMechanizationKf,
+                                             Ukf, CtfaUkf, ImmUkf])
 def test_a_batch_of_filters_steps_each_run_as_it_steps_alone(component_class):
     per_run = _recorded_inputs(3)
     _disturb(per_run)

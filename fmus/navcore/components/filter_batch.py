@@ -57,7 +57,7 @@ class InsGnssFilterBatch(ComponentBatch):
         self.rows = np.zeros((runs, 24))
         self._views = [None] * runs             # each engine's nav.rows: its row here
         self.stack = {name: np.zeros((runs,) + np.shape(getattr(first.engine, name)))
-                      for name in _STACKED} if first is not None else {}
+                      for name in self.STACKED} if first is not None else {}
         self.q_density = np.zeros((runs, 15))
         # per run, what decides whether its own code runs this step (kept by _sync)
         self.own = np.ones(runs, dtype=bool)    # not started yet, or a fix held back
@@ -90,12 +90,18 @@ class InsGnssFilterBatch(ComponentBatch):
         return next(c for c in self.component_class.__mro__
                     if c.__dict__.get("batch_class") is type(self))
 
+    #: the engine's attributes the batch stacks (what an IMU interval changes, and what the
+    #: solution outputs read), and the engine class whose propagation it stands for
+    STACKED = _STACKED
+    ENGINE = KfEngine
+
     def _propagates_like_kf(self, member) -> bool:
         """The batch stands for the run's own code only where that is the shell's and the
-        Kf engine's (a subclass that steps or propagates otherwise runs its own code)."""
+        engine's (:attr:`ENGINE`; a subclass that steps or propagates otherwise runs its own
+        code)."""
         engine = type(member.engine)
-        return (engine.propagate is KfEngine.propagate
-                and engine.covariance_diagonal is KfEngine.covariance_diagonal
+        return (engine.propagate is self.ENGINE.propagate
+                and engine.covariance_diagonal is self.ENGINE.covariance_diagonal
                 and type(member.engine.nav).update is Strapdown.update
                 and all(getattr(type(member), name) is getattr(self.shell, name)
                         for name in self.SHELL_METHODS))
@@ -126,12 +132,15 @@ class InsGnssFilterBatch(ComponentBatch):
         self.max_fix_age[b] = member.max_fix_age
         self.dense[b] = member.late_fixes
 
-    def _lend(self, b: int) -> None:
-        """Give run b's engine, history and clocks what the batch did since its last turn."""
+    def _lend(self, b: int, hold_last: bool = False) -> None:
+        """Give run b's engine, history and clocks what the batch did since its last turn
+        (``hold_last``: the history all but the latest interval, which
+        :meth:`_record_last` adds after the engine's own work on that interval)."""
         member = self.members[b]
         engine = member.engine
         for name, stacked in self.stack.items():
-            setattr(engine, name, stacked[b].copy())
+            value = stacked[b]
+            setattr(engine, name, value.item() if value.ndim == 0 else value.copy())
         entries = self.log[self.seen[b] - self.first_entry:]
         if type(engine).advance_clocks is not KfEngine.advance_clocks:
             for entry in entries:
@@ -145,10 +154,19 @@ class InsGnssFilterBatch(ComponentBatch):
             increments = [(t, dtheta[b], dvel[b], dt) for t, dtheta, dvel, dt in entries]
             history = member.history
             history.extend(increments[:-1], member.max_fix_age + entries[-1][3])
-            history.record(increments[-1], engine, member.max_fix_age + entries[-1][3],
-                           member.late_fixes)
+            if hold_last:
+                self._held = increments[-1]
+            else:
+                history.record(increments[-1], engine, member.max_fix_age + entries[-1][3],
+                               member.late_fixes)
         self.seen[b] = self.first_entry + len(self.log)
         self._sync(b)
+
+    def _record_last(self, b: int) -> None:
+        """The interval :meth:`_lend` held back, into run b's history now."""
+        member, increment = self.members[b], self._held
+        member.history.record(increment, member.engine, member.max_fix_age + increment[3],
+                              member.late_fixes)
 
     def _by_itself(self, b: int, call) -> None:
         """``call(member)`` for run b on its own objects; an error fails that run alone."""
@@ -228,8 +246,22 @@ class InsGnssFilterBatch(ComponentBatch):
         return imu_time, dt
 
     def _propagate(self, imu: np.ndarray, imu_time: float, dt: float) -> None:
-        stack = self.stack
         dtheta, dvel = imu[:, 2:5], imu[:, 5:8]
+        self._propagate_rows(dtheta, dvel, dt)
+        self.log.append((imu_time, dtheta, dvel, dt))
+        self.nav_time = imu_time
+        self._after_interval()
+        due = checkpoint_due(imu_time, self.last_checkpoint, dt, self.max_fix_age + dt,
+                             self.dense)
+        for b in np.flatnonzero(due).tolist():    # its latency history checkpoints now
+            self._lend(b)
+
+    def _after_interval(self) -> None:
+        """Hook: the runs' own code an engine runs after an interval (none for the Kf)."""
+
+    def _propagate_rows(self, dtheta, dvel, dt: float) -> None:
+        """Every run's interval (:func:`~navcore.filters.ins_gnss_kf.propagate_rows`)."""
+        stack = self.stack
         key, template = self._template
         if key != dt:            # the runs' time constants are one (_common_interval)
             cfg = self.members[0].engine.config
@@ -238,20 +270,12 @@ class InsGnssFilterBatch(ComponentBatch):
         stack["phi_acc"], stack["q_acc"], stack["rate_ib"] = propagate_rows(
             self.rows, stack["gyro_bias"], stack["accel_bias"], stack["phi_acc"],
             stack["q_acc"], self.q_density, dtheta, dvel, dt, template)
-        self.log.append((imu_time, dtheta, dvel, dt))
-        self.nav_time = imu_time
-        due = checkpoint_due(imu_time, self.last_checkpoint, dt, self.max_fix_age + dt,
-                             self.dense)
-        for b in np.flatnonzero(due).tolist():    # its latency history checkpoints now
-            self._lend(b)
 
     def _write_solutions(self) -> None:
         """The solution outputs of every run (InsGnssFilter._write_solution's values)."""
         out = self.out
         stack = self.stack
-        phi = stack["phi_acc"]
-        diagonal = (np.einsum("bij,bij->bi", phi @ stack["P"], phi)
-                    + np.diagonal(stack["q_acc"], axis1=1, axis2=2))
+        diagonal = self._covariance_diagonals()
         c = self._solution_col
         position_velocity, euler = solution_columns(self.rows)
         out[:, c:c + 6] = position_velocity
@@ -263,6 +287,13 @@ class InsGnssFilterBatch(ComponentBatch):
         out[:, self.columns["updated"]] = 0.0
         for b in np.flatnonzero(~np.isfinite(out).all(axis=1)).tolist():
             self._by_itself(b, lambda m: m._write_solution())
+
+    def _covariance_diagonals(self) -> np.ndarray:
+        """Every run's :meth:`KfEngine.covariance_diagonal` (B, 15)."""
+        stack = self.stack
+        phi = stack["phi_acc"]
+        return (np.einsum("bij,bij->bi", phi @ stack["P"], phi)
+                + np.diagonal(stack["q_acc"], axis1=1, axis2=2))
 
 
 __all__ = ["InsGnssFilterBatch"]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from ..core.component import Limits, ParameterError, integer, real
 from .filter_component import InsGnssFilter
+from .ukf_batch import UkfFilterBatch
 from ..filters.recovery import recovery_options
 from ..filters.ukf_filters import CtfaUkfEngine, ImmUkfEngine, UkfEngine
 
@@ -25,8 +26,8 @@ class Ukf(InsGnssFilter):
                    "with a nonlinear rotation-vector large-misalignment error model, fixed Q and "
                    "R, closed-loop feedback.")
     engine_class = UkfEngine
-    #: no batch of its own yet: a batch runs one Ukf per run
-    batch_class = None
+    #: many runs in one call (navcore.core.batch): the UKF family's time update
+    batch_class = UkfFilterBatch
     #: paper 000's UAV flight (uav_maneuver: 60 min, IMU at 50 Hz)
     default_experiment = (0.0, 3600.0, 0.02)
     extra_parameters = (

@@ -91,8 +91,10 @@ from .imm import ImmBank, imm_combine
 from .innovation_stats import nis
 from .ins_gnss_kf import KfEngine, UpdateResult
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
+from ..core.kernels import kernel
 from ..ins.strapdown import _gravity, _radii
-from .unscented import UnscentedKalmanFilter
+from .unscented import (UnscentedKalmanFilter, points_from_sqrt_rows, predicted_moments_rows,
+                        predicted_state_error, sqrt_rows)
 
 #: tolerance on accumulated time when deciding that a prediction interval is complete [s]
 _TIME_EPS = 1e-9
@@ -157,7 +159,9 @@ def _nav_rates(lat, h, vn, ve, rn, re):
 
 
 class NominalInterval:
-    """Means of the nominal (computed) navigation quantities over one UKF prediction interval."""
+    """Means of the nominal (computed) navigation quantities over one UKF prediction interval:
+    floats and arrays of one run (``v``, ``f`` (3,), ``C`` (3, 3)), or of B runs with a
+    leading run axis (:func:`interval_means`)."""
 
     __slots__ = ("T", "lat", "h", "v", "C", "f")
 
@@ -165,44 +169,119 @@ class NominalInterval:
         self.T, self.lat, self.h, self.v, self.C, self.f = T, lat, h, v, C, f
 
 
+#: columns of a UKF engine's interval sums (one row per run): the interval length T, then
+#: the trapezoid sums of lat, h, v (3) and C_bn (9 by rows) and the sum of C_bn dvel (3)
+N_SUMS = 18
+
+
+@kernel
+def accumulate_rows(sums, before, after, dvel_c, dt):
+    """Add one IMU interval of every run to its interval sums (B, :data:`N_SUMS`), in place:
+    ``before``/``after`` the strapdown rows (B, 24) at its start and end, ``dvel_c`` (B, 3)
+    the compensated velocity increments, ``dt`` (B,) the interval lengths."""
+    for b in range(sums.shape[0]):
+        s, r0, r1 = sums[b], before[b], after[b]
+        half = 0.5 * dt[b]
+        s[0] += dt[b]
+        s[1] += half * (r0[0] + r1[0])
+        s[2] += half * (r0[2] + r1[2])
+        for i in range(12):                   # v (columns 3..5) and C_bn (6..14)
+            s[3 + i] += half * (r0[3 + i] + r1[3 + i])
+        # C_prev @ dvel_c as numpy's product rounds it (BLAS from both)
+        s[15:18] += np.ascontiguousarray(r0[6:15]).reshape(3, 3) @ dvel_c[b]
+
+
+def interval_means(sums):
+    """The :class:`NominalInterval` of every run from its sums (B, :data:`N_SUMS`)."""
+    T = sums[:, 0]
+    runs = len(sums)
+    return NominalInterval(T, sums[:, 1] / T, sums[:, 2] / T, sums[:, 3:6] / T[:, None],
+                           sums[:, 6:15].reshape(runs, 3, 3) / T[:, None, None],
+                           sums[:, 15:18] / T[:, None])
+
+
+def prediction_due(T, predict_interval):
+    """Whether an interval of ``T`` seconds completes the prediction interval (floats, or
+    arrays: every run of a batch)."""
+    return T >= predict_interval - _TIME_EPS
+
+
+class _RunValues:
+    """The nominal values of one interval of B runs for :func:`error_dynamics`: ``lat``,
+    ``h`` (B,), ``v``, ``f`` (3, B), ``C`` (B, 3, 3), ``T`` (B,), and :meth:`spread`, which
+    takes per-run arrays (..., B) to the runs' points (..., N), every run's points
+    consecutive (one run: a broadcast, no copy)."""
+
+    __slots__ = ("lat", "h", "v", "f", "C", "T", "runs", "per_run")
+
+    def __init__(self, nom, points):
+        self.lat = np.asarray(nom.lat, dtype=float).reshape(-1)
+        self.runs = runs = self.lat.shape[0]
+        self.h = np.asarray(nom.h, dtype=float).reshape(-1)
+        self.T = np.asarray(nom.T, dtype=float).reshape(-1)
+        self.v = np.asarray(nom.v, dtype=float).reshape(runs, 3).T
+        self.f = np.asarray(nom.f, dtype=float).reshape(runs, 3).T
+        self.C = np.asarray(nom.C, dtype=float).reshape(runs, 3, 3)
+        self.per_run = points // runs
+
+    def spread(self, a):
+        return a if self.runs == 1 else np.repeat(a, self.per_run, axis=-1)
+
+
 def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
-    """Time derivative of every sigma point (rows of X, shape (N, 15)); module docstring."""
+    """Time derivative of every sigma point (rows of X, shape (N, 15)); module docstring.
+
+    ``nom`` is one run's interval (floats) or B runs' (arrays with a leading run axis, the N
+    points then the B runs' points one run after the other, N / B each)."""
+    return _error_dynamics(X, _RunValues(nom, X.shape[0]), tau_g, tau_a)
+
+
+def _error_dynamics(X, run, tau_g, tau_a):
     Xt = X.T                                   # (15, N): one row per state
     dr, dv, phi = Xt[0:3], Xt[3:6], Xt[6:9]
-    rn, re = _radii(nom.lat)
-    v = nom.v
-    # computed (primed) rates, scalars
-    w_in_c, w_cor_c = _nav_rates(nom.lat, nom.h, v[0], v[1], rn, re)
-    # true state of each point: computed minus error
-    lat_t = nom.lat - dr[0] / (rn + nom.h)
-    h_t = nom.h + dr[2]
-    v_t = v[:, None] - dv
-    w_in_t, w_cor_t = _nav_rates(lat_t, h_t, v_t[0], v_t[1], rn, re)
+    spread, runs = run.spread, run.runs
+    lats, hs = run.lat.tolist(), run.h.tolist()
+    radii = np.array([_radii(x) for x in lats]).T          # math: a float per run
+    gravity = np.array([_gravity(x, y) for x, y in zip(lats, hs)])
+    # the computed (primed) state of each run, then the true state of each point (computed
+    # minus error), in one array (rows lat, h, v (3), R_N, R_E): the rates of both in one pass
+    points = X.shape[0]
+    state = np.empty((7, runs + points))
+    state[0, :runs], state[1, :runs], state[2:5, :runs] = run.lat, run.h, run.v
+    state[5:7, :runs] = radii
+    state[5:7, runs:] = spread(radii)
+    rn = state[5, runs:]
+    np.subtract(spread(run.lat), dr[0] / (rn + spread(run.h)), out=state[0, runs:])
+    np.add(spread(run.h), dr[2], out=state[1, runs:])
+    np.subtract(spread(run.v), dv, out=state[2:5, runs:])
+    v = state[2:5]
+    w_in, w_cor = _nav_rates(state[0], state[1], v[0], v[1], state[5], state[6])
+    w_in, w_cor = np.array(w_in), np.array(w_cor)
+    coriolis = _cross(w_cor[_NEXT], w_cor[_PREV], v)      # w_cor' x v' and w_cor x v
+    v_t = v[:, runs:]
 
     phi_rows = X[:, 6:9]
     theta2 = np.einsum("ij,ij->i", phi_rows, phi_rows)
     a, b = _rodrigues_coefficients(theta2)
     phi_next, phi_prev = phi[_NEXT], phi[_PREV]
     # exp([phi x]) of the three vectors it rotates, at once: w_in' - C' dbg, f^{n'}, C' dba
-    C_t = nom.C.T
-    V = np.empty((3, 3, X.shape[0]))
-    np.subtract(np.array(w_in_c)[:, None], (X[:, 9:12] @ C_t).T, out=V[0])
-    V[1] = nom.f[:, None]
-    V[2] = (X[:, 12:15] @ C_t).T
+    # (every run's points by its own C': stacked products, each the floats of its 2-D one)
+    C_t = run.C.transpose(0, 2, 1)
+    by_run = X.reshape(runs, -1, N_STATES)
+    V = np.empty((3, 3, points))
+    np.subtract(spread(w_in[:, :runs]), (by_run[:, :, 9:12] @ C_t).reshape(-1, 3).T, out=V[0])
+    V[1] = spread(run.f)
+    V[2] = (by_run[:, :, 12:15] @ C_t).reshape(-1, 3).T
     RV = _rotate_by_rotvec(phi_next, phi_prev, V, a, b)
 
     # attitude: d(phi)/dt = J^-1(phi) [exp([phi x]) (w_in' - C' dbg) - w_in]
-    w_s = RV[0] - np.array(w_in_t)
+    w_s = RV[0] - w_in[:, runs:]
     dphi = _inverse_jacobian_apply(phi_next, phi_prev, w_s, theta2)
 
     # velocity
-    ddv = nom.f[:, None] - RV[1] + RV[2]
-    w_cor_t = np.array(w_cor_t)
-    (wn, we, wd), (vn, ve, vd) = w_cor_c, v
-    cor_c = np.array([we * vd - wd * ve, wd * vn - wn * vd, wn * ve - we * vn])   # w_cor' x v'
-    ddv -= cor_c[:, None] - _cross(w_cor_t[_NEXT], w_cor_t[_PREV], v_t)
-    ddv[2] += 2.0 * _gravity(nom.lat, nom.h) / math.sqrt(rn * re) * dr[2]
-
+    ddv = spread(run.f) - RV[1] + RV[2]
+    ddv -= spread(coriolis[:, :runs]) - coriolis[:, runs:]
+    ddv[2] += spread(2.0 * gravity / np.sqrt(radii[0] * radii[1])) * dr[2]
     Xdot = np.empty_like(X)
     Xdot_t = Xdot.T
     Xdot_t[0:3] = dv
@@ -216,11 +295,27 @@ def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
 def propagate_points(X, nom, tau_g=0.0, tau_a=0.0):
     """Process model f of paper 000 eq. 14 over one interval: one step with
     second-order position."""
-    Xdot = error_dynamics(X, nom, tau_g, tau_a)
-    T = nom.T
+    run = _RunValues(nom, X.shape[0])
+    Xdot = _error_dynamics(X, run, tau_g, tau_a)
+    T = run.spread(run.T)[:, None]
     Y = X + T * Xdot
     Y[:, 0:3] += 0.5 * T * T * Xdot[:, 3:6]
     return Y
+
+
+def predict_rows(x, P, nom, Q, q_scale, Wm, Wc, spread, tau_g, tau_a):
+    """The UKF time update (paper 000 eqs. 14-16) of B filters at once, each over its run's
+    interval ``nom`` (:func:`interval_means`; one nominal shared by all filters when it has
+    one run): means ``x`` (B, 15), checked symmetric covariances ``P`` (B, 15, 15), process
+    noises ``Q`` (B, 15, 15) times ``q_scale`` (B,), the UT's weights and point ``spread``.
+    One process-model call for every point of every filter (it works row by row).  Returns
+    (x, P, square-root fallbacks (B,), finite (B,)) as :meth:`UnscentedKalmanFilter.predict`
+    computes them for each filter."""
+    L, fallback = sqrt_rows(P)
+    X = points_from_sqrt_rows(x, L * spread)
+    Y = propagate_points(X.reshape(-1, N_STATES), nom, tau_g, tau_a).reshape(X.shape)
+    x, P, finite = predicted_moments_rows(Y, Wm, Wc, Q, q_scale)
+    return x, P, fallback, finite
 
 
 def discrete_process_noise(q_density, T):
@@ -246,8 +341,7 @@ class UkfEngine(KfEngine):
     predictions).
     """
 
-    state_fields = ("ukf", "q_scale", "_q_cache", "_T", "_sum_lat", "_sum_h", "_sum_v",
-                    "_sum_C", "_sum_dv")
+    state_fields = ("ukf", "q_scale", "_q_cache", "sums")
     derived_fields = ("predict_interval", "alpha", "beta", "kappa")
 
     def __init__(self, config, nav, *, predict_interval, alpha, beta, kappa):
@@ -265,38 +359,32 @@ class UkfEngine(KfEngine):
 
     # -- time update -------------------------------------------------------------------
     def _reset_interval(self):
-        self._T = 0.0
-        self._sum_lat = 0.0
-        self._sum_h = 0.0
-        self._sum_v = np.zeros(3)
-        self._sum_C = np.zeros((3, 3))
-        self._sum_dv = np.zeros(3)
+        #: the interval sums (1, N_SUMS) of :func:`accumulate_rows`
+        self.sums = np.zeros((1, N_SUMS))
+
+    @property
+    def _T(self):
+        """Length [s] of the interval accumulated since the last prediction."""
+        return self.sums[0, 0].item()
 
     def propagate(self, dtheta, dvel, dt):
         """Mechanize one IMU interval with bias-compensated increments; accumulate the interval
-        means and run the UKF prediction when ``predict_interval`` is complete."""
+        means (:func:`accumulate_rows` of this run) and run the UKF prediction when
+        ``predict_interval`` is complete."""
         dtheta_c = dtheta - self.gyro_bias * dt
         dvel_c = dvel - self.accel_bias * dt
         self.rate_ib = dtheta_c / dt
         nav = self.nav
-        C_prev = nav.C_bn
-        lat0, h0, v0 = nav.lat, nav.h, nav.v_ned
+        before = nav.rows.copy()
         nav.update(dtheta_c, dvel_c, dt)
-        half = 0.5 * dt
-        self._T += dt
-        self._sum_lat += half * (lat0 + nav.lat)
-        self._sum_h += half * (h0 + nav.h)
-        self._sum_v += half * (v0 + nav.v_ned)
-        self._sum_C += half * (C_prev + nav.C_bn)
-        self._sum_dv += C_prev @ dvel_c
-        if self._T >= self.predict_interval - _TIME_EPS:
+        accumulate_rows(self.sums, before, nav.rows, np.reshape(dvel_c, (1, 3)),
+                        np.full(1, float(dt)))
+        if prediction_due(self._T, self.predict_interval):
             self._predict()
         self.advance_clocks(dt)
 
     def _interval(self):
-        T = self._T
-        return NominalInterval(T, self._sum_lat / T, self._sum_h / T, self._sum_v / T,
-                               self._sum_C / T, self._sum_dv / T)
+        return interval_means(self.sums)
 
     def process_noise(self, T):
         """Discrete Q_d(T) at scale 1 (cached for the usual constant interval)."""
@@ -310,19 +398,32 @@ class UkfEngine(KfEngine):
         """UKF time update (paper 000 eqs. 14-16) over the accumulated interval."""
         if self._T <= 0.0:
             return
-        nom = self._interval()
         cfg = self.config
-        self.predict_filters(nom, self.process_noise(nom.T), cfg.gyro_bias_tau, cfg.accel_bias_tau)
+        self.predict_filters(self._interval(), self.process_noise(self._T), cfg.gyro_bias_tau,
+                             cfg.accel_bias_tau)
         self._reset_interval()
 
     def predict_filters(self, nom, Q, tau_g, tau_a):
-        """Predict the filter(s) over one interval (subclasses with several filters override)."""
-        self.ukf.predict(propagate_points, Q, nom, tau_g, tau_a, q_scale=self.q_scale,
-                         vectorized=True)
+        """Predict the filter(s) over one interval (subclasses with several filters override):
+        :func:`predict_rows` of this run."""
+        ukf = self.ukf
+        x, P, fallback, finite = predict_rows(
+            ukf.x[None], ukf.checked_covariance()[None], nom, Q[None],
+            np.full(1, float(self.q_scale)), ukf.Wm, ukf.Wc, ukf._spread, tau_g, tau_a)
+        ukf.sqrt_fallbacks += int(fallback[0])
+        if not finite[0]:
+            raise predicted_state_error()
+        ukf.x, ukf.P = x[0], P[0]
+
+    def prediction_covariance(self):
+        """P of the latest prediction (or update): the part of :meth:`covariance_diagonal`
+        that changes only there."""
+        return self.ukf.P
 
     def covariance_diagonal(self):
         """Diagonal of P at the last prediction plus the noise of the pending interval."""
-        return np.diagonal(self.ukf.P) + self.q_scale * self.q_density * self._T
+        return (np.diagonal(self.prediction_covariance())
+                + self.q_scale * self.q_density * self._T)
 
     def covariance(self):
         return self.ukf.P.copy()
@@ -468,8 +569,8 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
 
         self.bank.predict_all(predict_models)
 
-    def covariance_diagonal(self):
-        return np.diagonal(self.bank.P) + self.q_scale * self.q_density * self._T
+    def prediction_covariance(self):
+        return self.bank.P
 
     def covariance(self):
         return self.bank.P.copy()

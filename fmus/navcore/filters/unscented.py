@@ -156,12 +156,51 @@ def sigma_points(x: np.ndarray, P: np.ndarray, lambda_: float) -> np.ndarray:
 
 
 def _points_from_sqrt(x: np.ndarray, L: np.ndarray) -> np.ndarray:
-    n = x.shape[0]
-    X = np.empty((2 * n + 1, n))
-    X[0] = x
-    np.add(x, L.T, out=X[1:n + 1])          # row i is x + column i of L
-    np.subtract(x, L.T, out=X[n + 1:])
+    return points_from_sqrt_rows(x[None], L[None])[0]
+
+
+def points_from_sqrt_rows(x: np.ndarray, L: np.ndarray) -> np.ndarray:
+    """Sigma points of B filters at once: ``x`` (B, n), scaled square roots ``L`` (B, n, n);
+    returns (B, 2n + 1, n), each filter's points as :func:`sigma_points` lays them out."""
+    runs, n = x.shape
+    X = np.empty((runs, 2 * n + 1, n))
+    X[:, 0] = x
+    Lt = L.transpose(0, 2, 1)
+    np.add(x[:, None, :], Lt, out=X[:, 1:n + 1])          # row i is x + column i of L
+    np.subtract(x[:, None, :], Lt, out=X[:, n + 1:])
     return X
+
+
+def sqrt_rows(P: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """:func:`matrix_sqrt` of B symmetric matrices ``P`` (B, n, n) already symmetric: the
+    roots (B, n, n) and whether each needed the eigenvalue fallback (B,).  One LAPACK call
+    per matrix: numpy's stacked Cholesky rounds otherwise than the one a single filter calls."""
+    L = np.empty_like(P)
+    fallback = np.zeros(len(P), dtype=bool)
+    for b in range(len(P)):
+        L[b], fallback[b] = _sqrt_symmetric(P[b])
+    return L, fallback
+
+
+def predicted_moments_rows(Y: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, Q: np.ndarray,
+                           q_scale: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Paper 000 eqs. 15-16 for B filters at once: their mapped points ``Y`` (B, 2n + 1, n),
+    process noises ``Q`` (B, n, n) times ``q_scale`` (B,).  Returns the means (B, n), the
+    symmetrized covariances (B, n, n) and whether each is finite (B,).  numpy's stacked
+    products give each filter the floats of its own 2-D product (``tests/test_kf_batch.py``)."""
+    x = Wm @ Y
+    dev = Y - x[:, None, :]
+    P = (dev.transpose(0, 2, 1) * Wc) @ dev
+    P += q_scale[:, None, None] * Q               # 1.0 * Q is Q exactly
+    # a NaN/inf anywhere in f's output or Q propagates into P, so one check covers all
+    finite = np.isfinite(P).all(axis=(1, 2))
+    return x, 0.5 * (P + P.transpose(0, 2, 1)), finite
+
+
+def predicted_state_error() -> InputError:
+    """The error of a prediction whose moments are not finite (:func:`predicted_moments_rows`)."""
+    return InputError("UnscentedKalmanFilter.predict: the state predicted by f or 'Q' "
+                      "contains NaN or inf")
 
 
 def unscented_transform(points: np.ndarray, Wm: np.ndarray, Wc: np.ndarray,
@@ -265,6 +304,13 @@ class UnscentedKalmanFilter:
         ``P`` is symmetrized here only if the caller replaced it by a non-symmetric matrix
         (``predict``/``correct`` always store it symmetric).
         """
+        L, fallback = _sqrt_symmetric(self.checked_covariance())
+        self.sqrt_fallbacks += fallback
+        return _points_from_sqrt(self.x, L * self._spread)
+
+    def checked_covariance(self) -> np.ndarray:
+        """``P``, symmetrized if the caller replaced it by a non-symmetric matrix, after the
+        checks of :meth:`sigma_points` on ``x`` and ``P`` (shapes, finite values)."""
         x, P = self.x, self.P
         if x.shape != (self.n,) or P.shape != (self.n, self.n):
             raise InputError(
@@ -277,9 +323,7 @@ class UnscentedKalmanFilter:
             raise InputError("UnscentedKalmanFilter: 'x' contains NaN or inf")
         if not (P == P.T).all():
             P = 0.5 * (P + P.T)
-        L, fallback = _sqrt_symmetric(P)
-        self.sqrt_fallbacks += fallback
-        return _points_from_sqrt(x, L * self._spread)
+        return P
 
     # -- time update ----------------------------------------------------------------------
     def predict(self, f: Callable, Q: np.ndarray, *args: Any, q_scale: float = 1.0,
@@ -313,16 +357,13 @@ class UnscentedKalmanFilter:
                 f"UnscentedKalmanFilter.predict: 'Q' must have shape ({self.n}, {self.n}), "
                 f"got {np.shape(Q)}"
             )
-        x = self.Wm @ Y
-        dev = Y - x
-        P = (dev.T * self.Wc) @ dev
-        P += Q if q_scale == 1.0 else q_scale * np.asarray(Q)
-        # a NaN/inf anywhere in f's output or Q propagates into P, so one check covers all
-        if not np.isfinite(P).all():
-            raise InputError("UnscentedKalmanFilter.predict: the state predicted by f or 'Q' "
-                             "contains NaN or inf")
-        self.x = x
-        self.P = 0.5 * (P + P.T)
+        x, P, finite = predicted_moments_rows(Y[None], self.Wm, self.Wc,
+                                              np.asarray(Q, dtype=float)[None],
+                                              np.full(1, float(q_scale)))
+        if not finite[0]:
+            raise predicted_state_error()
+        self.x = x[0]
+        self.P = P[0]
 
     # -- measurement update ---------------------------------------------------------------
     def predict_measurement(self, h: Callable, *args: Any,

@@ -1,0 +1,178 @@
+"""The UKF family's batch (:mod:`navcore.core.batch`): B runs of Ukf, CtfaUkf or ImmUkf
+(:mod:`navcore.components.ukf_components`) with their IMU intervals and sigma-point
+predictions computed for all runs at once.
+
+It is the Kalman filters' batch (:mod:`navcore.components.filter_batch`: every run keeps its
+own component; a fix, a rollback, a checkpoint or a run not started yet runs the run's own
+code, lent the batch's values first) with the UKF engines' time update
+(:meth:`~navcore.filters.ukf_filters.UkfEngine.propagate`) in place of the Kf's:
+
+* every IMU interval of all runs: the bias compensation, the mechanization
+  (:func:`~navcore.ins.strapdown.update_rows`) and the interval sums
+  (:func:`~navcore.filters.ukf_filters.accumulate_rows`), the functions each engine calls
+  with one run;
+* the runs whose prediction interval is complete predict together: one
+  :func:`~navcore.filters.ukf_filters.predict_rows` call, the function each Ukf or CtfaUkf
+  engine calls with one run.  An engine that predicts otherwise (the IMM bank, a subclass)
+  or whose filter is not in the state the call expects (a covariance not finite or not
+  symmetric, other unscented-transform parameters than the batch's first run) predicts by
+  its own code, before the interval enters its latency history, as it does alone.
+"""
+from __future__ import annotations
+
+from typing import List
+
+import numpy as np
+
+from ..filters.ukf_filters import (N_SUMS, UkfEngine, accumulate_rows, discrete_process_noise,
+                                   interval_means, predict_rows, prediction_due)
+from ..filters.unscented import predicted_state_error
+from ..ins.strapdown import update_rows
+from .filter_batch import InsGnssFilterBatch
+
+#: the unscented filter's attributes stacked for a natively predicted engine
+_UKF_FIELDS = ("x", "P", "sqrt_fallbacks")
+
+
+class UkfFilterBatch(InsGnssFilterBatch):
+    """B runs of a filter of the UKF family (module docstring)."""
+
+    STACKED = ("gyro_bias", "accel_bias", "rate_ib", "q_scale", "sums")
+    ENGINE = UkfEngine
+
+    def _started(self, start_time: float) -> np.ndarray:
+        runs = self.runs
+        self._diagonal = np.zeros((runs, 15))       # of each engine's prediction_covariance
+        self._predict_interval = np.zeros(runs)
+        self._ukf = {}
+        self._q_cache = {}
+        alive = [m for b, m in enumerate(self.members) if b not in self._failures]
+        engine = alive[0].engine if alive else None
+        # the runs predict together when their engines predict as a Ukf with one transform
+        self._natively_predicted = engine is not None and all(
+            self._predicts_like_ukf(m.engine, engine) for m in alive)
+        if self._natively_predicted:
+            self._ukf = {name: np.zeros((runs,) + np.shape(getattr(engine.ukf, name)))
+                         for name in _UKF_FIELDS}
+        return super()._started(start_time)
+
+    @staticmethod
+    def _predicts_like_ukf(engine, first) -> bool:
+        kind = type(engine)
+        return (kind._predict is UkfEngine._predict
+                and kind.predict_filters is UkfEngine.predict_filters
+                and kind.process_noise is UkfEngine.process_noise
+                and engine.ukf is not None
+                and (engine.alpha, engine.beta, engine.kappa)
+                == (first.alpha, first.beta, first.kappa))
+
+    # -- the runs' own objects and the batch's stacks ------------------------------------
+    def _adopt(self, b: int) -> None:
+        engine = self.members[b].engine
+        for name, stacked in self._ukf.items():
+            stacked[b] = getattr(engine.ukf, name)
+        self._predict_interval[b] = engine.predict_interval
+        super()._adopt(b)
+        self._diagonal[b] = np.diagonal(engine.prediction_covariance())
+
+    def _lend(self, b: int, hold_last: bool = False) -> None:
+        ukf = self.members[b].engine.ukf
+        for name, stacked in self._ukf.items():
+            value = stacked[b]
+            setattr(ukf, name, int(value) if value.ndim == 0 else value.copy())
+        super()._lend(b, hold_last)
+
+    def _kept(self, rows: List[int]) -> None:
+        started = hasattr(self, "rows")
+        super()._kept(rows)          # it lends every kept run first: from the stacks uncut
+        if started:
+            self._diagonal = self._diagonal[rows]
+            self._predict_interval = self._predict_interval[rows]
+            self._ukf = {k: v[rows] for k, v in self._ukf.items()}
+            self._q_cache = {}
+
+    # -- stepping -------------------------------------------------------------------------
+    def _propagate_rows(self, dtheta, dvel, dt: float) -> None:
+        """:meth:`UkfEngine.propagate` of every run up to its prediction."""
+        stack = self.stack
+        runs = len(self.rows)
+        dtheta_c = dtheta - stack["gyro_bias"] * dt
+        dvel_c = dvel - stack["accel_bias"] * dt
+        stack["rate_ib"] = dtheta_c / dt
+        before = self.rows.copy()
+        dts = np.full(runs, float(dt))
+        update_rows(self.rows, dtheta_c, dvel_c, dts)
+        accumulate_rows(stack["sums"].reshape(runs, N_SUMS), before, self.rows, dvel_c, dts)
+
+    def _after_interval(self) -> None:
+        """The runs whose prediction interval is complete predict, together where they can,
+        before the interval enters their history (as in InsGnssFilter._integrate)."""
+        sums = self.stack["sums"][:, 0]
+        due = prediction_due(sums[:, 0], self._predict_interval)
+        if not due.any():
+            return
+        together = due & self._predictable() if self._natively_predicted else np.zeros_like(due)
+        if together.any():
+            self._predict_together(np.flatnonzero(together))
+        for b in np.flatnonzero(due & ~together).tolist():
+            self._predict_alone(b)
+
+    def _predictable(self) -> np.ndarray:
+        """The runs whose filter state is what :func:`predict_rows` takes (finite, P
+        symmetric); the others' own code raises or symmetrizes as it does alone."""
+        x, P = self._ukf["x"], self._ukf["P"]
+        return (np.isfinite(x).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
+                & (P == P.transpose(0, 2, 1)).all(axis=(1, 2)))
+
+    def _predict_together(self, rows: np.ndarray) -> None:
+        """:meth:`UkfEngine._predict` of the runs ``rows`` in one :func:`predict_rows` call."""
+        sums = self.stack["sums"][:, 0]
+        first = self.members[rows[0]].engine
+        cfg = first.config
+        ukf = first.ukf
+        x, P, fallback, finite = predict_rows(
+            self._ukf["x"][rows], self._ukf["P"][rows], interval_means(sums[rows]),
+            self._process_noise(rows, sums[rows, 0]), self.stack["q_scale"][rows],
+            ukf.Wm, ukf.Wc, ukf._spread, cfg.gyro_bias_tau, cfg.accel_bias_tau)
+        self._ukf["x"][rows] = x
+        self._ukf["P"][rows] = P
+        self._ukf["sqrt_fallbacks"][rows] += fallback
+        self._diagonal[rows] = np.diagonal(P, axis1=1, axis2=2)
+        sums[rows] = 0.0
+        for i in np.flatnonzero(~finite).tolist():
+            self.fail(int(rows[i]), predicted_state_error())
+
+    def _process_noise(self, rows: np.ndarray, T: np.ndarray) -> np.ndarray:
+        """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (kept per T:
+        the runs' intervals are nearly always one)."""
+        Q = np.empty((len(rows), 15, 15))
+        for i, (b, interval) in enumerate(zip(rows.tolist(), T.tolist())):
+            if interval not in self._q_cache:
+                self._q_cache[interval] = [None] * self.runs
+            cached = self._q_cache[interval]
+            if cached[b] is None:
+                cached[b] = discrete_process_noise(self.q_density[b], interval)
+            Q[i] = cached[b]
+        return Q
+
+    def _predict_alone(self, b: int) -> None:
+        """Run b's prediction by its own engine."""
+        member = self.members[b]
+        self._lend(b, hold_last=True)
+        try:
+            member.engine._predict()
+        except Exception as exc:      # the run's own error
+            self.fail(b, exc)
+            return
+        if member.applies_fixes:
+            self._record_last(b)
+        self._adopt(b)
+
+    def _covariance_diagonals(self) -> np.ndarray:
+        """Every run's :meth:`UkfEngine.covariance_diagonal` (B, 15)."""
+        stack = self.stack
+        return (self._diagonal
+                + stack["q_scale"][:, None] * self.q_density * stack["sums"][:, 0, :1])
+
+
+__all__ = ["UkfFilterBatch"]

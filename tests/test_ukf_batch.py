@@ -1,0 +1,155 @@
+"""The UKF family's batch (navcore.components.ukf_batch) and the time-update functions it
+shares with each engine alone (navcore.filters.ukf_filters: accumulate_rows, error_dynamics
+over the points of many runs, predict_rows).
+
+The whole batch is compared with each filter alone, bit for bit, in tests/test_kf_batch.py and
+tests/test_batch_simulation.py; here: the pieces against independent references (the
+pointwise process model of tests/test_ukf_process_model.py, a trapezoid sum by hand), and
+that the runs of a batch do predict in one call.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from test_ukf_process_model import TAU_A, TAU_G, reference_derivative
+
+from navcore.components import ukf_batch
+from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
+from navcore.filters import ukf_filters
+from navcore.filters.ukf_filters import (N_SUMS, NominalInterval, accumulate_rows,
+                                         error_dynamics, interval_means, predict_rows,
+                                         propagate_points)
+from navcore.filters.unscented import UnscentedKalmanFilter
+from orchestrator.cosim.batch import BatchSimulation
+from orchestrator.running.scenarios import load_scenario, registry, swap_filter
+
+from campaign_helpers import MODELS
+
+
+def _bits(a):
+    return np.ascontiguousarray(a).view(np.uint64)
+
+
+def _nominals(runs, rng):
+    """B runs' intervals, each different (latitude, height, velocity, attitude, force)."""
+    C = Rotation.from_euler("ZYX", rng.uniform(-1, 1, (runs, 3))).as_matrix()
+    return NominalInterval(np.full(runs, 0.1), rng.uniform(-1.2, 1.2, runs),
+                           rng.uniform(0, 3000, runs), rng.normal(0, 40, (runs, 3)), C,
+                           rng.normal([0, 0, -9.8], 1.0, (runs, 3)))
+
+
+def _one(nom, b):
+    return NominalInterval(nom.T[b], nom.lat[b], nom.h[b], nom.v[b], nom.C[b], nom.f[b])
+
+
+def _points(runs, rng, per_run=31):
+    scale = np.array([5.0] * 3 + [0.2] * 3 + [3e-3] * 3 + [2e-5] * 3 + [2e-3] * 3)
+    X = rng.standard_normal((runs * per_run, 15)) * scale
+    X[1, 6:9] = [0.2, -0.3, 0.1]                  # a large attitude error
+    X[2, 6:9] = [3e-9, 0.0, -1e-9]                # inside the series branches
+    return X
+
+
+def test_error_dynamics_of_many_runs_is_each_run_alone_and_the_pointwise_reference():
+    rng = np.random.default_rng(31)
+    nom, X = _nominals(5, rng), _points(5, rng)
+    together = error_dynamics(X, nom, TAU_G, TAU_A)
+    for b in range(5):
+        rows = slice(31 * b, 31 * (b + 1))
+        alone = error_dynamics(X[rows], _one(nom, b), TAU_G, TAU_A)
+        assert np.array_equal(_bits(together[rows]), _bits(alone)), b
+        ref = np.array([reference_derivative(x, _one(nom, b)) for x in X[rows]])
+        # position, velocity and bias rows as in test_ukf_process_model (another form of the
+        # same equations, rounding level); attitude rows against central differences
+        np.testing.assert_allclose(together[rows, 0:6], ref[:, 0:6], rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(together[rows, 9:15], ref[:, 9:15], rtol=1e-9, atol=1e-15)
+        for got, want in zip(together[rows][3:, 6:9], ref[3:, 6:9]):
+            assert np.linalg.norm(got - want) <= 1e-8 * np.linalg.norm(want)
+
+
+def test_one_nominal_serves_the_points_of_several_filters():
+    """The IMM bank: one run's interval, three models' points in one call."""
+    rng = np.random.default_rng(32)
+    nom, X = _nominals(1, rng), _points(3, rng)
+    together = propagate_points(X, nom, TAU_G, TAU_A)
+    for j in range(3):
+        rows = slice(31 * j, 31 * (j + 1))
+        assert np.array_equal(_bits(together[rows]),
+                              _bits(propagate_points(X[rows], _one(nom, 0), TAU_G, TAU_A)))
+
+
+def test_predict_rows_is_each_filters_own_prediction():
+    rng = np.random.default_rng(33)
+    runs = 4
+    nom = _nominals(runs, rng)
+    filters = []
+    for b in range(runs):
+        A = rng.normal(0, 1, (15, 15)) * np.logspace(-4, 0, 15)
+        flt = UnscentedKalmanFilter(15, P0=A @ A.T + 1e-12 * np.eye(15),
+                                    x0=rng.normal(0, 1e-3, 15))
+        filters.append(flt)
+    Q = np.stack([np.diag(rng.uniform(1e-12, 1e-6, 15)) for _ in range(runs)])
+    q_scale = np.array([1.0, 2.5, 1.0, 10.0])
+    x, P, fallback, finite = predict_rows(
+        np.stack([f.x for f in filters]), np.stack([f.P for f in filters]), nom, Q, q_scale,
+        filters[0].Wm, filters[0].Wc, filters[0]._spread, TAU_G, TAU_A)
+    assert finite.all() and not fallback.any()
+    for b, flt in enumerate(filters):
+        flt.predict(propagate_points, Q[b], _one(nom, b), TAU_G, TAU_A, q_scale=q_scale[b],
+                    vectorized=True)
+        assert np.array_equal(_bits(x[b]), _bits(flt.x)), b
+        assert np.array_equal(_bits(P[b]), _bits(flt.P)), b
+
+
+def test_the_interval_sums_are_the_trapezoids_of_the_rows_compiled_or_not():
+    """accumulate_rows against a trapezoid sum written out here, and its compiled code
+    against its interpreted source, bit for bit."""
+    rng = np.random.default_rng(34)
+    runs, steps = 3, 7
+    rows = rng.normal(0, 1, (steps + 1, runs, 24))
+    dvel = rng.normal(0, 0.1, (steps, runs, 3))
+    dt = np.full(runs, 0.02)
+    compiled, interpreted = np.zeros((runs, N_SUMS)), np.zeros((runs, N_SUMS))
+    for k in range(steps):
+        accumulate_rows(compiled, rows[k], rows[k + 1], dvel[k], dt)
+        accumulate_rows.py_func(interpreted, rows[k], rows[k + 1], dvel[k], dt)
+    assert np.array_equal(_bits(compiled), _bits(interpreted))
+    half = 0.5 * (rows[:-1] + rows[1:]) * 0.02
+    np.testing.assert_allclose(compiled[:, 0], steps * 0.02, rtol=1e-15)
+    np.testing.assert_allclose(compiled[:, 1], half[:, :, 0].sum(axis=0), rtol=1e-13)
+    np.testing.assert_allclose(compiled[:, 2], half[:, :, 2].sum(axis=0), rtol=1e-13)
+    np.testing.assert_allclose(compiled[:, 3:15], half[:, :, 3:15].sum(axis=0), rtol=1e-12,
+                               atol=1e-15)
+    dv_ned = np.einsum("kbij,kbj->bi", rows[:-1, :, 6:15].reshape(steps, runs, 3, 3), dvel)
+    np.testing.assert_allclose(compiled[:, 15:18], dv_ned, rtol=1e-12, atol=1e-15)
+    means = interval_means(compiled)
+    np.testing.assert_allclose(means.C * (steps * 0.02), compiled[:, 6:15].reshape(runs, 3, 3),
+                               rtol=1e-15)
+
+
+@pytest.mark.parametrize("filter_name, together", [("Ukf", True), ("CtfaUkf", True),
+                                                   ("ImmUkf", False)])
+def test_the_runs_of_a_batch_predict_in_one_call(monkeypatch, filter_name, together):
+    calls = []
+
+    def counting(x, *args):
+        calls.append(len(x))
+        return predict_rows(x, *args)
+
+    monkeypatch.setattr(ukf_batch, "predict_rows", counting)
+    model = swap_filter(load_scenario(MODELS / "uav_maneuver"), filter_name)
+    sets = [{"trajectory.seed": 3 + b, "gnss.seed": 40 + b} for b in range(4)]
+    BatchSimulation(model, registry(), sets).run(stop_time=3.0)
+    if together:
+        # 50 Hz IMU, a prediction every 0.1 s: the 4 runs together, but for the prediction
+        # before each fix, which each run's own update makes
+        assert len(calls) >= 20 and set(calls) == {4}
+    else:
+        assert calls == []         # the IMM bank predicts by each run's own code
+
+
+def test_every_filter_of_the_family_names_the_ukf_batch():
+    for component_class in (Ukf, CtfaUkf, ImmUkf):
+        assert component_class.batch_class is ukf_batch.UkfFilterBatch
+    assert ukf_filters.UkfEngine.predict_filters is not ukf_filters.ImmUkfEngine.predict_filters
