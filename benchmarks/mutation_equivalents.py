@@ -378,6 +378,7 @@ _MODEL_NUMBERS = ("the states, covariances, measurements and model outputs are n
                   "the same values")
 _UNIT_SCALE = "a scale of 1.0 times the matrix is the matrix exactly: the branch saves a product"
 _UKF_FILTERS = "navcore.filters.ukf_filters.x"
+_UKF_TIME_UPDATE = "navcore.filters.ukf_time_update.x"
 _STAND_IN = ("the stand-in for a small angle only keeps the closed form finite where np.where "
              "takes the series instead")
 _ROWS_READ = "only rows 0-2 of it are read (dr[0], dr[2]; phi[_NEXT], phi[_PREV])"
@@ -593,24 +594,24 @@ EQUIVALENT.update({
     _UKF + "correct__mutmut_6": ("z = np.asarray(z, )", _MODEL_NUMBERS),
     _UKF + "correct__mutmut_24": (
         "S = Pzz + (R if (r_scale == 1.0) and False else r_scale * np.asarray(R))", _UNIT_SCALE),
-    _UKF_FILTERS + "__rodrigues_coefficients__mutmut_21": (
+    _UKF_TIME_UPDATE + "__rodrigues_coefficients__mutmut_21": (
         "safe = np.where(small, 2.0, theta)", _STAND_IN),
-    _UKF_FILTERS + "__inverse_jacobian_apply__mutmut_12": (
+    _UKF_TIME_UPDATE + "__inverse_jacobian_apply__mutmut_12": (
         "theta = np.sqrt(np.where(small, 2.0, theta2))", _STAND_IN),
-    _UKF_FILTERS + "_error_dynamics__mutmut_6": (
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_6": (
         "dr, dv, phi = Xt[0:4], Xt[3:6], Xt[6:9]", _ROWS_READ),
-    _UKF_FILTERS + "_error_dynamics__mutmut_10": (
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_10": (
         "dr, dv, phi = Xt[0:3], Xt[3:6], Xt[6:10]", _ROWS_READ),
-    _UKF_FILTERS + "_error_dynamics__mutmut_65": (
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_65": (
         'theta2 = np.einsum("IJ,IJ->I", phi_rows, phi_rows)',
         "einsum's subscripts are labels: IJ,IJ->I is the same sum as ij,ij->i"),
-    _UKF_FILTERS + "_error_dynamics__mutmut_72": (
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_72": (
         "V = np.empty((4, 3, X.shape[0]))",
         "a fourth slice of V is rotated along elementwise and never read: RV[0..2] are the same"),
-    _UKF_FILTERS + "_error_dynamics__mutmut_90": ("V[2] = (X[:, 12:16] @ C_t).T", _FIFTEEN),
-    _UKF_FILTERS + "_error_dynamics__mutmut_183": (
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_90": ("V[2] = (X[:, 12:16] @ C_t).T", _FIFTEEN),
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_183": (
         "Xdot_t[12:16] = 0.0 if tau_a <= 0 else -Xt[12:15] / tau_a", _FIFTEEN),
-    _UKF_FILTERS + "_error_dynamics__mutmut_192": (
+    _UKF_TIME_UPDATE + "__error_dynamics__mutmut_192": (
         "Xdot_t[12:15] = 0.0 if tau_a <= 0 else -Xt[12:16] / tau_a", _FIFTEEN),
     _UKF_FILTERS + "ǁUkfEngineǁ_new_ukf__mutmut_5": ("x0=None, P0=self.P.copy())", _DEFAULT_ZEROS),
     _UKF_FILTERS + "ǁUkfEngineǁ_new_ukf__mutmut_11": ("P0=self.P.copy())", _DEFAULT_ZEROS),

@@ -69,6 +69,10 @@ MODULES.update({
                                     "tests/test_bias_covariance.py",
                                     "tests/test_ukf_engines_by_hand.py",
                                     "tests/test_ukf_process_model_series_and_defaults.py"],
+    "navcore.filters.ukf_time_update": ["tests/test_ukf_process_model.py",
+                                        "tests/test_ukf_process_model_series_and_defaults.py",
+                                        "tests/test_ukf_engines_by_hand.py",
+                                        "tests/test_ukf_batch.py"],
 })
 
 # AHRS engines and sensor logs

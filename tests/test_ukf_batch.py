@@ -1,6 +1,6 @@
 """The UKF family's batch (navcore.components.ukf_batch) and the time-update functions it
-shares with each engine alone (navcore.filters.ukf_filters: accumulate_rows, error_dynamics
-over the points of many runs, predict_rows).
+shares with each engine alone (navcore.filters.ukf_time_update: accumulate_rows,
+error_dynamics over the points of many runs, predict_rows).
 
 The whole batch is compared with each filter alone, bit for bit, in tests/test_kf_batch.py and
 tests/test_batch_simulation.py; here: the pieces against independent references (the
@@ -17,9 +17,9 @@ from test_ukf_process_model import TAU_A, TAU_G, reference_derivative
 from navcore.components import ukf_batch
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.filters import ukf_filters
-from navcore.filters.ukf_filters import (N_SUMS, NominalInterval, accumulate_rows,
-                                         error_dynamics, interval_means, predict_rows,
-                                         propagate_points)
+from navcore.filters.ukf_time_update import (N_SUMS, NominalInterval, accumulate_rows,
+                                             error_dynamics, interval_means, predict_rows,
+                                             propagate_points)
 from navcore.filters.unscented import UnscentedKalmanFilter
 from orchestrator.cosim.batch import BatchSimulation
 from orchestrator.running.scenarios import load_scenario, registry, swap_filter
@@ -51,14 +51,22 @@ def _points(runs, rng, per_run=31):
     return X
 
 
+def _assert_each_block_alone(together, X, alone, blocks):
+    """Block k of ``together`` (31 points) equals ``alone(points of block k, k)``, bit for
+    bit."""
+    for k in range(blocks):
+        rows = slice(31 * k, 31 * (k + 1))
+        assert np.array_equal(_bits(together[rows]), _bits(alone(X[rows], k))), k
+
+
 def test_error_dynamics_of_many_runs_is_each_run_alone_and_the_pointwise_reference():
     rng = np.random.default_rng(31)
     nom, X = _nominals(5, rng), _points(5, rng)
     together = error_dynamics(X, nom, TAU_G, TAU_A)
+    _assert_each_block_alone(together, X,
+                             lambda x, b: error_dynamics(x, _one(nom, b), TAU_G, TAU_A), 5)
     for b in range(5):
         rows = slice(31 * b, 31 * (b + 1))
-        alone = error_dynamics(X[rows], _one(nom, b), TAU_G, TAU_A)
-        assert np.array_equal(_bits(together[rows]), _bits(alone)), b
         ref = np.array([reference_derivative(x, _one(nom, b)) for x in X[rows]])
         # position, velocity and bias rows as in test_ukf_process_model (another form of the
         # same equations, rounding level); attitude rows against central differences
@@ -72,11 +80,8 @@ def test_one_nominal_serves_the_points_of_several_filters():
     """The IMM bank: one run's interval, three models' points in one call."""
     rng = np.random.default_rng(32)
     nom, X = _nominals(1, rng), _points(3, rng)
-    together = propagate_points(X, nom, TAU_G, TAU_A)
-    for j in range(3):
-        rows = slice(31 * j, 31 * (j + 1))
-        assert np.array_equal(_bits(together[rows]),
-                              _bits(propagate_points(X[rows], _one(nom, 0), TAU_G, TAU_A)))
+    _assert_each_block_alone(propagate_points(X, nom, TAU_G, TAU_A), X,
+                             lambda x, j: propagate_points(x, _one(nom, 0), TAU_G, TAU_A), 3)
 
 
 def test_predict_rows_is_each_filters_own_prediction():

@@ -16,8 +16,9 @@ import pytest
 from scipy.optimize import brentq
 
 from navcore.filters.ins_gnss_kf import KfConfig
-from navcore.filters.ukf_filters import (CtfaUkfEngine, ImmUkfEngine, NominalInterval,
-                                         UkfEngine, discrete_process_noise, propagate_points)
+from navcore.filters.ukf_filters import CtfaUkfEngine, ImmUkfEngine, UkfEngine
+from navcore.filters.ukf_time_update import (NominalInterval, discrete_process_noise,
+                                             propagate_points)
 from navcore.filters.unscented import UnscentedKalmanFilter
 from navcore.ins.strapdown import Strapdown
 

@@ -1,4 +1,4 @@
-"""The UKF's process model over all sigma points (navcore.filters.ukf_filters.error_dynamics)
+"""The UKF's process model over all sigma points (navcore.filters.ukf_time_update.error_dynamics)
 against a
 point-by-point reference written independently: scipy rotations for exp([phi x]), numpy
 cross products, textbook earth and transport rates, and the rotation vector's rate taken by
@@ -12,8 +12,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from navcore.ins import earth
-from navcore.filters.ukf_filters import (NominalInterval, discrete_process_noise, error_dynamics,
-                                 propagate_points)
+from navcore.filters.ukf_time_update import (NominalInterval, discrete_process_noise,
+                                             error_dynamics, propagate_points)
 from navcore.filters.unscented import UnscentedKalmanFilter
 
 TAU_G, TAU_A = 3600.0, 1800.0
@@ -40,7 +40,7 @@ def rotation_vector_rate(phi, w_s, step=1e-5):
 
 
 def reference_derivative(x, nom):
-    """Module docstring of navcore.filters.ukf_filters, one point; radii at the computed
+    """Module docstring of navcore.filters.ukf_time_update, one point; radii at the computed
     latitude."""
     dr, dv, phi, dbg, dba = x[0:3], x[3:6], x[6:9], x[9:12], x[12:15]
     rn, re = earth.radii(nom.lat)

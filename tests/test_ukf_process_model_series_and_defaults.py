@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from test_ukf_process_model import TAU_A, TAU_G, points, reference_derivative  # noqa: F401
 
-from navcore.filters.ukf_filters import (_NEXT, _PREV, _inverse_jacobian_apply,
-                                         _rodrigues_coefficients, error_dynamics,
-                                         propagate_points)
+from navcore.filters.ukf_time_update import (_NEXT, _PREV, _inverse_jacobian_apply,
+                                             _rodrigues_coefficients, error_dynamics,
+                                             propagate_points)
 
 
 def test_rodrigues_coefficients_by_their_series():

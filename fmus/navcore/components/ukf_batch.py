@@ -9,10 +9,10 @@ code, lent the batch's values first) with the UKF engines' time update
 
 * every IMU interval of all runs: the bias compensation, the mechanization
   (:func:`~navcore.ins.strapdown.update_rows`) and the interval sums
-  (:func:`~navcore.filters.ukf_filters.accumulate_rows`), the functions each engine calls
+  (:func:`~navcore.filters.ukf_time_update.accumulate_rows`), the functions each engine calls
   with one run;
 * the runs whose prediction interval is complete predict together: one
-  :func:`~navcore.filters.ukf_filters.predict_rows` call, the function each Ukf or CtfaUkf
+  :func:`~navcore.filters.ukf_time_update.predict_rows` call, the function each Ukf or CtfaUkf
   engine calls with one run.  An engine that predicts otherwise (the IMM bank, a subclass)
   or whose filter is not in the state the call expects (a covariance not finite or not
   symmetric, other unscented-transform parameters than the batch's first run) predicts by
@@ -24,8 +24,9 @@ from typing import List
 
 import numpy as np
 
-from ..filters.ukf_filters import (N_SUMS, UkfEngine, accumulate_rows, discrete_process_noise,
-                                   interval_means, predict_rows, prediction_due)
+from ..filters.ukf_filters import UkfEngine
+from ..filters.ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise,
+                                       interval_means, predict_rows, prediction_due)
 from ..filters.unscented import predicted_state_error
 from ..ins.strapdown import update_rows
 from .filter_batch import InsGnssFilterBatch
@@ -143,17 +144,13 @@ class UkfFilterBatch(InsGnssFilterBatch):
             self.fail(int(rows[i]), predicted_state_error())
 
     def _process_noise(self, rows: np.ndarray, T: np.ndarray) -> np.ndarray:
-        """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (kept per T:
-        the runs' intervals are nearly always one)."""
-        Q = np.empty((len(rows), 15, 15))
-        for i, (b, interval) in enumerate(zip(rows.tolist(), T.tolist())):
-            if interval not in self._q_cache:
-                self._q_cache[interval] = [None] * self.runs
-            cached = self._q_cache[interval]
-            if cached[b] is None:
-                cached[b] = discrete_process_noise(self.q_density[b], interval)
-            Q[i] = cached[b]
-        return Q
+        """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (all runs' for
+        each T, kept: the runs' intervals are nearly always one)."""
+        for interval in set(T.tolist()) - self._q_cache.keys():
+            self._q_cache[interval] = np.stack([discrete_process_noise(q, interval)
+                                                for q in self.q_density])
+        return np.stack([self._q_cache[interval][b]
+                         for b, interval in zip(rows.tolist(), T.tolist())])
 
     def _predict_alone(self, b: int) -> None:
         """Run b's prediction by its own engine."""

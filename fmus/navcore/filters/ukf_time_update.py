@@ -1,0 +1,329 @@
+"""The UKF engines' time update (paper 000 eqs. 14-16 on the error model of
+:mod:`navcore.filters.ukf_filters`), for one run or many: the process model over sigma points,
+the interval means of the nominal navigation it runs on, and the prediction of many filters in
+one call.
+
+Every function takes a leading run axis, and an engine alone calls it with one run, so a run
+alone and a run inside a batch (:mod:`navcore.components.ukf_batch`) compute the same floats:
+:func:`accumulate_rows` adds an IMU interval to every run's interval sums (a kernel),
+:func:`interval_means` turns them into each run's :class:`NominalInterval`,
+:func:`error_dynamics` and :func:`propagate_points` map the points of B runs, each with its
+run's nominal (one nominal may serve the points of several filters: an IMM bank), and
+:func:`predict_rows` predicts B filters (one square root per covariance, one process-model call
+for all their points, their moments in stacked products).
+
+Large-misalignment error model (rotation-vector form)
+-----------------------------------------------------
+This is the large-misalignment model of Yan Gongmin (*Strapdown inertial navigation algorithm
+and integrated navigation principles*, 2016, sec. 7.5) with the Euler-platform angles replaced by
+the rotation vector, so its kinematic matrix is the inverse right/left Jacobian of SO(3)
+instead of the inverse Euler-rate matrix.  With ``C' = C_n^{n'} = exp(-[phi x])`` (true nav frame
+to computed nav frame), a prime marking computed quantities, ``w_in = w_ie + w_en``, ``f^{n'}``
+the computed specific force ``C_bn' f~^b`` and ``dbg``/``dba`` the errors of the compensated gyro
+and accelerometer outputs:
+
+*attitude* -- differentiating ``C' = C_bn' C_bn^T`` with the true and computed attitude
+kinematics gives ``dC'/dt = [(C_bn' dbg - w_in' + C' w_in) x] C'``, so ``R = exp([phi x]) =
+C'^T`` rotates with the spatial rate ``w_s = R (w_in' - C_bn' dbg) - w_in`` and the rotation
+vector obeys the exact kinematics ``d(phi)/dt = J^-1(phi) w_s`` with::
+
+    J^-1(phi) = I - 1/2 [phi x] + c(|phi|) [phi x]^2,   c(t) = (1 - (t/2) cot(t/2)) / t^2  (-> 1/12)
+
+(to first order: ``-w_in x phi + d(w_in) - C_bn dbg``, the linear model's attitude row).
+``w_in`` of the *true* state is evaluated exactly from the computed position and velocity minus
+the position/velocity error of each sigma point.
+
+*velocity* -- ``v' - v`` with ``v_dot = C_bn f^b - (2 w_ie + w_en) x v + g``::
+
+    d(dv)/dt = (I - exp([phi x])) f^{n'} + exp([phi x]) C_bn' dba
+               - [(2 w_ie' + w_en') x v' - (2 w_ie + w_en) x v] + (2 g / R) dr_d e_d
+
+(``(I - exp([phi x])) f`` is ``f x phi = [f x] phi`` to first order, paper 000 eq. 1
+``-[psi x] f`` and error_model's ``[f^n x] phi``).
+
+*position and biases* as in error_model: ``d(dr)/dt = dv``, ``d(db)/dt = -db / tau`` (random
+constant for ``tau = 0``).
+
+Time update at a coarser rate
+-----------------------------
+Propagating 31 sigma points at 100 Hz would cost more than the rest of the filter, and the error
+dynamics are slow (Schuler 84 min, earth rate, transport rate: all below 1e-3 rad/s), so the UKF
+prediction (paper 000 eqs. 14-16) runs every ``ukf_predict_interval`` ``T`` seconds (default 0.1 s;
+always also right before a measurement update) with the *interval means* of the nominal quantities:
+``f^{n'}`` (sum of ``C_bn' dvel`` over the interval divided by ``T``, exact for the term linear in
+``f``), ``C_bn'`` (time mean, exact for a constant bias), position and velocity.  Each point is
+advanced by one step ``x+ = x + T x_dot`` with the position error taken to second order,
+``dr+ = dr + T (dv + T/2 d(dv)/dt)``.
+
+Process noise is additive, ``Q_d(T)`` with ``Q_d = diag(q) T`` plus the velocity noise integrated
+into position (``q_v T^3/3`` and the ``q_v T^2/2`` cross terms); ``q`` is the spectral density of
+error_model (ARW^2, VRW^2, bias drivers).  This equals the augmented-noise form of paper 000 (eqs.
+9-10) to second order: the noise enters the model above as ``-J^-1 R C_bn' w_g`` and ``R C_bn'
+w_a``, i.e. through rotations of an isotropic white noise (``R C Q C^T R^T = Q`` for
+``Q = sigma^2 I``) multiplied by ``J^-1 = I + O(phi)``; the dropped noise-state cross terms are of
+order ``|phi| q``, far below ``q`` for attitude errors of milliradians (see the unscented.py
+docstring on additive versus augmented noise).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.kernels import kernel
+from ..ins import earth
+from ..ins.error_model import N_STATES, POS, VEL
+from ..ins.strapdown import _gravity, _radii
+from .unscented import (points_from_sqrt_rows, predicted_moments_rows, predicted_state_error,
+                        sqrt_rows)
+
+#: tolerance on accumulated time when deciding that a prediction interval is complete [s]
+_TIME_EPS = 1e-9
+
+
+# The process model works on component arrays of shape (3, N) (one row per axis, one column per
+# sigma point), so a cross product is two gathers and three array operations whatever N.
+_NEXT = np.array([1, 2, 0])
+_PREV = np.array([2, 0, 1])
+
+
+def _cross(a_next, a_prev, b):
+    """Cross products a x b, b of shape (..., 3, N), for a given by its gathered components
+    a_next = a[_NEXT] and a_prev = a[_PREV] (shape (3, N) or (3, 1))."""
+    return a_next * b[..., _PREV, :] - a_prev * b[..., _NEXT, :]
+
+
+def _rodrigues_coefficients(theta2):
+    """sin(t)/t and (1 - cos t)/t^2 of |phi|^2 = theta2, with their series near 0."""
+    theta = np.sqrt(theta2)
+    small = theta2 < 1e-12
+    if not small.any():                  # the usual case: the same values without the series
+        return np.sin(theta) / theta, (1.0 - np.cos(theta)) / (theta * theta)
+    safe = np.where(small, 1.0, theta)
+    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
+    return a, b
+
+
+def _rotate_by_rotvec(phi_next, phi_prev, V, a, b):
+    """exp([phi x]) V (Rodrigues) for V of shape (..., 3, N); a, b of _rodrigues_coefficients."""
+    pxv = _cross(phi_next, phi_prev, V)
+    return V + a * pxv + b * _cross(phi_next, phi_prev, pxv)
+
+
+def _inverse_jacobian_apply(phi_next, phi_prev, w, theta2):
+    """J^-1(phi) w = w - 1/2 phi x w + c(|phi|) phi x (phi x w) (rotation-vector kinematics)."""
+    small = theta2 < 1e-8
+    if small.any():
+        theta = np.sqrt(np.where(small, 1.0, theta2))
+        half = 0.5 * theta
+        c = np.where(small, 1.0 / 12.0 + theta2 / 720.0,
+                     (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta))
+    else:                                # the same values without the series
+        theta = np.sqrt(theta2)
+        half = 0.5 * theta
+        c = (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta)
+    pxw = _cross(phi_next, phi_prev, w)
+    return w - 0.5 * pxw + c * _cross(phi_next, phi_prev, pxw)
+
+
+def _nav_rates(lat, h, vn, ve, rn, re):
+    """(w_ie + w_en, 2 w_ie + w_en) in NED; arrays or floats; radii given."""
+    sl, cl = np.sin(lat), np.cos(lat)
+    w = earth.OMEGA_IE
+    reh = re + h
+    rnh = rn + h
+    en_n, en_e, en_d = ve / reh, -vn / rnh, -ve * sl / (cl * reh)
+    w_in = (w * cl + en_n, en_e, -w * sl + en_d)
+    w_cor = (2.0 * w * cl + en_n, en_e, -2.0 * w * sl + en_d)
+    return w_in, w_cor
+
+
+class NominalInterval:
+    """Means of the nominal (computed) navigation quantities over one UKF prediction interval:
+    floats and arrays of one run (``v``, ``f`` (3,), ``C`` (3, 3)), or of B runs with a
+    leading run axis (:func:`interval_means`)."""
+
+    __slots__ = ("T", "lat", "h", "v", "C", "f")
+
+    def __init__(self, T, lat, h, v, C, f):
+        self.T, self.lat, self.h, self.v, self.C, self.f = T, lat, h, v, C, f
+
+
+#: columns of a UKF engine's interval sums (one row per run): the interval length T, then
+#: the trapezoid sums of lat, h, v (3) and C_bn (9 by rows) and the sum of C_bn dvel (3)
+N_SUMS = 18
+
+
+@kernel
+def accumulate_rows(sums, before, after, dvel_c, dt):
+    """Add one IMU interval of every run to its interval sums (B, :data:`N_SUMS`), in place:
+    ``before``/``after`` the strapdown rows (B, 24) at its start and end, ``dvel_c`` (B, 3)
+    the compensated velocity increments, ``dt`` (B,) the interval lengths."""
+    for b in range(sums.shape[0]):
+        s, r0, r1 = sums[b], before[b], after[b]
+        half = 0.5 * dt[b]
+        s[0] += dt[b]
+        s[1] += half * (r0[0] + r1[0])
+        s[2] += half * (r0[2] + r1[2])
+        for i in range(12):                   # v (columns 3..5) and C_bn (6..14)
+            s[3 + i] += half * (r0[3 + i] + r1[3 + i])
+        # C_prev @ dvel_c as numpy's product rounds it (BLAS from both)
+        s[15:18] += np.ascontiguousarray(r0[6:15]).reshape(3, 3) @ dvel_c[b]
+
+
+def interval_means(sums):
+    """The :class:`NominalInterval` of every run from its sums (B, :data:`N_SUMS`)."""
+    T = sums[:, 0]
+    runs = len(sums)
+    return NominalInterval(T, sums[:, 1] / T, sums[:, 2] / T, sums[:, 3:6] / T[:, None],
+                           sums[:, 6:15].reshape(runs, 3, 3) / T[:, None, None],
+                           sums[:, 15:18] / T[:, None])
+
+
+def prediction_due(T, predict_interval):
+    """Whether an interval of ``T`` seconds completes the prediction interval (floats, or
+    arrays: every run of a batch)."""
+    return T >= predict_interval - _TIME_EPS
+
+
+class _RunValues:
+    """The nominal values of one interval of B runs for :func:`error_dynamics`: ``lat``,
+    ``h`` (B,), ``v``, ``f`` (3, B), ``C`` (B, 3, 3), ``T`` (B,), and :meth:`spread`, which
+    takes per-run arrays (..., B) to the runs' points (..., N), every run's points
+    consecutive (one run: a broadcast, no copy)."""
+
+    __slots__ = ("lat", "h", "v", "f", "C", "T", "runs", "per_run")
+
+    def __init__(self, nom, points):
+        self.lat = np.asarray(nom.lat, dtype=float).reshape(-1)
+        self.runs = runs = self.lat.shape[0]
+        self.h = np.asarray(nom.h, dtype=float).reshape(-1)
+        self.T = np.asarray(nom.T, dtype=float).reshape(-1)
+        self.v = np.asarray(nom.v, dtype=float).reshape(runs, 3).T
+        self.f = np.asarray(nom.f, dtype=float).reshape(runs, 3).T
+        self.C = np.asarray(nom.C, dtype=float).reshape(runs, 3, 3)
+        self.per_run = points // runs
+
+    def spread(self, a):
+        return a if self.runs == 1 else np.repeat(a, self.per_run, axis=-1)
+
+
+def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
+    """Time derivative of every sigma point (rows of X, shape (N, 15)); module docstring.
+
+    ``nom`` is one run's interval (floats) or B runs' (arrays with a leading run axis, the N
+    points then the B runs' points one run after the other, N / B each)."""
+    return _error_dynamics(X, _RunValues(nom, X.shape[0]), tau_g, tau_a)
+
+
+def _error_dynamics(X, run, tau_g, tau_a):
+    Xt = X.T                                   # (15, N): one row per state
+    dr, dv, phi = Xt[0:3], Xt[3:6], Xt[6:9]
+    spread, runs = run.spread, run.runs
+    lats, hs = run.lat.tolist(), run.h.tolist()
+    radii = np.array([_radii(x) for x in lats]).T          # math: a float per run
+    gravity = np.array([_gravity(x, y) for x, y in zip(lats, hs)])
+    # the computed (primed) state of each run, then the true state of each point (computed
+    # minus error), in one array (rows lat, h, v (3), R_N, R_E): the rates of both in one pass
+    points = X.shape[0]
+    state = np.empty((7, runs + points))
+    state[0, :runs], state[1, :runs], state[2:5, :runs] = run.lat, run.h, run.v
+    state[5:7, :runs] = radii
+    state[5:7, runs:] = spread(radii)
+    rn = state[5, runs:]
+    np.subtract(spread(run.lat), dr[0] / (rn + spread(run.h)), out=state[0, runs:])
+    np.add(spread(run.h), dr[2], out=state[1, runs:])
+    np.subtract(spread(run.v), dv, out=state[2:5, runs:])
+    v = state[2:5]
+    w_in, w_cor = _nav_rates(state[0], state[1], v[0], v[1], state[5], state[6])
+    w_in, w_cor = np.array(w_in), np.array(w_cor)
+    coriolis = _cross(w_cor[_NEXT], w_cor[_PREV], v)      # w_cor' x v' and w_cor x v
+    v_t = v[:, runs:]
+
+    phi_rows = X[:, 6:9]
+    theta2 = np.einsum("ij,ij->i", phi_rows, phi_rows)
+    a, b = _rodrigues_coefficients(theta2)
+    phi_next, phi_prev = phi[_NEXT], phi[_PREV]
+    # exp([phi x]) of the three vectors it rotates, at once: w_in' - C' dbg, f^{n'}, C' dba
+    # (every run's points by its own C': stacked products, each the floats of its 2-D one)
+    C_t = run.C.transpose(0, 2, 1)
+    by_run = X.reshape(runs, -1, N_STATES)
+    V = np.empty((3, 3, points))
+    np.subtract(spread(w_in[:, :runs]), (by_run[:, :, 9:12] @ C_t).reshape(-1, 3).T, out=V[0])
+    V[1] = spread(run.f)
+    V[2] = (by_run[:, :, 12:15] @ C_t).reshape(-1, 3).T
+    RV = _rotate_by_rotvec(phi_next, phi_prev, V, a, b)
+
+    # attitude: d(phi)/dt = J^-1(phi) [exp([phi x]) (w_in' - C' dbg) - w_in]
+    w_s = RV[0] - w_in[:, runs:]
+    dphi = _inverse_jacobian_apply(phi_next, phi_prev, w_s, theta2)
+
+    # velocity
+    ddv = spread(run.f) - RV[1] + RV[2]
+    ddv -= spread(coriolis[:, :runs]) - coriolis[:, runs:]
+    ddv[2] += spread(2.0 * gravity / np.sqrt(radii[0] * radii[1])) * dr[2]
+    Xdot = np.empty_like(X)
+    Xdot_t = Xdot.T
+    Xdot_t[0:3] = dv
+    Xdot_t[3:6] = ddv
+    Xdot_t[6:9] = dphi
+    Xdot_t[9:12] = 0.0 if tau_g <= 0 else -Xt[9:12] / tau_g
+    Xdot_t[12:15] = 0.0 if tau_a <= 0 else -Xt[12:15] / tau_a
+    return Xdot
+
+
+def propagate_points(X, nom, tau_g=0.0, tau_a=0.0):
+    """Process model f of paper 000 eq. 14 over one interval: one step with
+    second-order position."""
+    run = _RunValues(nom, X.shape[0])
+    Xdot = _error_dynamics(X, run, tau_g, tau_a)
+    T = run.spread(run.T)[:, None]
+    Y = X + T * Xdot
+    Y[:, 0:3] += 0.5 * T * T * Xdot[:, 3:6]
+    return Y
+
+
+def predict_rows(x, P, nom, Q, q_scale, Wm, Wc, spread, tau_g, tau_a):
+    """The UKF time update (paper 000 eqs. 14-16) of B filters at once, each over its run's
+    interval ``nom`` (:func:`interval_means`; one nominal shared by all filters when it has
+    one run): means ``x`` (B, 15), checked symmetric covariances ``P`` (B, 15, 15), process
+    noises ``Q`` (B, 15, 15) times ``q_scale`` (B,), the UT's weights and point ``spread``.
+    One process-model call for every point of every filter (it works row by row).  Returns
+    (x, P, square-root fallbacks (B,), finite (B,)) as :meth:`UnscentedKalmanFilter.predict`
+    computes them for each filter."""
+    L, fallback = sqrt_rows(P)
+    X = points_from_sqrt_rows(x, L * spread)
+    Y = propagate_points(X.reshape(-1, N_STATES), nom, tau_g, tau_a).reshape(X.shape)
+    x, P, finite = predicted_moments_rows(Y, Wm, Wc, Q, q_scale)
+    return x, P, fallback, finite
+
+
+def discrete_process_noise(q_density, T):
+    """Q_d(T) of the additive process noise (module docstring): diag(q) T plus the velocity
+    noise integrated into position."""
+    Q = np.diag(q_density * T)
+    qv = q_density[VEL]
+    Q[POS, POS] = np.diag(qv * T ** 3 / 3.0)
+    cross = np.diag(qv * T * T / 2.0)
+    Q[POS, VEL] = cross
+    Q[VEL, POS] = cross
+    return Q
+
+
+def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
+    """:func:`predict_rows` of the unscented filters ``filters``
+    (:class:`~navcore.filters.unscented.UnscentedKalmanFilter`, one transform) over the
+    interval ``nom`` with the process noise ``Q`` times each filter's scale of ``q_scales``:
+    their states checked as :meth:`~navcore.filters.unscented.UnscentedKalmanFilter.predict`
+    checks them, updated in place; raises its error when a prediction is not finite."""
+    first = filters[0]
+    x, P, fallback, finite = predict_rows(
+        np.stack([flt.x for flt in filters]),
+        np.stack([flt.checked_covariance() for flt in filters]), nom,
+        np.broadcast_to(Q, (len(filters),) + np.shape(Q)), np.asarray(q_scales, dtype=float),
+        first.Wm, first.Wc, first._spread, tau_g, tau_a)
+    for j, flt in enumerate(filters):
+        flt.sqrt_fallbacks += int(fallback[j])
+    if not finite.all():
+        raise predicted_state_error()
+    for j, flt in enumerate(filters):
+        flt.x, flt.P = x[j], P[j]
