@@ -18,6 +18,30 @@ def test_t_interval_textbook_example():
     assert s["low"] == pytest.approx(3.0 - s["half_width"])
 
 
+@pytest.mark.parametrize("level", [0.5, 0.9, 0.95, 0.99])
+def test_t_quantile_is_scipy_stats_t_ppf_and_printed_tables(level):
+    """The quantile without scipy.stats gives scipy.stats.t.ppf's floats; t_{0.975, 4} = 2.776
+    and t_{0.975, 19} = 2.093 from printed tables."""
+    from scipy import stats
+    for dof in (1, 2, 4, 19, 63, 1000):
+        p = 0.5 + level / 2.0
+        assert st.t_quantile(p, dof) == float(stats.t.ppf(p, dof))
+    assert st.t_quantile(0.975, 4) == pytest.approx(2.776, abs=5e-4)
+    assert st.t_quantile(0.975, 19) == pytest.approx(2.093, abs=5e-4)
+
+
+def test_a_campaign_summary_does_not_import_scipy_stats():
+    """scipy.stats costs most of a short command's import time (docs/speed.md)."""
+    import subprocess
+    import sys
+    code = ("import sys; import orchestrator.cli.commands, orchestrator.campaigns.campaign; "
+            "import orchestrator.campaigns.campaign_summary; "
+            "print('scipy.stats' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "False"
+
+
 def test_t_interval_covers_the_mean_at_the_stated_rate():
     """Over 4000 samples of 5 normal values the 95 % interval covers the true mean in
     95 +- 1 % of the cases (binomial sd 0.34 %)."""

@@ -31,7 +31,7 @@ from itertools import combinations
 from typing import Dict, List, Mapping, Sequence
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from ..errors import NavfmuError
 
@@ -42,6 +42,11 @@ METHOD = ("Cox's log-normal interval over the runs (n - 1 dof; positive, "
           "statistics.positive_interval)")
 T_METHOD = "two-sided Student t interval over the runs (n - 1 dof)"
 PAIRED_METHOD = "paired t interval of the per-run differences (same seeds)"
+
+
+def t_quantile(p: float, dof: int) -> float:
+    """The x with P(X <= x) = p for X ~ Student's t with ``dof`` degrees of freedom."""
+    return float(special.stdtrit(dof, p))
 
 
 def t_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float]:
@@ -59,7 +64,7 @@ def t_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float
         return {"mean": mean, "low": math.nan, "high": math.nan, "half_width": math.nan,
                 "sd": math.nan, "n": n, "dropped": dropped}
     sd = float(finite.std(ddof=1))
-    half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * sd / math.sqrt(n)
+    half = t_quantile(0.5 + level / 2.0, n - 1) * sd / math.sqrt(n)
     return {"mean": mean, "low": mean - half, "high": mean + half, "half_width": half,
             "sd": sd, "n": n, "dropped": dropped}
 
@@ -77,7 +82,7 @@ def positive_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str
         return {**t, "low": max(t["low"], 0.0), "half_width": t["half_width"]}
     logs = np.log(x)
     n, m, var = x.size, float(logs.mean()), float(logs.var(ddof=1))
-    half = float(stats.t.ppf(0.5 + level / 2.0, n - 1)) * math.sqrt(
+    half = t_quantile(0.5 + level / 2.0, n - 1) * math.sqrt(
         var / n + var * var / (2.0 * (n - 1)))
     low, high = math.exp(m + var / 2.0 - half), math.exp(m + var / 2.0 + half)
     return {**t, "low": low, "high": high, "half_width": (high - low) / 2.0}
@@ -128,5 +133,6 @@ def ordering_holds(per_run: Mapping[str, Sequence[float]], ordering: List[str],
                for a, b in combinations(ordering, 2))
 
 
-__all__ = ["t_interval", "positive_interval", "paired_difference", "verdict", "supported_orderings",
-           "ordering_holds", "LEVEL", "METHOD", "T_METHOD", "PAIRED_METHOD"]
+__all__ = ["t_quantile", "t_interval", "positive_interval", "paired_difference", "verdict",
+           "supported_orderings", "ordering_holds", "LEVEL", "METHOD", "T_METHOD",
+           "PAIRED_METHOD"]

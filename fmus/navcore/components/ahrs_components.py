@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from ..core import signals
+from .ahrs_batch import AhrsFilterBatch
 from ..filters.ahrs import FuzzyAdaptiveR, UkfAhrsEngine, triad_attitude
 from ..core.component import Component, Limits, integer, real, string
 from ..ins.constants import DPH, DPSH, G0
@@ -75,6 +76,7 @@ class AhrsFilter(Component):
     inputs = signals.AHRS_INPUTS
     #: paper 003's turntable run (ahrs_turntable: 240 s, IMU at 50 Hz)
     default_experiment = (0.0, 240.0, 0.02)
+    batch_class = AhrsFilterBatch
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -168,16 +168,6 @@ class InsGnssFilterBatch(ComponentBatch):
         member.history.record(increment, member.engine, member.max_fix_age + increment[3],
                               member.late_fixes)
 
-    def _by_itself(self, b: int, call) -> None:
-        """``call(member)`` for run b on its own objects; an error fails that run alone."""
-        self._lend(b)
-        try:
-            call(self.members[b])
-        except Exception as exc:          # the run's own error (InputError, divergence)
-            self.fail(b, exc)
-            return
-        self._adopt(b)
-
     def _kept(self, rows: List[int]) -> None:
         if not hasattr(self, "rows"):
             return
@@ -201,9 +191,6 @@ class InsGnssFilterBatch(ComponentBatch):
             self.first_entry = oldest
 
     # -- stepping -------------------------------------------------------------------------
-    def _inputs_of(self, b: int, inputs) -> Dict[str, float]:
-        return {name: values[b].item() for name, values in inputs.items()}
-
     def advance(self, t, h, inputs) -> np.ndarray:
         imu = inputs.real_columns(_IMU)
         interval = self._common_interval(imu)

@@ -6,7 +6,8 @@ The runs of a batch fly the same profile on the same grid (parameters ``profile`
 otherwise fails, naming the parameter), so one trajectory generator gives every run's truth
 and ideal increments, and the IMU errors of all runs are applied in one kernel call
 (:class:`~navcore.sensors.imu_error_batch.ImuErrorBatch`).  A run with its magnetometer or
-vibration switched on takes its magnetometer sample through its own component's code.
+vibration switched on takes its magnetometer sample through the function its own component
+calls, with the other runs' (:func:`~navcore.sensors.magnetometer.measure_rows`).
 """
 from __future__ import annotations
 
@@ -21,6 +22,8 @@ from ..core.timing import samples_reached
 from ..errors import ParameterError
 from ..sensors.imu_error_batch import ImuErrorBatch
 from ..sensors.imu_errors import INTENSITY_REFERENCE_RATE
+from ..sensors.magnetometer import measure_rows
+from ..ins.rotations import _euler_rows
 
 #: the parameters every run of a batch shares (one trajectory)
 SHARED_PARAMETERS = ("profile", "imu_period", "extend_profile")
@@ -95,17 +98,16 @@ class TrajectoryImuBatch(ComponentBatch):
         out[:, self._rate_cols] = measured / dt
 
     def _magnetometer(self, out, measured, t_end, dt, truth) -> None:
-        """The magnetometer rows, each by its run's own component (ImuMeasurement)."""
-        attitude = (truth["roll"], truth["pitch"], truth["yaw"])
-        for b in self.mag_rows:
-            member = self.models[b]
-            sample = {}
-            member._write_mag(sample, t_end, attitude)
-            out[b, self._mag_cols] = [sample["mag_time"]] + [sample[n]
-                                                             for n in signals.MAG_NAMES]
-            if member.magnetometer.vibrating(t_end):
-                measured[b, 3:] = measured[b, 3:] + member.magnetometer.accel_disturbance(
-                    t_end) * dt
+        """The magnetometer rows (:func:`~navcore.sensors.magnetometer.measure_rows`, the
+        function each run's ImuMeasurement calls with its one model)."""
+        rows = self.mag_rows
+        models = [self.models[b].magnetometer for b in rows]
+        C_bn = np.array(_euler_rows(truth["roll"], truth["pitch"], truth["yaw"]))
+        out[rows, self._mag_cols[0]] = t_end
+        out[np.ix_(rows, self._mag_cols[1:])] = measure_rows(models, t_end, C_bn)
+        for b, model in zip(rows, models):
+            if model.vibrating(t_end):
+                measured[b, 3:] = measured[b, 3:] + model.accel_disturbance(t_end) * dt
 
 
 __all__ = ["TrajectoryImuBatch", "SHARED_PARAMETERS"]

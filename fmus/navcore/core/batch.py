@@ -109,6 +109,29 @@ class ComponentBatch(ABC):
         ok &= np.where(high_open, values < high, values <= high)
         return ok.all(axis=1)
 
+    def _by_itself(self, b: int, call) -> None:
+        """``call(member)`` for run b on its own objects, given the batch's values first
+        (:meth:`_lend`) and taken back after (:meth:`_adopt`); an error fails that run
+        alone."""
+        self._lend(b)
+        try:
+            call(self.members[b])
+        except Exception as exc:          # the run's own error (InputError, divergence)
+            self.fail(b, exc)
+            return
+        self._adopt(b)
+
+    @staticmethod
+    def _inputs_of(b: int, inputs) -> Dict[str, float]:
+        """Run b's inputs of a batch step, as its own component takes them."""
+        return {name: values[b].item() for name, values in inputs.items()}
+
+    def _lend(self, b: int) -> None:
+        """Hook of :meth:`_by_itself`: give run b's own objects the batch's values."""
+
+    def _adopt(self, b: int) -> None:
+        """Hook of :meth:`_by_itself`: take run b's own objects' values into the batch."""
+
     def _kept(self, rows: List[int]) -> None:
         """Hook: compact the batch's own per-run arrays (``self.members`` are still all
         the runs; batch row ``i`` becomes ``rows.index(i)``)."""

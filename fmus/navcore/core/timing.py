@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 #: relative tolerance on times, as a fraction of the period they are compared on
 TIME_TOLERANCE = 1e-9
 #: units in the last place of the compared time added to the tolerance (master rounding)
@@ -33,6 +35,15 @@ def time_tolerance(period: float, t: float = 0.0) -> float:
 def same_time(a: float, b: float, period: float) -> bool:
     """``a`` and ``b`` are the same instant on a grid of ``period`` seconds."""
     return abs(a - b) <= time_tolerance(period, max(abs(a), abs(b)))
+
+
+def same_time_rows(a, b, period):
+    """:func:`same_time` of arrays, element by element (``np.spacing`` of a non-negative
+    time is its ``math.ulp``)."""
+    a, b, period = np.asarray(a), np.asarray(b), np.asarray(period)
+    tolerance = TIME_TOLERANCE * np.abs(period) + _ULPS * np.spacing(
+        np.maximum(np.abs(a), np.abs(b)))
+    return np.abs(a - b) <= tolerance
 
 
 def samples_reached(start: float, period: float, t_end: float) -> int:

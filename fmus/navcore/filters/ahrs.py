@@ -117,6 +117,60 @@ def _bias_quats(b, T):
     return np.concatenate((np.cos(0.5 * t), s * phi), axis=1)
 
 
+def propagate_points(X, dq, T, reference):
+    """The time update of the module docstring on sigma points ``X`` (N, 6): gyro
+    increments ``dq`` (quaternion (4,), or one per point (N, 4)), interval ``T`` (scalar, or
+    (N, 1)); each point continued in the MRP set nearest ``reference`` (its filter's prior
+    mean: (3,), or one per point (N, 3))."""
+    q = mrp_to_quat(X[:, :3])
+    q = _quat_multiply_rows(_quat_multiply_rows(q, np.broadcast_to(dq, q.shape)),
+                            _bias_quats(X[:, 3:], T))
+    # the MRP moves continuously and leaves the unit sphere; shadow_switched then switches
+    # the mean and the covariance together
+    sigma = nearest_set(quat_to_mrp(q), reference)
+    return np.concatenate((sigma, X[:, 3:]), axis=1)
+
+
+def measure_points(X, gravity, field_unit):
+    """Paper 003 eq. 24 on sigma points ``X`` (N, 6): (N, 6) rows ``[f_b, m_b / H]``."""
+    C = mrp_to_dcm_batch(X[:, :3])                   # C_bn per point
+    f = -gravity * C[:, 2, :]                         # C_bn^T (0, 0, -g)
+    m = C.transpose(0, 2, 1) @ field_unit              # C_bn^T m_n / H
+    return np.concatenate((f, m), axis=1)
+
+
+def attitude_process_noise(x, T, gyro_arw, gyro_bias_rw):
+    """Q of one time update over ``T`` from the state ``x`` (module docstring)."""
+    s = float(x[:3] @ x[:3])
+    q_att = gyro_arw ** 2 * T * (1.0 + s) ** 2 / 16.0
+    return np.diag([q_att] * 3 + [gyro_bias_rw ** 2 * T] * 3)
+
+
+def shadow_switched(x, P):
+    """``(x, P)`` with the MRP switched to its shadow and P through the Jacobian when
+    ``|sigma| > 1``; None when the MRP stays."""
+    sigma = x[:3]
+    if float(sigma @ sigma) <= 1.0:
+        return None
+    J = np.eye(6)
+    J[:3, :3] = shadow_jacobian(sigma)
+    P = J @ P @ J.T
+    return np.concatenate((shadow(sigma), x[3:])), 0.5 * (P + P.T)
+
+
+def euler_sigma_rows(X, Wm, Wc):
+    """1-sigma of roll, pitch, yaw (B, 3) from the sigma points ``X`` (B, 13, 6) of B
+    filters (weights ``Wm``, ``Wc``): the angles of every point (libm's atan2 per point, as
+    :func:`quat_euler`), wrapped about the central point's."""
+    runs, points = X.shape[:2]
+    q = mrp_to_quat(X[:, :, :3].reshape(-1, 3))
+    angles = np.array([quat_euler(r) for r in q.tolist()]).reshape(runs, points, 3)
+    dev = wrap_angle(angles - angles[:, :1])
+    mean = Wm @ dev
+    dev = dev - mean[:, None, :]
+    return np.sqrt(np.maximum(Wc @ (dev * dev), 0.0))
+
+
 class UkfAhrsEngine:
     """The UKF of the module docstring.
 
@@ -164,44 +218,27 @@ class UkfAhrsEngine:
         self.interval += dt
 
     def _switch_to_shadow(self):
-        sigma = self.ukf.x[:3]
-        if float(sigma @ sigma) <= 1.0:
-            return
-        J = np.eye(6)
-        J[:3, :3] = shadow_jacobian(sigma)
-        self.ukf.x = np.concatenate((shadow(sigma), self.ukf.x[3:]))
-        P = J @ self.ukf.P @ J.T
-        self.ukf.P = 0.5 * (P + P.T)
-        self.shadow_switches += 1
+        switched = shadow_switched(self.ukf.x, self.ukf.P)
+        if switched is not None:
+            self.ukf.x, self.ukf.P = switched
+            self.shadow_switches += 1
 
     def _process(self, X, dq, T):
-        q = mrp_to_quat(X[:, :3])
-        q = _quat_multiply_rows(_quat_multiply_rows(q, np.broadcast_to(dq, q.shape)),
-                                _bias_quats(X[:, 3:], T))
-        # continue each point in the set nearest the prior mean (X[0]): the MRP moves
-        # continuously and leaves the unit sphere; _switch_to_shadow then switches the mean
-        # and the covariance together
-        sigma = nearest_set(quat_to_mrp(q), X[0, :3])
-        return np.concatenate((sigma, X[:, 3:]), axis=1)
+        return propagate_points(X, dq, T, X[0, :3])
 
     def predict(self):
         """UKF time update over the accumulated interval (nothing if it is empty)."""
         T = self.interval
         if T <= 0.0:
             return
-        s = float(self.ukf.x[:3] @ self.ukf.x[:3])
-        q_att = self.gyro_arw ** 2 * T * (1.0 + s) ** 2 / 16.0
-        Q = np.diag([q_att] * 3 + [self.gyro_bias_rw ** 2 * T] * 3)
+        Q = attitude_process_noise(self.ukf.x, T, self.gyro_arw, self.gyro_bias_rw)
         self.ukf.predict(self._process, Q, np.array(self.dq), T, vectorized=True)
         self.dq = (1.0, 0.0, 0.0, 0.0)
         self.interval = 0.0
         self._switch_to_shadow()
 
     def _measure(self, X):
-        C = mrp_to_dcm_batch(X[:, :3])                   # C_bn per point
-        f = -self.gravity * C[:, 2, :]                    # C_bn^T (0, 0, -g)
-        m = C.transpose(0, 2, 1) @ self.field_unit         # C_bn^T m_n / H
-        return np.concatenate((f, m), axis=1)
+        return measure_points(X, self.gravity, self.field_unit)
 
     def update(self, f_b, m_b):
         """Time update to now, then the measurement update with specific force ``f_b``
@@ -237,12 +274,7 @@ class UkfAhrsEngine:
 
     def euler_sigma(self):
         """1-sigma of roll, pitch, yaw from the sigma points of the MRP block."""
-        X = self.ukf.sigma_points()
-        angles = np.array([quat_euler(q) for q in mrp_to_quat(X[:, :3]).tolist()])
-        dev = wrap_angle(angles - angles[0])
-        mean = self.ukf.Wm @ dev
-        dev = dev - mean
-        return np.sqrt(np.maximum(self.ukf.Wc @ (dev * dev), 0.0))
+        return euler_sigma_rows(self.ukf.sigma_points()[None], self.ukf.Wm, self.ukf.Wc)[0]
 
     @property
     def gyro_bias(self):

@@ -197,10 +197,91 @@ def predicted_moments_rows(Y: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, Q: np.
     return x, 0.5 * (P + P.transpose(0, 2, 1)), finite
 
 
+def state_error(x: np.ndarray, P: np.ndarray) -> Optional[InputError]:
+    """The error of a filter whose ``P`` or ``x`` is not finite (None: both are)."""
+    if not np.isfinite(P).all():
+        return InputError("UnscentedKalmanFilter: 'P' contains NaN or inf")
+    if not np.isfinite(x).all():
+        return InputError("UnscentedKalmanFilter: 'x' contains NaN or inf")
+    return None
+
+
 def predicted_state_error() -> InputError:
     """The error of a prediction whose moments are not finite (:func:`predicted_moments_rows`)."""
     return InputError("UnscentedKalmanFilter.predict: the state predicted by f or 'Q' "
                       "contains NaN or inf")
+
+
+def measurement_moments_rows(X: np.ndarray, Y: np.ndarray, x: np.ndarray, Wm: np.ndarray,
+                             Wc: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Paper 000 eqs. 18-20 for B filters at once: their points ``X`` (B, 2n + 1, n) with
+    means ``x`` (B, n), mapped through h to ``Y`` (B, 2n + 1, m).  Returns ``z_pred`` (B, m),
+    ``Pzz`` (B, m, m, without R) and ``Pxz`` (B, n, m)."""
+    z_pred = Wm @ Y
+    dY = Y - z_pred[:, None, :]
+    wdY = dY * Wc[:, None]
+    Pzz = dY.transpose(0, 2, 1) @ wdY
+    Pxz = (X - x[:, None, :]).transpose(0, 2, 1) @ wdY
+    return z_pred, Pzz, Pxz
+
+
+class CorrectedRows(NamedTuple):
+    """:func:`correct_rows`' results, one row per filter; ``status`` 0 where the filter was
+    corrected, else the code :func:`correction_error` turns into its error (that filter's
+    other rows are then not meaningful)."""
+
+    x: np.ndarray
+    P: np.ndarray
+    v: np.ndarray
+    S: np.ndarray
+    K: np.ndarray
+    nis: np.ndarray
+    log_likelihood: np.ndarray
+    status: np.ndarray
+
+
+#: :func:`correct_rows` status codes
+_NOT_FINITE, _NOT_POSITIVE = 1, 2
+
+
+def correct_rows(x: np.ndarray, P: np.ndarray, z: np.ndarray, z_pred: np.ndarray,
+                 S: np.ndarray, Pxz: np.ndarray) -> CorrectedRows:
+    """Paper 000 eqs. 21-23 for B filters at once (:meth:`UnscentedKalmanFilter.correct`):
+    states ``x`` (B, n), ``P`` (B, n, n), measurements ``z`` and predictions ``z_pred``
+    (B, m), innovation covariances ``S = Pzz + R`` (B, m, m, symmetrized here), ``Pxz``
+    (B, n, m).  One Cholesky factor per filter (LAPACK, as one filter alone calls it) serves
+    the PD check, the gain, the NIS and log det S."""
+    S = 0.5 * (S + S.transpose(0, 2, 1))
+    v = z - z_pred
+    runs, m = z.shape
+    K = np.zeros(Pxz.shape)
+    nis, log_likelihood = np.zeros(runs), np.zeros(runs)
+    status = np.where(np.isfinite(S).all(axis=(1, 2)) & np.isfinite(v).all(axis=1), 0,
+                      _NOT_FINITE)
+    for b in np.flatnonzero(status == 0).tolist():
+        # S is never inverted explicitly; the numpy wrappers cost ~7 us each for a 3x3
+        Ls, info = lapack.dpotrf(S[b], lower=1, clean=1)
+        if info != 0:
+            status[b] = _NOT_POSITIVE
+            continue
+        Kt, _ = lapack.dpotrs(Ls, Pxz[b].T, lower=1)
+        K[b] = Kt.T
+        nis[b] = nis_from_cholesky(Ls, v[b])
+        log_likelihood[b] = gaussian_log_likelihood(nis[b], log_det_from_cholesky(Ls), m)
+    # a filter not corrected has K = 0 and may have a v that is not finite
+    x = x + (K @ np.where(status[:, None] == 0, v, 0.0)[:, :, None])[:, :, 0]
+    P = P - K @ Pxz.transpose(0, 2, 1)
+    return CorrectedRows(x, 0.5 * (P + P.transpose(0, 2, 1)), v, S, K, nis, log_likelihood,
+                         status)
+
+
+def correction_error(status: int) -> InputError:
+    """The error of a filter :func:`correct_rows` could not correct."""
+    if status == _NOT_FINITE:
+        return InputError("UnscentedKalmanFilter.correct: the measurement predicted by h or "
+                          "'R' contains NaN or inf")
+    return InputError("UnscentedKalmanFilter.correct: innovation covariance S = Pzz + R is "
+                      "not positive definite (check R)")
 
 
 def unscented_transform(points: np.ndarray, Wm: np.ndarray, Wc: np.ndarray,
@@ -317,10 +398,9 @@ class UnscentedKalmanFilter:
                 f"UnscentedKalmanFilter: 'x' must be ({self.n},) and 'P' ({self.n}, {self.n}), "
                 f"got {x.shape} and {P.shape}"
             )
-        if not np.isfinite(P).all():
-            raise InputError("UnscentedKalmanFilter: 'P' contains NaN or inf")
-        if not np.isfinite(x).all():
-            raise InputError("UnscentedKalmanFilter: 'x' contains NaN or inf")
+        error = state_error(x, P)
+        if error is not None:
+            raise error
         if not (P == P.T).all():
             P = 0.5 * (P + P.T)
         return P
@@ -375,12 +455,9 @@ class UnscentedKalmanFilter:
         """
         X = self.sigma_points()
         Y = _apply_model(h, X, args, vectorized)
-        z_pred = self.Wm @ Y
-        dY = Y - z_pred
-        wdY = dY * self.Wc[:, None]
-        Pzz = dY.T @ wdY
-        Pxz = (X - self.x).T @ wdY
-        return MeasurementPrediction(z_pred, Pzz, Pxz)
+        z_pred, Pzz, Pxz = measurement_moments_rows(X[None], Y[None], self.x[None], self.Wm,
+                                                    self.Wc)
+        return MeasurementPrediction(z_pred[0], Pzz[0], Pxz[0])
 
     def correct(self, z: np.ndarray, prediction: MeasurementPrediction, R: np.ndarray,
                 r_scale: float = 1.0) -> Dict[str, Any]:
@@ -403,31 +480,15 @@ class UnscentedKalmanFilter:
             raise InputError(f"UnscentedKalmanFilter.correct: 'R' must have shape {Pzz.shape}, "
                              f"got {np.shape(R)}")
         S = Pzz + (R if r_scale == 1.0 else r_scale * np.asarray(R))
-        S = 0.5 * (S + S.T)
-        v = z - z_pred
-        if not (np.isfinite(S).all() and np.isfinite(v).all()):
-            raise InputError("UnscentedKalmanFilter.correct: the measurement predicted by h or 'R' "
-                             "contains NaN or inf")
-        # One Cholesky factor S = Ls Ls^T (LAPACK directly: the numpy wrappers cost ~7 us each
-        # for a 3x3) serves the PD check, the gain K = Pxz S^-1 (dpotrs), the NIS |Ls^-1 v|^2
-        # (dtrtrs) and log det S = 2 sum log diag(Ls); S is never inverted explicitly.
-        Ls, info = lapack.dpotrf(S, lower=1, clean=1)
-        if info != 0:
-            raise InputError(
-                "UnscentedKalmanFilter.correct: innovation covariance S = Pzz + R is not "
-                "positive definite (check R)"
-            )
-        Kt, _ = lapack.dpotrs(Ls, Pxz.T, lower=1)
-        K = Kt.T
-        nis = nis_from_cholesky(Ls, v)
-        log_likelihood = gaussian_log_likelihood(nis, log_det_from_cholesky(Ls), v.shape[0])
-        self.x = self.x + K @ v
-        P = self.P - K @ Pxz.T
-        self.P = 0.5 * (P + P.T)
-        self.last_nis = nis
-        self.last_log_likelihood = log_likelihood
-        return {"innovation": v, "S": S, "nis": nis, "log_likelihood": log_likelihood,
-                "K": K, "z_pred": z_pred}
+        rows = correct_rows(self.x[None], self.P[None], z[None], z_pred[None], S[None],
+                            Pxz[None])
+        if rows.status[0]:
+            raise correction_error(rows.status[0])
+        self.x, self.P = rows.x[0], rows.P[0]
+        self.last_nis = nis = float(rows.nis[0])
+        self.last_log_likelihood = log_likelihood = float(rows.log_likelihood[0])
+        return {"innovation": rows.v[0], "S": rows.S[0], "nis": nis,
+                "log_likelihood": log_likelihood, "K": rows.K[0], "z_pred": z_pred}
 
     def update(self, z: np.ndarray, h: Callable, R: np.ndarray, *args: Any, r_scale: float = 1.0,
                vectorized: bool = False) -> Dict[str, Any]:

@@ -25,7 +25,7 @@ magnetometer or vibration keeps its IMU numbers bit for bit.
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Tuple
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
 
@@ -119,10 +119,7 @@ class MagnetometerModel:
     def measure(self, t: float, C_bn: np.ndarray) -> np.ndarray:
         """Magnetometer reading [T] at time ``t`` for the attitude ``C_bn``; draws the sample's
         random numbers (call once per sample, then :meth:`accel_disturbance`)."""
-        self._z = self.rng.standard_normal(6)
-        factor = self.vibration_mag_factor if self.vibrating(t) else 1.0
-        return (self.soft_iron @ (C_bn.T @ self.field_ned) + self.hard_iron
-                + (self.noise * factor) * self._z[:3])
+        return measure_rows([self], t, C_bn)[0]
 
     def accel_disturbance(self, t: float) -> np.ndarray:
         """Extra specific force [m/s^2] of the vibration at time ``t`` (zero before it)."""
@@ -131,3 +128,24 @@ class MagnetometerModel:
         phase = 2.0 * math.pi * self.vibration_frequency * (t - self.vibration_start)
         sine = self.vibration_amplitude * np.sin(phase + _AXIS_PHASES)
         return sine + self.vibration_noise * self._z[3:]
+
+
+def measure_rows(models: List["MagnetometerModel"], t: float, C_bn: np.ndarray) -> np.ndarray:
+    """:meth:`MagnetometerModel.measure` of every model of ``models`` (B, 3) at time ``t``
+    for one attitude ``C_bn`` (the runs of a batch share their truth): each model draws its
+    own numbers; the field in body axes is one product per distinct field and soft iron (the
+    products of one model alone)."""
+    z = np.array([m.rng.standard_normal(6) for m in models])
+    factor = np.empty(len(models))
+    body = np.empty((len(models), 3))
+    fields: Dict[bytes, np.ndarray] = {}
+    for b, m in enumerate(models):
+        m._z = z[b]
+        factor[b] = m.vibration_mag_factor if m.vibrating(t) else 1.0
+        key = m.field_ned.tobytes() + m.soft_iron.tobytes()
+        if key not in fields:
+            fields[key] = m.soft_iron @ (C_bn.T @ m.field_ned)
+        body[b] = fields[key]
+    hard = np.array([m.hard_iron for m in models])
+    noise = np.array([m.noise for m in models])
+    return body + hard + (noise * factor)[:, None] * z[:, :3]

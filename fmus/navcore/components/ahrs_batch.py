@@ -1,0 +1,340 @@
+"""The AHRS filters' batch (:mod:`navcore.core.batch`): B runs of UkfAhrs or FuzzyUkfAhrs
+(:mod:`navcore.components.ahrs_components`) stepped together.
+
+Every run keeps its own component object (parameters, engine, fuzzy adaptation).  The batch
+keeps the runs' filter state stacked (MRP and gyro bias ``x``, ``P``, the pending gyro
+increments and interval, the R scales, the clocks) and, when every run takes the same new
+IMU interval (the runs of a batch share their trajectory, so their time tags agree), does
+for all runs at once what :meth:`AhrsFilter.step` does for one:
+
+* the gyro increment into the pending time update;
+* for the runs whose measurement update is due, the UKF time and measurement updates, by
+  the functions the single engine calls with one run: the sigma points of all runs
+  (:func:`~navcore.filters.unscented.points_from_sqrt_rows`, one LAPACK square root per run
+  as one run alone calls it), :func:`~navcore.filters.ahrs.propagate_points` and
+  :func:`~navcore.filters.ahrs.measure_points` on the points of all runs, the stacked
+  moments (:func:`~navcore.filters.unscented.predicted_moments_rows`,
+  :func:`~navcore.filters.unscented.measurement_moments_rows`) and
+  :func:`~navcore.filters.unscented.correct_rows`; the fuzzy adaptation of R is each run's
+  own object, called with its row;
+* the solution outputs.  The quaternion products of the outputs and of the gyro increments
+  are the single engine's float formulas (``_qmul``) on arrays; the rotation-vector
+  quaternions and the Euler angles stay libm's ``sin``/``cos``/``atan2``/``hypot`` per run
+  (:func:`~navcore.filters.ahrs._rotvec_quat`, :func:`~navcore.filters.ahrs.quat_euler`):
+  numpy's ``arctan2`` differs from libm's in the last place for about 8 % of arguments, so
+  arrays would not give each run the floats of its single run.
+
+Everything else is the run's own component, given the batch's values first (:meth:`_lend`)
+and taken back after (:meth:`_adopt`): a run not started yet (TRIAD from its first samples),
+an input it refuses, an IMU interval that is not the runs' common one, a covariance that is
+not finite or symmetric before an update, a non-finite attitude (its DivergenceError), and
+every step of a batch whose runs differ in the constants of the stacked model (gravity,
+field, alpha/beta/kappa) or whose class steps otherwise.
+"""
+from __future__ import annotations
+
+from typing import List
+
+import numpy as np
+
+from ..core import signals
+from ..core.batch import ComponentBatch
+from ..core.timing import same_time_rows
+from ..filters.ahrs import (UkfAhrsEngine, _qmul, _rotvec_quat, attitude_process_noise,
+                            euler_sigma_rows, measure_points, propagate_points, quat_euler,
+                            shadow_switched)
+from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
+                                 points_from_sqrt_rows, predicted_moments_rows,
+                                 predicted_state_error, sqrt_rows, state_error)
+
+_INPUT_NAMES = tuple(p.name for p in signals.AHRS_INPUTS)
+_POINTS = 13                      # 2 n + 1 sigma points of the 6-state filter
+#: (name, engine attribute path) of the per-run values the batch stacks
+_FIELDS = (("x", "ukf.x"), ("P", "ukf.P"), ("interval", "interval"), ("r_scale", "r_scale"),
+           ("last_nis", "last_nis"), ("ukf_nis", "ukf.last_nis"),
+           ("log_likelihood", "ukf.last_log_likelihood"), ("fallbacks", "ukf.sqrt_fallbacks"),
+           ("switches", "shadow_switches"))
+#: the engine's constants the stacked model shares between the runs
+_SHARED = ("gravity", "field_intensity", "inclination")
+#: the methods of the filter shell and of the engine the batch stands for
+_SHELL_METHODS = ("step", "_write_solution")
+_ENGINE_METHODS = ("accumulate", "predict", "update", "_process", "_measure",
+                   "_switch_to_shadow", "current_quat", "euler", "euler_sigma")
+
+
+def _engine_path(engine, path):
+    obj = engine
+    for part in path.split(".")[:-1]:
+        obj = getattr(obj, part)
+    return obj, path.split(".")[-1]
+
+
+class AhrsFilterBatch(ComponentBatch):
+    """B runs of an AHRS filter (module docstring)."""
+
+    def _started(self, start_time: float) -> np.ndarray:
+        runs = self.runs
+        self.out = np.zeros((runs, len(self.columns)))
+        self.x = np.zeros((runs, 6))
+        self.P = np.zeros((runs, 6, 6))
+        self.dq = np.zeros((runs, 4))
+        self.interval = np.zeros(runs)
+        self.r_scale = np.ones((runs, 2))
+        self.last_nis = np.zeros(runs)
+        self.ukf_nis = np.zeros(runs)
+        self.log_likelihood = np.zeros(runs)
+        self.fallbacks = np.zeros(runs, dtype=np.int64)
+        self.switches = np.zeros(runs, dtype=np.int64)
+        self.started = np.zeros(runs, dtype=bool)
+        self.last_update = np.zeros(runs)
+        self.nav_time = np.full(runs, float(start_time))
+        alive = [b for b in range(runs) if b not in self._failures]
+        self._native = bool(alive) and self._stands_for(alive)
+        self._constants(alive)
+        for b in alive:
+            self._adopt(b)
+        return self.out.copy()
+
+    def _stands_for(self, alive: List[int]) -> bool:
+        """Whether the batch's stacked code is every run's own (module docstring)."""
+        shell = next(c for c in self.component_class.__mro__
+                     if c.__dict__.get("batch_class") is type(self))
+        engines = [self.members[b].engine for b in alive]
+        first = engines[0]
+        same = all(all(getattr(e, k) == getattr(first, k) for k in _SHARED)
+                   and (e.ukf.alpha, e.ukf.beta, e.ukf.kappa)
+                   == (first.ukf.alpha, first.ukf.beta, first.ukf.kappa) for e in engines)
+        return same and all(
+            all(getattr(type(e), m) is getattr(UkfAhrsEngine, m) for m in _ENGINE_METHODS)
+            for e in engines) and all(
+            getattr(type(self.members[b]), m) is getattr(shell, m)
+            for b in alive for m in _SHELL_METHODS)
+
+    def _constants(self, alive: List[int]) -> None:
+        """The per-run parameters the stacked steps read, and the shared constants."""
+        runs = self.runs
+        self.update_interval = np.zeros(runs)
+        self.max_mag_age = np.zeros(runs)
+        self.field_intensity = np.ones(runs)
+        self.gyro_noise = np.zeros((runs, 2))          # arw, bias random walk
+        self.R0 = np.zeros((runs, 6, 6))
+        for b in alive:
+            member = self.members[b]
+            engine = member.engine
+            self.update_interval[b] = member.params["update_interval"]
+            self.max_mag_age[b] = member.params["max_mag_age"]
+            self.field_intensity[b] = engine.field_intensity
+            self.gyro_noise[b] = engine.gyro_arw, engine.gyro_bias_rw
+            self.R0[b] = engine.R0
+        if alive:
+            engine = self.members[alive[0]].engine
+            ukf = engine.ukf
+            self.Wm, self.Wc, self.spread = ukf.Wm, ukf.Wc, ukf._spread
+            self.gravity, self.field_unit = engine.gravity, engine.field_unit
+
+    # -- the runs' own objects and the batch's stacks ------------------------------------
+    def _adopt(self, b: int) -> None:
+        """Take run b's engine and outputs into the batch (after its own code ran)."""
+        member = self.members[b]
+        engine = member.engine
+        for name, path in _FIELDS:
+            obj, attr = _engine_path(engine, path)
+            getattr(self, name)[b] = getattr(obj, attr)
+        self.dq[b] = engine.dq
+        self.started[b] = engine.started
+        self.last_update[b] = member.last_update
+        self.nav_time[b] = member.nav_time
+        self.out[b] = [member.out[name] for name in self.columns]
+
+    def _lend(self, b: int) -> None:
+        """Give run b's engine and shell the batch's values."""
+        member = self.members[b]
+        engine = member.engine
+        for name, path in _FIELDS:
+            obj, attr = _engine_path(engine, path)
+            value = getattr(self, name)[b]
+            setattr(obj, attr, value.item() if value.ndim == 0 else value.copy())
+        engine.dq = tuple(self.dq[b].tolist())
+        member.nav_time = self.nav_time[b].item()
+        member.last_update = self.last_update[b].item()
+        out = member.out
+        for name, value in zip(self.columns, self.out[b].tolist()):
+            out[name] = type(out[name])(value)
+
+    def _kept(self, rows: List[int]) -> None:
+        if not hasattr(self, "x"):
+            return
+        for name in ("out", "x", "P", "dq", "interval", "r_scale", "last_nis", "ukf_nis",
+                     "log_likelihood", "fallbacks", "switches", "started", "last_update",
+                     "nav_time",
+                     "update_interval", "max_mag_age", "field_intensity", "gyro_noise", "R0"):
+            setattr(self, name, getattr(self, name)[rows])
+
+    def _alive(self) -> np.ndarray:
+        alive = np.ones(self.runs, dtype=bool)
+        alive[list(self._failures)] = False
+        return alive
+
+    # -- stepping -------------------------------------------------------------------------
+    def advance(self, t, h, inputs) -> np.ndarray:
+        values = inputs.real_columns(_INPUT_NAMES)
+        imu_time, dt = values[:, 0], values[:, 1]
+        ready = self._alive() & self.started & self.accepted_rows(values, _INPUT_NAMES)
+        ready &= self._native
+        new = (imu_time > self.nav_time + 0.5 * dt) & (dt > 0)
+        quiet = ready & ~new                  # no new IMU sample: the outputs hold
+        self.out[quiet, self.columns["updated"]] = 0.0
+        rows = np.flatnonzero(ready & new)
+        # a run whose interval does not start where its last one ended raises its own
+        # StepSizeError
+        joined = same_time_rows(imu_time[rows] - dt[rows], self.nav_time[rows], dt[rows])
+        self._step_rows(rows[joined], values[rows[joined]])
+        own = self._alive() & ~quiet
+        own[rows[joined]] = False
+        for b in np.flatnonzero(own).tolist():
+            self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
+        return self.out
+
+    def _step_rows(self, rows: np.ndarray, v: np.ndarray) -> None:
+        """:meth:`AhrsFilter.step` of the started runs ``rows`` (their inputs ``v``), each
+        on the new IMU interval that follows its last one."""
+        if not rows.size:
+            return
+        imu_time, dt = v[:, 0], v[:, 1]
+        f_b = v[:, 5:8] / dt[:, None]
+        mag_fresh = np.abs(v[:, 8] - imu_time) <= self.max_mag_age[rows] + 1e-9
+        self.nav_time[rows] = imu_time
+        increments = np.array([_rotvec_quat(*r) for r in v[:, 2:5].tolist()]).T
+        self.dq[rows] = np.array(_qmul(self.dq[rows].T, increments)).T
+        self.interval[rows] += dt
+        picked = mag_fresh & (imu_time - self.last_update[rows]
+                              >= self.update_interval[rows] - 1e-9)
+        self.out[rows, self.columns["updated"]] = 0.0
+        updated = rows[picked]
+        if updated.size:
+            updated = self._update_rows(updated, f_b[picked], v[picked, 9:12],
+                                        imu_time[picked])
+        self._write_solutions(rows, updated)
+
+    def _update_rows(self, rows: np.ndarray, f_b: np.ndarray, m_b: np.ndarray,
+                     imu_time: np.ndarray) -> np.ndarray:
+        """:meth:`UkfAhrsEngine.update` of the runs ``rows``; the rows that updated."""
+        usable = np.ones(len(rows), dtype=bool)
+        for i, b in enumerate(rows.tolist()):
+            error = state_error(self.x[b], self.P[b])
+            if error is not None:                # checked_covariance's error
+                self.fail(b, error)
+                usable[i] = False
+        rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
+        ok = self._predict_rows(rows)
+        rows, f_b, m_b, imu_time = rows[ok], f_b[ok], m_b[ok], imu_time[ok]
+        ok = self._correct_rows(rows, f_b, m_b)
+        rows = rows[ok]
+        self.last_update[rows] = imu_time[ok]
+        col = self.columns
+        self.out[rows, col["updated"]] = 1.0
+        self.out[rows, col["nis"]] = self.last_nis[rows]
+        self.out[rows, col["nis_dof"]] = 6.0
+        if "fuzzy_e_accel" in col:
+            for b in rows.tolist():
+                adaptive = self.members[b].engine.adaptive
+                self.out[b, [col["fuzzy_e_accel"], col["fuzzy_e_mag"]]] = adaptive.e
+                self.out[b, [col["fuzzy_de_accel"], col["fuzzy_de_mag"]]] = adaptive.de
+        return rows
+
+    def _points(self, rows: np.ndarray) -> np.ndarray:
+        """The sigma points of the runs ``rows`` (B, 13, 6), as each engine draws them
+        (:meth:`UnscentedKalmanFilter.sigma_points`: a P that is not symmetric is
+        symmetrized for them)."""
+        P = self.P[rows]
+        odd = ~(P == P.transpose(0, 2, 1)).all(axis=(1, 2))
+        P[odd] = 0.5 * (P[odd] + P[odd].transpose(0, 2, 1))
+        L, fallback = sqrt_rows(P)
+        self.fallbacks[rows] += fallback
+        return points_from_sqrt_rows(self.x[rows], L * self.spread)
+
+    def _predict_rows(self, rows: np.ndarray) -> np.ndarray:
+        """The time update of the runs ``rows``; which of them did not fail."""
+        T = self.interval[rows]
+        Q = np.array([attitude_process_noise(self.x[b], T_b, *self.gyro_noise[b].tolist())
+                      for T_b, b in zip(T.tolist(), rows.tolist())]).reshape(-1, 6, 6)
+        X = self._points(rows)
+        Y = propagate_points(X.reshape(-1, 6), np.repeat(self.dq[rows], _POINTS, axis=0),
+                             np.repeat(T, _POINTS)[:, None],
+                             np.repeat(X[:, 0, :3], _POINTS, axis=0))
+        x, P, finite = predicted_moments_rows(Y.reshape(X.shape), self.Wm, self.Wc, Q,
+                                              np.ones(len(rows)))
+        for b in rows[~finite].tolist():
+            self.fail(b, predicted_state_error())
+        rows = rows[finite]
+        self.x[rows], self.P[rows] = x[finite], P[finite]
+        self.dq[rows] = (1.0, 0.0, 0.0, 0.0)
+        self.interval[rows] = 0.0
+        self._shadow_rows(rows)
+        return finite
+
+    def _correct_rows(self, rows: np.ndarray, f_b: np.ndarray, m_b: np.ndarray) -> np.ndarray:
+        """The measurement update of the runs ``rows``; which of them did not fail."""
+        X = self._points(rows)
+        Z = measure_points(X.reshape(-1, 6), self.gravity, self.field_unit).reshape(X.shape)
+        z = np.concatenate((f_b, m_b / self.field_intensity[rows][:, None]), axis=1)
+        z_pred, Pzz, Pxz = measurement_moments_rows(X, Z, self.x[rows], self.Wm, self.Wc)
+        for i, b in enumerate(rows.tolist()):
+            adaptive = self.members[b].engine.adaptive
+            if adaptive is not None:
+                self.r_scale[b] = adaptive.step(z[i] - z_pred[i], Pzz[i], self.R0[b],
+                                                self.r_scale[b])
+        R = self.R0[rows] * np.repeat(self.r_scale[rows], 3, axis=1)[:, :, None]
+        result = correct_rows(self.x[rows], self.P[rows], z, z_pred, Pzz + R, Pxz)
+        ok = result.status == 0
+        for i in np.flatnonzero(~ok).tolist():
+            self.fail(int(rows[i]), correction_error(result.status[i]))
+        rows = rows[ok]
+        self.x[rows], self.P[rows] = result.x[ok], result.P[ok]
+        self.last_nis[rows] = self.ukf_nis[rows] = result.nis[ok]
+        self.log_likelihood[rows] = result.log_likelihood[ok]
+        self._shadow_rows(rows)
+        return ok
+
+    def _shadow_rows(self, rows: np.ndarray) -> None:
+        """Each engine's switch to the shadow MRP (:func:`shadow_switched`, its own test)."""
+        near = np.einsum("bi,bi->b", self.x[rows, :3], self.x[rows, :3]) > 0.5
+        for b in rows[near].tolist():
+            switched = shadow_switched(self.x[b], self.P[b])
+            if switched is not None:
+                self.x[b], self.P[b] = switched
+                self.switches[b] += 1
+
+    def _write_solutions(self, rows: np.ndarray, updated: np.ndarray) -> None:
+        """:meth:`AhrsFilter._write_solution` of the runs ``rows`` (sigmas: ``updated``); a
+        run whose state is not finite writes its own (its DivergenceError)."""
+        finite = np.isfinite(self.x[rows]).all(axis=1)
+        if not finite.all():
+            for b in rows[~finite].tolist():
+                self._by_itself(b, lambda m: m._write_solution(sigmas=False))
+            rows = rows[finite]
+            updated = updated[np.isin(updated, rows)]
+        out, col = self.out, self.columns
+        x = self.x[rows]
+        x0, x1, x2 = x[:, 0], x[:, 1], x[:, 2]
+        s = x0 * x0 + x1 * x1 + x2 * x2                  # UkfAhrsEngine.current_quat
+        q = np.array(((1.0 - s) / (1.0 + s), 2.0 * x0 / (1.0 + s), 2.0 * x1 / (1.0 + s),
+                      2.0 * x2 / (1.0 + s)))
+        T = self.interval[rows]
+        pending = T > 0.0
+        if pending.any():
+            bias = (-x[pending, 3:] * T[pending, None]).tolist()
+            turn = np.array([_rotvec_quat(*r) for r in bias]).T
+            q[:, pending] = _qmul(_qmul(q[:, pending], self.dq[rows[pending]].T), turn)
+        out[rows, col["nav_time"]] = self.nav_time[rows]
+        out[rows, col["aligned"]] = 1.0
+        out[rows, col["nav_roll"]:col["nav_yaw"] + 1] = [quat_euler(r) for r in q.T.tolist()]
+        if updated.size:
+            out[updated, col["std_roll"]:col["std_yaw"] + 1] = euler_sigma_rows(
+                self._points(updated), self.Wm, self.Wc)
+        out[rows, col["nav_bg_x"]:col["nav_bg_z"] + 1] = x[:, 3:]
+        out[rows, col["r_scale_accel"]] = self.r_scale[rows, 0]
+        out[rows, col["r_scale_mag"]] = self.r_scale[rows, 1]
+
+
+__all__ = ["AhrsFilterBatch"]

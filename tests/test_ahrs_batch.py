@@ -1,0 +1,245 @@
+"""The AHRS filters' batch (navcore.components.ahrs_batch) and the row functions it shares
+with one filter alone (navcore.filters.unscented: measurement_moments_rows, correct_rows).
+
+Each run of a batch against the same component stepped alone on the same inputs, bit for
+bit, with per-run parameters, a late start, a shadow-set switch, inputs one step late, a
+refused input and a covariance made non-finite; that the runs' updates are one call; the
+row functions against the textbook gain ``K = Pxz S^-1`` written with numpy's inverse.  The
+whole simulation in batches against single runs is in tests/test_batch_simulation.py.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_ahrs import AHRS_PARAMS, SENSORS, TABLE, _trajectory, profiles  # noqa: F401
+
+from navcore.components import ahrs_batch
+from navcore.components.ahrs_components import FuzzyUkfAhrs, UkfAhrs
+from navcore.core.batch import BatchInputs
+from navcore.errors import InputError
+from navcore.filters import unscented
+from navcore.filters.unscented import correct_rows, measurement_moments_rows
+
+STEP = 0.02
+
+
+def _bits(a):
+    return np.ascontiguousarray(a, dtype=float).view(np.uint64)
+
+
+def _feeds(profile, seeds, steps, delay=0):
+    """Per run, the filter inputs of every step (``delay`` steps late, Jacobi-like)."""
+    feeds = []
+    for seed in seeds:
+        traj, out = _trajectory(profile, **{**SENSORS, "seed": seed})
+        names = [p.name for p in UkfAhrs.inputs]
+        rows = [{n: out[n] for n in names}] * (delay + 1)
+        for k in range(steps):
+            out = traj.step(k * STEP, STEP, {})
+            rows.append({n: out[n] for n in names})
+        feeds.append(rows[1:steps + 1])
+    return feeds
+
+
+def _batch_inputs(feeds, k):
+    names = tuple(p.name for p in UkfAhrs.inputs)
+    real = np.array([[feed[k][n] for n in names] for feed in feeds])
+    return BatchInputs({n: real[:, j] for j, n in enumerate(names)}, real, names)
+
+
+def _batch(cls, run_parameters):
+    batch = cls.batch_class(cls, len(run_parameters))
+    batch.set_parameters([{**AHRS_PARAMS, **p} for p in run_parameters])
+    return batch
+
+
+def _run_both(cls, run_parameters, feeds, steps, meddle=None):
+    """The batch and each run alone on ``feeds``; ``meddle(k, batch, singles)`` may change
+    both before step k.  Returns the batch's outputs, the singles' and the batch."""
+    batch = _batch(cls, run_parameters)
+    batch.start(0.0)
+    singles = []
+    for p in run_parameters:
+        f = cls(**{**AHRS_PARAMS, **p})
+        f.start(0.0)
+        singles.append(f)
+    names = [p.name for p in cls.outputs]
+    together, alone = [], []
+    for k in range(steps):
+        if meddle is not None:
+            meddle(k, batch, singles)
+        together.append(batch.advance(k * STEP, STEP, _batch_inputs(feeds, k)).copy())
+        row = []
+        for b, f in enumerate(singles):
+            if alone and isinstance(alone[-1][b], Exception):
+                row.append(alone[-1][b])             # a failed run stops
+                continue
+            try:
+                out = f.advance(k * STEP, STEP, feeds[b][k])
+                row.append([float(out[n]) for n in names])
+            except InputError as exc:
+                row.append(exc)
+        alone.append(row)
+    return together, alone, batch
+
+
+def _assert_rows_equal(together, alone, failed=()):
+    for k, (out, row) in enumerate(zip(together, alone)):
+        for b, single in enumerate(row):
+            if b in failed and isinstance(single, Exception):
+                continue
+            assert np.array_equal(_bits(out[b]), _bits(single)), (k, b)
+
+
+RUNS = [{}, {"r_accel_mps2": 0.05, "update_interval": 0.06},
+        {"q_gyro_arw_dpsh": 2.0, "init_attitude": "parameters", "init_roll": 0.1,
+         "init_pitch": -0.2, "init_yaw": 3.0},
+        {"max_mag_age": 0.0, "p0_att": math.radians(20.0)}]
+
+
+@pytest.mark.parametrize("cls, delay", [(UkfAhrs, 0), (FuzzyUkfAhrs, 1)])
+def test_every_run_of_a_batch_steps_as_it_does_alone(cls, delay, profiles):  # noqa: F811
+    """Four runs with their own parameters and seeds through the TABLE profile (a rotation of
+    200 deg: the shadow switch), one of them started from parameters."""
+    runs = RUNS if cls is UkfAhrs else [{**p, "fuzzy_window": 5 + 3 * i}
+                                        for i, p in enumerate(RUNS)]
+    feeds = _feeds(profiles(TABLE), [3, 4, 5, 6], 1000, delay)
+    together, alone, batch = _run_both(cls, runs, feeds, 1000)
+    _assert_rows_equal(together, alone)
+    assert batch.switches.min() >= 1 and batch.take_failures() == {}
+    # the runs differ: the comparison is not of equal runs
+    assert not np.array_equal(together[-1][0], together[-1][1])
+
+
+def test_the_runs_update_together_in_one_call(monkeypatch, profiles):  # noqa: F811
+    calls = []
+    real = ahrs_batch.correct_rows
+    monkeypatch.setattr(ahrs_batch, "correct_rows",
+                        lambda *a: calls.append(len(a[0])) or real(*a))
+    feeds = _feeds(profiles(TABLE), [3, 4, 5], 100)
+    _run_both(FuzzyUkfAhrs, [{}, {"r_accel_mps2": 0.03}, {"fuzzy_window": 4}], feeds, 100)
+    assert len(calls) >= 15 and set(calls) == {3}
+
+
+def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(profiles):  # noqa: F811
+    feeds = _feeds(profiles(TABLE), [3, 4, 5], 300)
+    feeds[0][120] = {**feeds[0][120], "imu_dt": -1.0}            # refused: imu_dt > 0
+
+    def meddle(k, batch, singles):
+        if k == 200:                                             # run 2's P not finite
+            batch.P[2, 1, 1] = math.nan
+            singles[2].engine.ukf.P = batch.P[2].copy()
+
+    together, alone, batch = _run_both(UkfAhrs, [{}, {}, {}], feeds, 300, meddle)
+    failures = batch.take_failures()
+    assert sorted(failures) == [0, 2]
+    assert "imu_dt" in str(failures[0]) and "'P' contains NaN" in str(failures[2])
+    first_error = [next(k for k, row in enumerate(alone) if isinstance(row[b], Exception))
+                   for b in (0, 2)]
+    assert first_error[0] == 120 and 200 <= first_error[1] < 205     # its next update
+    for b, k in zip((0, 2), first_error):
+        assert str(alone[k][b]) == str(failures[b])
+    # run 1 goes on as alone; the failed runs match up to their error
+    _assert_rows_equal([t[[1]] for t in together], [[r[1]] for r in alone])
+    _assert_rows_equal([t[[0, 2]] for t in together[:120]], [r[::2] for r in alone[:120]])
+    _assert_rows_equal([t[[2]] for t in together[:first_error[1]]],
+                       [[r[2]] for r in alone[:first_error[1]]])
+
+
+def _filters(runs, rng, n=6, m=6):
+    x = rng.normal(0, 0.3, (runs, n))
+    A = rng.normal(0, 0.1, (runs, n, n))
+    P = A @ A.transpose(0, 2, 1) + 1e-3 * np.eye(n)
+    X = x[:, None, :] + rng.normal(0, 0.2, (runs, 2 * n + 1, n))
+    Y = np.sin(X) @ rng.normal(0, 1, (n, m))
+    return x, P, X, Y
+
+
+def test_measurement_moments_and_correction_of_many_filters_against_the_textbook():
+    """Each filter of five: the moments as sums written out, K = Pxz inv(S), x + K v,
+    P - K S K^T (numpy's inverse), NIS v^T inv(S) v; and each row equal to the filter
+    computed alone, bit for bit."""
+    rng = np.random.default_rng(7)
+    x, P, X, Y = _filters(5, rng)
+    Wm, Wc, _ = unscented.sigma_weights(6, 0.5, 2.0, 1.0)
+    z_pred, Pzz, Pxz = measurement_moments_rows(X, Y, x, Wm, Wc)
+    R = np.diag(rng.uniform(0.01, 0.1, 6))
+    z = z_pred + rng.normal(0, 0.1, z_pred.shape)
+    result = correct_rows(x, P, z, z_pred, Pzz + R, Pxz)
+    for b in range(5):
+        mean = sum(w * y for w, y in zip(Wm, Y[b]))
+        dz = Y[b] - mean
+        dx = X[b] - x[b]
+        Szz = sum(w * np.outer(d, d) for w, d in zip(Wc, dz))
+        Sxz = sum(w * np.outer(a, d) for w, a, d in zip(Wc, dx, dz))
+        np.testing.assert_allclose(z_pred[b], mean, rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(Pzz[b], Szz, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(Pxz[b], Sxz, rtol=1e-12, atol=1e-15)
+        S = Szz + R
+        K = Sxz @ np.linalg.inv(S)
+        v = z[b] - mean
+        np.testing.assert_allclose(result.x[b], x[b] + K @ v, rtol=1e-11, atol=1e-14)
+        np.testing.assert_allclose(result.P[b], P[b] - K @ S @ K.T, rtol=1e-10, atol=1e-14)
+        assert result.nis[b] == pytest.approx(v @ np.linalg.inv(S) @ v, rel=1e-11)
+        alone = correct_rows(x[b:b + 1], P[b:b + 1], z[b:b + 1], z_pred[b:b + 1],
+                             Pzz[b:b + 1] + R, Pxz[b:b + 1])
+        moments = measurement_moments_rows(X[b:b + 1], Y[b:b + 1], x[b:b + 1], Wm, Wc)
+        for together, one in zip((z_pred, Pzz, Pxz, *result[:7]), (*moments, *alone[:7])):
+            assert np.array_equal(_bits(together[b]), _bits(one[0]))
+    assert result.status.tolist() == [0] * 5
+
+
+def test_a_filter_that_cannot_be_corrected_is_flagged_alone():
+    rng = np.random.default_rng(8)
+    x, P, X, Y = _filters(3, rng)
+    Wm, Wc, _ = unscented.sigma_weights(6, 1.0, 2.0, 0.0)
+    z_pred, Pzz, Pxz = measurement_moments_rows(X, Y, x, Wm, Wc)
+    S = Pzz + np.eye(6) * 0.01
+    S[0] = -np.eye(6)                        # not positive definite
+    z = z_pred.copy()
+    z[2, 3] = math.inf                       # not finite
+    result = correct_rows(x, P, z, z_pred, S, Pxz)
+    assert result.status[1] == 0 and result.status[0] and result.status[2]
+    assert "positive definite" in str(unscented.correction_error(result.status[0]))
+    assert "NaN or inf" in str(unscented.correction_error(result.status[2]))
+
+
+def test_magnetometer_rows_are_each_model_alone():
+    """Runs with their own field, hard and soft iron, noise and vibration: the readings of
+    measure_rows are each model's own measure, bit for bit, and each model's next draws
+    (its accel_disturbance) follow its own."""
+    from scipy.spatial.transform import Rotation
+
+    from navcore.sensors.magnetometer import MagnetometerModel, measure_rows
+    base = dict(mag_field_T=5e-5, mag_noise_T=1e-7)
+    params = [base, base, {**base, "mag_inclination": 0.3, "mag_hard_iron_y": 2e-6},
+              {**base, "mag_soft_iron": "1.01,0.002,0,0,0.99,0.001,0,0,1",
+               "vibration_start_s": 0.5, "vibration_accel_noise_mps2": 0.2,
+               "vibration_mag_factor": 3.0}]
+    together = [MagnetometerModel(p, seed) for p, seed in zip(params, (1, 2, 3, 4))]
+    alone = [MagnetometerModel(p, seed) for p, seed in zip(params, (1, 2, 3, 4))]
+    for k in range(20):
+        t = 0.1 * k
+        C_bn = Rotation.from_euler("ZYX", [0.3 * k, 0.1, -0.2]).as_matrix()
+        rows = measure_rows(together, t, C_bn)
+        for b, m in enumerate(alone):
+            assert np.array_equal(_bits(rows[b]), _bits(m.measure(t, C_bn))), (k, b)
+            assert np.array_equal(_bits(together[b].accel_disturbance(t)),
+                                  _bits(m.accel_disturbance(t)))
+    assert not np.array_equal(rows[0], rows[1])          # own seeds
+
+
+def test_same_time_of_arrays_is_same_time_of_each_element():
+    """Long runs (1e5 s), short ones, exact zeros, differences around the tolerance."""
+    from navcore.core.timing import same_time, same_time_rows
+    rng = np.random.default_rng(0)
+    a = np.concatenate([rng.uniform(-1e5, 1e5, 5000), rng.uniform(0, 1, 5000), np.zeros(5)])
+    b = a + rng.choice([0, 1e-15, 1e-12, 1e-11, 1e-9, -1e-13], a.size) * rng.uniform(
+        0, 3, a.size)
+    period = rng.choice([0.02, 0.01, 1.0, 0.005], a.size)
+    rows = same_time_rows(a, b, period)
+    assert rows.tolist() == [same_time(*v) for v in zip(a.tolist(), b.tolist(),
+                                                         period.tolist())]
+    assert 0.3 < rows.mean() < 0.95                    # both answers occur
