@@ -133,9 +133,9 @@ def test_the_interval_sums_are_the_trapezoids_of_the_rows_compiled_or_not():
                                rtol=1e-15)
 
 
-@pytest.mark.parametrize("filter_name, together", [("Ukf", True), ("CtfaUkf", True),
-                                                   ("ImmUkf", False)])
-def test_the_runs_of_a_batch_predict_in_one_call(monkeypatch, filter_name, together):
+@pytest.mark.parametrize("filter_name, models", [("Ukf", 1), ("CtfaUkf", 1), ("ImmUkf", 2),
+                                                  ("ImmUkf", 3)])
+def test_the_runs_of_a_batch_predict_in_one_call(monkeypatch, filter_name, models):
     calls = []
 
     def counting(x, *args):
@@ -145,13 +145,13 @@ def test_the_runs_of_a_batch_predict_in_one_call(monkeypatch, filter_name, toget
     monkeypatch.setattr(ukf_batch, "predict_rows", counting)
     model = swap_filter(load_scenario(MODELS / "uav_maneuver"), filter_name)
     sets = [{"trajectory.seed": 3 + b, "gnss.seed": 40 + b} for b in range(4)]
+    if filter_name == "ImmUkf":
+        for s in sets:
+            s["filter.imm_models"] = models
     BatchSimulation(model, registry(), sets).run(stop_time=3.0)
-    if together:
-        # 50 Hz IMU, a prediction every 0.1 s: the 4 runs together, but for the prediction
-        # before each fix, which each run's own update makes
-        assert len(calls) >= 20 and set(calls) == {4}
-    else:
-        assert calls == []         # the IMM bank predicts by each run's own code
+    # 50 Hz IMU, a prediction every 0.1 s: the 4 runs together (every model of an IMM
+    # bank), but for the prediction before each fix, which each run's own update makes
+    assert len(calls) >= 20 and set(calls) == {4 * models}
 
 
 def test_every_filter_of_the_family_names_the_ukf_batch():

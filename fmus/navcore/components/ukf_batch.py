@@ -12,11 +12,14 @@ code, lent the batch's values first) with the UKF engines' time update
   (:func:`~navcore.filters.ukf_time_update.accumulate_rows`), the functions each engine calls
   with one run;
 * the runs whose prediction interval is complete predict together: one
-  :func:`~navcore.filters.ukf_time_update.predict_rows` call, the function each Ukf or CtfaUkf
-  engine calls with one run.  An engine that predicts otherwise (the IMM bank, a subclass)
-  or whose filter is not in the state the call expects (a covariance not finite or not
-  symmetric, other unscented-transform parameters than the batch's first run) predicts by
-  its own code, before the interval enters its latency history, as it does alone.
+  :func:`~navcore.filters.ukf_time_update.predict_rows` call, the function each engine calls
+  with one run (with the models of its bank for the IMM: the models of all runs' banks in
+  one call, after each bank's own mixing where its cycle starts, and each bank's own
+  combination after).  An engine that predicts otherwise (a subclass), or whose filter is
+  not in the state the call expects (a covariance not finite or not symmetric, other
+  unscented-transform parameters or another number of IMM models than the batch's first
+  run), predicts by its own code, before the interval enters its latency history, as it
+  does alone.
 """
 from __future__ import annotations
 
@@ -24,7 +27,8 @@ from typing import List
 
 import numpy as np
 
-from ..filters.ukf_filters import UkfEngine
+from ..filters.imm import ImmBank, imm_combine
+from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise,
                                        interval_means, predict_rows, prediction_due)
 from ..filters.unscented import predicted_state_error
@@ -50,22 +54,30 @@ class UkfFilterBatch(InsGnssFilterBatch):
         alive = [m for b, m in enumerate(self.members) if b not in self._failures]
         engine = alive[0].engine if alive else None
         # the runs predict together when their engines predict as a Ukf with one transform
-        self._natively_predicted = engine is not None and all(
-            self._predicts_like_ukf(m.engine, engine) for m in alive)
+        self._natively_predicted, self._banks_predicted = (engine is not None and all(
+            self._predicts_as(m.engine, engine, kind) for m in alive)
+            for kind in (UkfEngine, ImmUkfEngine))
         if self._natively_predicted:
             self._ukf = {name: np.zeros((runs,) + np.shape(getattr(engine.ukf, name)))
                          for name in _UKF_FIELDS}
         return super()._started(start_time)
 
     @staticmethod
-    def _predicts_like_ukf(engine, first) -> bool:
+    def _predicts_as(engine, first, kind_of_engine) -> bool:
+        """Whether ``engine`` predicts as ``kind_of_engine`` does (UkfEngine: one filter,
+        ImmUkfEngine: a bank of models) with ``first``'s transform and number of models."""
         kind = type(engine)
-        return (kind._predict is UkfEngine._predict
-                and kind.predict_filters is UkfEngine.predict_filters
+        if not (kind._predict is UkfEngine._predict
+                and kind.predict_filters is kind_of_engine.predict_filters
                 and kind.process_noise is UkfEngine.process_noise
-                and engine.ukf is not None
                 and (engine.alpha, engine.beta, engine.kappa)
-                == (first.alpha, first.beta, first.kappa))
+                == (first.alpha, first.beta, first.kappa)):
+            return False
+        if kind_of_engine is UkfEngine:
+            return engine.ukf is not None
+        return (type(engine.bank).predict_all is ImmBank.predict_all
+                and isinstance(first, ImmUkfEngine)
+                and len(engine.bank.filters) == len(first.bank.filters))
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -112,6 +124,9 @@ class UkfFilterBatch(InsGnssFilterBatch):
         due = prediction_due(sums[:, 0], self._predict_interval)
         if not due.any():
             return
+        if self._banks_predicted:
+            self._predict_banks(np.flatnonzero(due))
+            return
         together = due & self._predictable() if self._natively_predicted else np.zeros_like(due)
         if together.any():
             self._predict_together(np.flatnonzero(together))
@@ -142,6 +157,48 @@ class UkfFilterBatch(InsGnssFilterBatch):
         sums[rows] = 0.0
         for i in np.flatnonzero(~finite).tolist():
             self.fail(int(rows[i]), predicted_state_error())
+
+    def _predict_banks(self, rows: np.ndarray) -> None:
+        """:meth:`UkfEngine._predict` of the IMM runs ``rows``: each bank mixes if its cycle
+        starts (its own :meth:`ImmBank.mix`), the models of all banks predict in one
+        :func:`predict_rows` call (every run's nominal interval spread over its banks'
+        points), each bank combines its models (:func:`imm_combine`)."""
+        banks = {}
+        for b in rows.tolist():
+            bank = self.members[b].engine.bank
+            try:
+                if bank.needs_mixing:
+                    bank.mix()
+                banks[b] = (bank, [flt.checked_covariance() for flt in bank.filters])
+            except Exception as exc:        # the run's own error (InputError)
+                self.fail(b, exc)
+        if not banks:
+            return
+        rows = np.array(list(banks))
+        models = len(next(iter(banks.values()))[0].filters)
+        filters = [flt for bank, _ in banks.values() for flt in bank.filters]
+        sums = self.stack["sums"][:, 0]
+        first = self.members[rows[0]].engine
+        cfg, ukf = first.config, filters[0]
+        Q = np.repeat(self._process_noise(rows, sums[rows, 0]), models, axis=0)
+        scales = np.concatenate([self.members[b].engine.q_scales for b in rows.tolist()])
+        x, P, fallback, finite = predict_rows(
+            np.stack([flt.x for flt in filters]),
+            np.stack([P for _, Ps in banks.values() for P in Ps]), interval_means(sums[rows]),
+            Q, scales, ukf.Wm, ukf.Wc, ukf._spread, cfg.gyro_bias_tau, cfg.accel_bias_tau)
+        sums[rows] = 0.0
+        for i, (b, (bank, _)) in enumerate(banks.items()):
+            own = slice(models * i, models * (i + 1))
+            for flt, extra in zip(bank.filters, fallback[own].tolist()):
+                flt.sqrt_fallbacks += int(extra)
+            if not finite[own].all():
+                self.fail(b, predicted_state_error())
+                continue
+            for flt, x_j, P_j in zip(bank.filters, x[own], P[own]):
+                flt.x, flt.P = x_j, P_j
+            bank.x, bank.P = imm_combine(bank.mu, [flt.x for flt in bank.filters],
+                                         [flt.P for flt in bank.filters])
+            self._diagonal[b] = np.diagonal(bank.P)
 
     def _process_noise(self, rows: np.ndarray, T: np.ndarray) -> np.ndarray:
         """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (all runs' for
