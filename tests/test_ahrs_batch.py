@@ -243,3 +243,18 @@ def test_same_time_of_arrays_is_same_time_of_each_element():
     assert rows.tolist() == [same_time(*v) for v in zip(a.tolist(), b.tolist(),
                                                          period.tolist())]
     assert 0.3 < rows.mean() < 0.95                    # both answers occur
+
+
+def test_euler_angles_of_quaternion_columns_are_those_of_each_quaternion():
+    """quat_euler_rows against quat_euler bit for bit: random attitudes, unnormalized ones,
+    pitch at +-90 deg and yaw at -180 deg (reported as +180)."""
+    from navcore.filters.ahrs import quat_euler, quat_euler_rows
+    rng = np.random.default_rng(3)
+    q = rng.normal(size=(4, 500))
+    q[:, 250:] /= np.linalg.norm(q[:, 250:], axis=0)
+    half = math.sqrt(0.5)
+    q[:, 0] = (half, 0.0, half, 0.0)                 # pitch +90 deg
+    q[:, 1] = (-0.0, -0.0, 0.0, 1.0)                 # yaw atan2(-0, -1) = -180 deg
+    rows = quat_euler_rows(q)
+    assert np.array_equal(_bits(rows.T), _bits([quat_euler(c) for c in q.T.tolist()]))
+    assert rows[2, 1] == math.pi

@@ -20,7 +20,7 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
 * the solution outputs.  The quaternion products of the outputs and of the gyro increments
   are the single engine's float formulas (``_qmul``) on arrays; the rotation-vector
   quaternions and the Euler angles stay libm's ``sin``/``cos``/``atan2``/``hypot`` per run
-  (:func:`~navcore.filters.ahrs._rotvec_quat`, :func:`~navcore.filters.ahrs.quat_euler`):
+  (:func:`~navcore.filters.ahrs._rotvec_quat`, :func:`~navcore.filters.ahrs.quat_euler_rows`):
   numpy's ``arctan2`` differs from libm's in the last place for about 8 % of arguments, so
   arrays would not give each run the floats of its single run.
 
@@ -41,7 +41,7 @@ from ..core import signals
 from ..core.batch import ComponentBatch
 from ..core.timing import same_time_rows
 from ..filters.ahrs import (UkfAhrsEngine, _qmul, _rotvec_quat, attitude_process_noise,
-                            euler_sigma_rows, measure_points, propagate_points, quat_euler,
+                            euler_sigma_rows, measure_points, propagate_points, quat_euler_rows,
                             shadow_switched)
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
                                  points_from_sqrt_rows, predicted_moments_rows,
@@ -328,7 +328,7 @@ class AhrsFilterBatch(ComponentBatch):
             q[:, pending] = _qmul(_qmul(q[:, pending], self.dq[rows[pending]].T), turn)
         out[rows, col["nav_time"]] = self.nav_time[rows]
         out[rows, col["aligned"]] = 1.0
-        out[rows, col["nav_roll"]:col["nav_yaw"] + 1] = [quat_euler(r) for r in q.T.tolist()]
+        out[rows, col["nav_roll"]:col["nav_yaw"] + 1] = quat_euler_rows(q).T
         if updated.size:
             out[updated, col["std_roll"]:col["std_yaw"] + 1] = euler_sigma_rows(
                 self._points(updated), self.Wm, self.Wc)

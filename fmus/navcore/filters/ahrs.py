@@ -86,16 +86,38 @@ def _rotvec_quat(x, y, z):
     return (math.cos(0.5 * t), s * x, s * y, s * z)
 
 
-def quat_euler(q):
-    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (Groves eq. 2.38
-    via eq. 2.34), normalised first."""
-    w, x, y, z = q
+def _euler_of_quat(w, x, y, z, atan2, hypot):
+    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z) (Groves
+    eq. 2.38 via eq. 2.34), normalised first: floats, or arrays with ``atan2``/``hypot``
+    taken element by element."""
     n = w * w + x * x + y * y + z * z
-    roll = math.atan2(2.0 * (w * x + y * z), n - 2.0 * (x * x + y * y))
-    pitch = math.atan2(2.0 * (w * y - z * x),
-                       math.hypot(2.0 * (w * x + y * z), n - 2.0 * (x * x + y * y)))
-    yaw = math.atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z))
+    a = 2.0 * (w * x + y * z)
+    b = n - 2.0 * (x * x + y * y)
+    return (atan2(a, b), atan2(2.0 * (w * y - z * x), hypot(a, b)),
+            atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z)))
+
+
+def quat_euler(q):
+    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (a 4-sequence of
+    floats), yaw in (-pi, pi]."""
+    roll, pitch, yaw = _euler_of_quat(*q, math.atan2, math.hypot)
     return roll, pitch, (math.pi if yaw <= -math.pi else yaw)
+
+
+def _libm(function):
+    """``function`` of two arrays element by element: Python's ``math`` (numpy's vectorized
+    ``arctan2`` and ``hypot`` round otherwise, see navcore.ins.rotations)."""
+    return lambda a, b: np.array(list(map(function, a.tolist(), b.tolist())))
+
+
+_ATAN2, _HYPOT = _libm(math.atan2), _libm(math.hypot)
+
+
+def quat_euler_rows(q):
+    """:func:`quat_euler` of every column of ``q`` (4, N): the (3, N) roll, pitch and yaw,
+    each the floats of :func:`quat_euler`."""
+    roll, pitch, yaw = _euler_of_quat(*q, _ATAN2, _HYPOT)
+    return np.array((roll, pitch, np.where(yaw <= -math.pi, math.pi, yaw)))
 
 
 def _quat_multiply_rows(p, q):
@@ -160,11 +182,12 @@ def shadow_switched(x, P):
 
 def euler_sigma_rows(X, Wm, Wc):
     """1-sigma of roll, pitch, yaw (B, 3) from the sigma points ``X`` (B, 13, 6) of B
-    filters (weights ``Wm``, ``Wc``): the angles of every point (libm's atan2 per point, as
-    :func:`quat_euler`), wrapped about the central point's."""
+    filters (weights ``Wm``, ``Wc``): the angles of every point (:func:`quat_euler_rows`),
+    wrapped about the central point's."""
     runs, points = X.shape[:2]
     q = mrp_to_quat(X[:, :, :3].reshape(-1, 3))
-    angles = np.array([quat_euler(r) for r in q.tolist()]).reshape(runs, points, 3)
+    # C order: the stacked products below round by the layout of their operands
+    angles = np.ascontiguousarray(quat_euler_rows(q.T).T).reshape(runs, points, 3)
     dev = wrap_angle(angles - angles[:, :1])
     mean = Wm @ dev
     dev = dev - mean[:, None, :]

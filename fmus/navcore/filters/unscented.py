@@ -254,11 +254,16 @@ def correct_rows(x: np.ndarray, P: np.ndarray, z: np.ndarray, z_pred: np.ndarray
     S = 0.5 * (S + S.transpose(0, 2, 1))
     v = z - z_pred
     runs, m = z.shape
+    if math.isfinite(S.sum() + v.sum()):          # NaN and inf propagate into a sum
+        status = np.zeros(runs, dtype=np.int64)
+    else:
+        status = np.where(np.isfinite(S).all(axis=(1, 2)) & np.isfinite(v).all(axis=1), 0,
+                          _NOT_FINITE)
     K = np.zeros(Pxz.shape)
     nis, log_likelihood = np.zeros(runs), np.zeros(runs)
-    status = np.where(np.isfinite(S).all(axis=(1, 2)) & np.isfinite(v).all(axis=1), 0,
-                      _NOT_FINITE)
-    for b in np.flatnonzero(status == 0).tolist():
+    for b in range(runs):
+        if status[b]:
+            continue
         # S is never inverted explicitly; the numpy wrappers cost ~7 us each for a 3x3
         Ls, info = lapack.dpotrf(S[b], lower=1, clean=1)
         if info != 0:
@@ -269,7 +274,8 @@ def correct_rows(x: np.ndarray, P: np.ndarray, z: np.ndarray, z_pred: np.ndarray
         nis[b] = nis_from_cholesky(Ls, v[b])
         log_likelihood[b] = gaussian_log_likelihood(nis[b], log_det_from_cholesky(Ls), m)
     # a filter not corrected has K = 0 and may have a v that is not finite
-    x = x + (K @ np.where(status[:, None] == 0, v, 0.0)[:, :, None])[:, :, 0]
+    used = np.where(status[:, None] == 0, v, 0.0) if status.any() else v
+    x = x + (K @ used[:, :, None])[:, :, 0]
     P = P - K @ Pxz.transpose(0, 2, 1)
     return CorrectedRows(x, 0.5 * (P + P.transpose(0, 2, 1)), v, S, K, nis, log_likelihood,
                          status)
