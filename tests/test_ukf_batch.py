@@ -18,7 +18,8 @@ from navcore.components import ukf_batch
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.filters import ukf_filters
 from navcore.filters.ukf_time_update import (N_SUMS, NominalInterval, accumulate_rows,
-                                             error_dynamics, interval_means, predict_rows,
+                                             error_dynamics, interval_means,
+                                             predict_filter_groups, predict_rows,
                                              propagate_points)
 from navcore.filters.unscented import UnscentedKalmanFilter
 from orchestrator.cosim.batch import BatchSimulation
@@ -142,7 +143,12 @@ def test_the_runs_of_a_batch_predict_in_one_call(monkeypatch, filter_name, model
         calls.append(len(x))
         return predict_rows(x, *args)
 
+    def counting_groups(filters, *args):
+        calls.append(len(filters))
+        return predict_filter_groups(filters, *args)
+
     monkeypatch.setattr(ukf_batch, "predict_rows", counting)
+    monkeypatch.setattr(ukf_batch, "predict_filter_groups", counting_groups)
     model = swap_filter(load_scenario(MODELS / "uav_maneuver"), filter_name)
     sets = [{"trajectory.seed": 3 + b, "gnss.seed": 40 + b} for b in range(4)]
     if filter_name == "ImmUkf":

@@ -30,7 +30,8 @@ import numpy as np
 from ..filters.imm import ImmBank, imm_combine
 from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise,
-                                       interval_means, predict_rows, prediction_due)
+                                       interval_means, predict_filter_groups, predict_rows,
+                                       prediction_due)
 from ..filters.unscented import predicted_state_error
 from ..ins.strapdown import update_rows
 from .filter_batch import InsGnssFilterBatch
@@ -178,24 +179,18 @@ class UkfFilterBatch(InsGnssFilterBatch):
         models = len(next(iter(banks.values()))[0].filters)
         filters = [flt for bank, _ in banks.values() for flt in bank.filters]
         sums = self.stack["sums"][:, 0]
-        first = self.members[rows[0]].engine
-        cfg, ukf = first.config, filters[0]
-        Q = np.repeat(self._process_noise(rows, sums[rows, 0]), models, axis=0)
-        scales = np.concatenate([self.members[b].engine.q_scales for b in rows.tolist()])
-        x, P, fallback, finite = predict_rows(
-            np.stack([flt.x for flt in filters]),
-            np.stack([P for _, Ps in banks.values() for P in Ps]), interval_means(sums[rows]),
-            Q, scales, ukf.Wm, ukf.Wc, ukf._spread, cfg.gyro_bias_tau, cfg.accel_bias_tau)
+        cfg = self.members[rows[0]].engine.config
+        finite = predict_filter_groups(
+            filters, np.stack([P for _, Ps in banks.values() for P in Ps]),
+            interval_means(sums[rows]),
+            np.repeat(self._process_noise(rows, sums[rows, 0]), models, axis=0),
+            np.concatenate([self.members[b].engine.q_scales for b in rows.tolist()]),
+            cfg.gyro_bias_tau, cfg.accel_bias_tau, models)
         sums[rows] = 0.0
-        for i, (b, (bank, _)) in enumerate(banks.items()):
-            own = slice(models * i, models * (i + 1))
-            for flt, extra in zip(bank.filters, fallback[own].tolist()):
-                flt.sqrt_fallbacks += int(extra)
-            if not finite[own].all():
+        for (b, (bank, _)), ok in zip(banks.items(), finite.tolist()):
+            if not ok:
                 self.fail(b, predicted_state_error())
                 continue
-            for flt, x_j, P_j in zip(bank.filters, x[own], P[own]):
-                flt.x, flt.P = x_j, P_j
             bank.x, bank.P = imm_combine(bank.mu, [flt.x for flt in bank.filters],
                                          [flt.P for flt in bank.filters])
             self._diagonal[b] = np.diagonal(bank.P)

@@ -309,21 +309,32 @@ def discrete_process_noise(q_density, T):
     return Q
 
 
-def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
+def predict_filter_groups(filters, P, nom, Q, q_scales, tau_g, tau_a, models):
     """:func:`predict_rows` of the unscented filters ``filters``
-    (:class:`~navcore.filters.unscented.UnscentedKalmanFilter`, one transform) over the
-    interval ``nom`` with the process noise ``Q`` times each filter's scale of ``q_scales``:
-    their states checked as :meth:`~navcore.filters.unscented.UnscentedKalmanFilter.predict`
-    checks them, updated in place; raises its error when a prediction is not finite."""
+    (:class:`~navcore.filters.unscented.UnscentedKalmanFilter`, one transform) whose checked
+    covariances are ``P`` (F, n, n), with process noises ``Q`` (F, n, n) times
+    ``q_scales`` (F,): ``models`` consecutive filters per run of ``nom``.  Every filter
+    counts its square-root fallbacks; the filters of a run take their prediction when all
+    of them are finite.  Returns, per run, whether they were."""
     first = filters[0]
     x, P, fallback, finite = predict_rows(
-        np.stack([flt.x for flt in filters]),
-        np.stack([flt.checked_covariance() for flt in filters]), nom,
-        np.broadcast_to(Q, (len(filters),) + np.shape(Q)), np.asarray(q_scales, dtype=float),
-        first.Wm, first.Wc, first._spread, tau_g, tau_a)
+        np.stack([flt.x for flt in filters]), P, nom, Q, q_scales, first.Wm, first.Wc,
+        first._spread, tau_g, tau_a)
+    finite_runs = finite.reshape(-1, models).all(axis=1)
     for j, flt in enumerate(filters):
         flt.sqrt_fallbacks += int(fallback[j])
-    if not finite.all():
+        if finite_runs[j // models]:
+            flt.x, flt.P = x[j], P[j]
+    return finite_runs
+
+
+def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
+    """:func:`predict_filter_groups` of one run's filters over its interval ``nom`` with the
+    process noise ``Q`` times each filter's scale of ``q_scales``: their states checked as
+    :meth:`~navcore.filters.unscented.UnscentedKalmanFilter.predict` checks them, updated in
+    place; raises its error when a prediction is not finite."""
+    P = np.stack([flt.checked_covariance() for flt in filters])
+    Q = np.broadcast_to(Q, (len(filters),) + np.shape(Q))
+    if not predict_filter_groups(filters, P, nom, Q, np.asarray(q_scales, dtype=float),
+                                 tau_g, tau_a, len(filters))[0]:
         raise predicted_state_error()
-    for j, flt in enumerate(filters):
-        flt.x, flt.P = x[j], P[j]
