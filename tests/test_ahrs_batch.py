@@ -231,6 +231,40 @@ def test_magnetometer_rows_are_each_model_alone():
     assert not np.array_equal(rows[0], rows[1])          # own seeds
 
 
+def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():
+    """Over more than one block of normals (MagnetometerModel.NORMALS_BLOCK samples), each
+    reading is the field in body axes plus the hard iron plus the noise times the next 3 of
+    6 normals the model's generator gives one sample at a time (numpy's default_rng of
+    [seed, 3003]), the vibration noise the other 3."""
+    from navcore.sensors.magnetometer import MagnetometerModel
+    params = dict(mag_field_T=5e-5, mag_noise_T=1e-7, mag_hard_iron_x=1e-6,
+                  vibration_start_s=0.0, vibration_accel_noise_mps2=0.2)
+    model = MagnetometerModel(params, 7)
+    stream = np.random.default_rng([7, 3003])
+    field = 5e-5 * np.array([math.cos(math.radians(60.0)), 0.0, math.sin(math.radians(60.0))])
+    C_bn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    for k in range(MagnetometerModel.NORMALS_BLOCK + 50):
+        z = stream.standard_normal(6)
+        reading = model.measure(0.01 * k, C_bn)
+        expected = C_bn.T @ field + np.array([1e-6, 0.0, 0.0]) + 1e-7 * z[:3]
+        np.testing.assert_allclose(reading, expected, rtol=0, atol=1e-20)
+        assert np.array_equal(model.accel_disturbance(0.01 * k), 0.2 * z[3:])
+
+
+def test_rotation_vector_quaternions_of_rows_are_those_of_each_vector():
+    """rotvec_quat_rows against _rotvec_quat bit for bit, on both sides of the small-angle
+    series (|v| = 1e-6) and at zero."""
+    from navcore.filters.ahrs import _rotvec_quat, rotvec_quat_rows
+    rng = np.random.default_rng(5)
+    v = rng.normal(size=(800, 3)) * np.repeat([1e-9, 1e-7, 6e-7, 1e-5, 1e-3, 0.1, 1.0, 3.0],
+                                              100)[:, None]
+    v[0] = 0.0
+    rows = rotvec_quat_rows(v)
+    assert np.array_equal(_bits(rows.T), _bits([_rotvec_quat(*r) for r in v.tolist()]))
+    norms = np.linalg.norm(v, axis=1)
+    assert (norms < 1e-6).any() and (norms > 1e-6).any()
+
+
 def test_same_time_of_arrays_is_same_time_of_each_element():
     """Long runs (1e5 s), short ones, exact zeros, differences around the tolerance."""
     from navcore.core.timing import same_time, same_time_rows
@@ -258,3 +292,27 @@ def test_euler_angles_of_quaternion_columns_are_those_of_each_quaternion():
     rows = quat_euler_rows(q)
     assert np.array_equal(_bits(rows.T), _bits([quat_euler(c) for c in q.T.tolist()]))
     assert rows[2, 1] == math.pi
+
+
+def test_accepted_rows_is_each_input_s_declared_range():
+    """ComponentBatch.accepted_rows (open bounds from closed ones by nextafter) against
+    Limits.contains per value: closed, open and one-sided ranges, values at each bound, one
+    float either side of it, NaN and the infinities."""
+    from types import SimpleNamespace
+
+    from navcore.core.batch import ComponentBatch
+    from navcore.core.limits import Limits
+    limits = {"a": Limits(0.0, 1.0), "b": Limits(0.0, 1.0, low_open=True, high_open=True),
+              "c": Limits(low=-2.5), "d": Limits(high=1e-3, high_open=True), "e": Limits()}
+    ports = {n: SimpleNamespace(limits=x) for n, x in limits.items()}
+    fake = SimpleNamespace(component_class=SimpleNamespace(_input_ports=lambda: ports))
+    fake._open_bounds = lambda names: ComponentBatch._open_bounds(fake, names)
+    candidates = [0.0, 1.0, -2.5, 1e-3, 0.5, -1.0, 2.0, math.nan, math.inf, -math.inf]
+    candidates += [math.nextafter(x, s) for x in (0.0, 1.0, -2.5, 1e-3) for s in (-1, 2)]
+    rng = np.random.default_rng(2)
+    names = tuple(limits)
+    values = rng.choice(candidates, size=(400, len(names)))
+    rows = ComponentBatch.accepted_rows(fake, values, names)
+    expected = [all(limits[n].contains(v) for n, v in zip(names, row)) for row in values.tolist()]
+    assert rows.tolist() == expected
+    assert 0 < sum(expected) < len(expected)

@@ -391,14 +391,18 @@ def test_restoring_a_state_checks_the_kinds_of_the_fields():
 
 # -- fuzzy adaptive R ----------------------------------------------------------------------
 class _Inference:
-    """A stand-in rule base: records (e, de) and returns the next factor of a list."""
+    """A stand-in rule base: records (e, de) and returns the next factor of a list, for each
+    block its stacked form is called with."""
 
     def __init__(self, factors):
         self.factors, self.calls = list(factors), []
 
+    def stacked(self, copies):
+        return self
+
     def __call__(self, e, de):
-        self.calls.append((e, de))
-        return self.factors.pop(0)
+        self.calls += list(zip(e.tolist(), de.tolist()))
+        return np.array([self.factors.pop(0) for _ in e.tolist()])
 
 
 PZZ = np.diag([1.0, 1.0, 1.0, 4.0, 4.0, 4.0]) + 0.3 * (np.eye(6, k=1) + np.eye(6, k=-1))

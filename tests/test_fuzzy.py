@@ -161,3 +161,43 @@ def test_de_is_the_growth_of_the_mismatch():
     for v in (0.02, 0.01):
         adapt.step(np.full(6, v), np.zeros((6, 6)), R0, np.ones(2))
     assert adapt.de[0] < 0 < grown
+
+
+def _centroid_by_loops(inference, e, de):
+    """The inference of the module docstring written out with Python loops: rule table,
+    min/max, centroid over the grid (the reference the stacked inference must reproduce)."""
+    mu_e = memberships(e, (-0.5, 0.0, 1.0), inference.e_feet).tolist()
+    mu_de = memberships(de, (-0.5, 0.0, 0.5), inference.de_feet).tolist()
+    rules = [[0, 1, 2], [1, 2, 3], [2, 3, 4]]
+    fired = [0.0] * 5
+    for i in range(3):
+        for j in range(3):
+            fired[rules[i][j]] = max(fired[rules[i][j]], min(mu_e[i], mu_de[j]))
+    sets = inference.output_sets.tolist()
+    aggregate = [max(min(sets[k][g], fired[k]) for k in range(5))
+                 for g in range(len(inference.grid))]
+    total = math.fsum(aggregate)
+    if total <= 0.0:
+        return 1.0
+    return math.exp(math.fsum(a * x for a, x in zip(aggregate, inference.grid.tolist())) / total)
+
+
+def test_stacked_inferences_with_their_own_sets_against_loops():
+    """Rows of different feet and output vertices (the GA's per-run parameters) in one
+    StackedInference: each row's factor is its own inference's, within rounding of the
+    loop-and-fsum reference (the centroid's sums round in another order there)."""
+    from navcore.filters.fuzzy import FEET, OUTPUT_VERTICES, StackedInference
+    rng = np.random.default_rng(11)
+    inferences = [FuzzyRScale()] + [
+        FuzzyRScale({k: rng.uniform(lo, hi) for k, (_, lo, hi, _) in
+                     {**FEET, **OUTPUT_VERTICES}.items()}) for _ in range(5)]
+    rows = [inferences[k % 6] for k in range(60)]
+    e, de = rng.uniform(-1.0, 3.0, 60), rng.uniform(-1.0, 1.0, 60)
+    e[:3], de[:3] = (0.0, 0.5, -0.5), (0.0, 0.0, -0.5)     # vertices: matched, I, LD
+    stacked = StackedInference(rows)(e, de)
+    expected = [_centroid_by_loops(f, a, b) for f, a, b in zip(rows, e.tolist(), de.tolist())]
+    np.testing.assert_allclose(stacked, expected, rtol=1e-13)
+    assert stacked[0] == 1.0
+    assert len(set(np.round(stacked, 6).tolist())) > 30           # the rows differ
+    # each row is the single inference, bit for bit
+    assert stacked.tolist() == [f(a, b) for f, a, b in zip(rows, e.tolist(), de.tolist())]

@@ -15,14 +15,16 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
   :func:`~navcore.filters.ahrs.measure_points` on the points of all runs, the stacked
   moments (:func:`~navcore.filters.unscented.predicted_moments_rows`,
   :func:`~navcore.filters.unscented.measurement_moments_rows`) and
-  :func:`~navcore.filters.unscented.correct_rows`; the fuzzy adaptation of R is each run's
-  own object, called with its row;
+  :func:`~navcore.filters.unscented.correct_rows`; the fuzzy adaptation of R of all runs in
+  one :func:`~navcore.filters.ahrs.adapt_r_scales` call (each run's window and state its own
+  object's, the inferences of all runs' blocks stacked);
 * the solution outputs.  The quaternion products of the outputs and of the gyro increments
-  are the single engine's float formulas (``_qmul``) on arrays; the rotation-vector
-  quaternions and the Euler angles stay libm's ``sin``/``cos``/``atan2``/``hypot`` per run
-  (:func:`~navcore.filters.ahrs._rotvec_quat`, :func:`~navcore.filters.ahrs.quat_euler_rows`):
-  numpy's ``arctan2`` differs from libm's in the last place for about 8 % of arguments, so
-  arrays would not give each run the floats of its single run.
+  are the single engine's float formulas (``_qmul``) on arrays; in the rotation-vector
+  quaternions and the Euler angles the arithmetic is on arrays too, but ``sin``/``cos``/
+  ``atan2``/``hypot`` stay libm's per element (:func:`~navcore.filters.ahrs.rotvec_quat_rows`,
+  :func:`~navcore.filters.ahrs.quat_euler_rows`): numpy's ``arctan2`` differs from libm's in
+  the last place for about 8 % of arguments, so numpy's would not give each run the floats
+  of its single run.
 
 Everything else is the run's own component, given the batch's values first (:meth:`_lend`)
 and taken back after (:meth:`_adopt`): a run not started yet (TRIAD from its first samples),
@@ -40,9 +42,11 @@ import numpy as np
 from ..core import signals
 from ..core.batch import ComponentBatch
 from ..core.timing import same_time_rows
-from ..filters.ahrs import (UkfAhrsEngine, _qmul, _rotvec_quat, attitude_process_noise,
-                            euler_sigma_rows, measure_points, propagate_points, quat_euler_rows,
+from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, _qmul, adapt_r_scales,
+                            attitude_process_noise, euler_sigma_rows, measure_points,
+                            propagate_points, quat_euler_rows, rotvec_quat_rows,
                             shadow_switched)
+from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
                                  points_from_sqrt_rows, predicted_moments_rows,
                                  predicted_state_error, sqrt_rows, state_error)
@@ -89,6 +93,7 @@ class AhrsFilterBatch(ComponentBatch):
         self.last_update = np.zeros(runs)
         self.nav_time = np.full(runs, float(start_time))
         alive = [b for b in range(runs) if b not in self._failures]
+        self._blocks = {}            # the stacked fuzzy inferences of sets of runs
         self._native = bool(alive) and self._stands_for(alive)
         self._constants(alive)
         for b in alive:
@@ -106,6 +111,7 @@ class AhrsFilterBatch(ComponentBatch):
                    == (first.ukf.alpha, first.ukf.beta, first.ukf.kappa) for e in engines)
         return same and all(
             all(getattr(type(e), m) is getattr(UkfAhrsEngine, m) for m in _ENGINE_METHODS)
+            and (e.adaptive is None or type(e.adaptive).step is FuzzyAdaptiveR.step)
             for e in engines) and all(
             getattr(type(self.members[b]), m) is getattr(shell, m)
             for b in alive for m in _SHELL_METHODS)
@@ -204,7 +210,7 @@ class AhrsFilterBatch(ComponentBatch):
         f_b = v[:, 5:8] / dt[:, None]
         mag_fresh = np.abs(v[:, 8] - imu_time) <= self.max_mag_age[rows] + 1e-9
         self.nav_time[rows] = imu_time
-        increments = np.array([_rotvec_quat(*r) for r in v[:, 2:5].tolist()]).T
+        increments = rotvec_quat_rows(v[:, 2:5])
         self.dq[rows] = np.array(_qmul(self.dq[rows].T, increments)).T
         self.interval[rows] += dt
         picked = mag_fresh & (imu_time - self.last_update[rows]
@@ -279,11 +285,7 @@ class AhrsFilterBatch(ComponentBatch):
         Z = measure_points(X.reshape(-1, 6), self.gravity, self.field_unit).reshape(X.shape)
         z = np.concatenate((f_b, m_b / self.field_intensity[rows][:, None]), axis=1)
         z_pred, Pzz, Pxz = measurement_moments_rows(X, Z, self.x[rows], self.Wm, self.Wc)
-        for i, b in enumerate(rows.tolist()):
-            adaptive = self.members[b].engine.adaptive
-            if adaptive is not None:
-                self.r_scale[b] = adaptive.step(z[i] - z_pred[i], Pzz[i], self.R0[b],
-                                                self.r_scale[b])
+        self._adapt_r(rows, z - z_pred, Pzz)
         R = self.R0[rows] * np.repeat(self.r_scale[rows], 3, axis=1)[:, :, None]
         result = correct_rows(self.x[rows], self.P[rows], z, z_pred, Pzz + R, Pxz)
         ok = result.status == 0
@@ -295,6 +297,23 @@ class AhrsFilterBatch(ComponentBatch):
         self.log_likelihood[rows] = result.log_likelihood[ok]
         self._shadow_rows(rows)
         return ok
+
+    def _adapt_r(self, rows: np.ndarray, innovations: np.ndarray, Pzz: np.ndarray) -> None:
+        """The fuzzy adaptation of R of the runs ``rows`` that have one, in one
+        :func:`~navcore.filters.ahrs.adapt_r_scales` call."""
+        adaptives = [self.members[b].engine.adaptive for b in rows.tolist()]
+        picked = [i for i, a in enumerate(adaptives) if a is not None]
+        if not picked:
+            return
+        adaptives = [adaptives[i] for i in picked]
+        key = tuple(id(a.inference) for a in adaptives)    # the cache holds them: ids stay
+        blocks = self._blocks.get(key)
+        if blocks is None:
+            blocks = self._blocks[key] = StackedInference(
+                [a.inference for a in adaptives for _ in range(2)])
+        runs = rows[picked]
+        self.r_scale[runs] = adapt_r_scales(adaptives, blocks, innovations[picked],
+                                            Pzz[picked], self.R0[runs], self.r_scale[runs])[0]
 
     def _shadow_rows(self, rows: np.ndarray) -> None:
         """Each engine's switch to the shadow MRP (:func:`shadow_switched`, its own test)."""
@@ -323,8 +342,7 @@ class AhrsFilterBatch(ComponentBatch):
         T = self.interval[rows]
         pending = T > 0.0
         if pending.any():
-            bias = (-x[pending, 3:] * T[pending, None]).tolist()
-            turn = np.array([_rotvec_quat(*r) for r in bias]).T
+            turn = rotvec_quat_rows(-x[pending, 3:] * T[pending, None])
             q[:, pending] = _qmul(_qmul(q[:, pending], self.dq[rows[pending]].T), turn)
         out[rows, col["nav_time"]] = self.nav_time[rows]
         out[rows, col["aligned"]] = 1.0

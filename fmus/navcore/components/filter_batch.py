@@ -24,6 +24,7 @@ engine's (:meth:`_adopt`), so the run computes exactly what it computes alone.
 """
 from __future__ import annotations
 
+import math
 from typing import Dict, List
 
 import numpy as np
@@ -221,9 +222,10 @@ class InsGnssFilterBatch(ComponentBatch):
         when any run needs its own code for this step."""
         if not self._native or not self._taus or self._failures or self.own.any():
             return None
-        imu_time, dt = imu[0, 0].item(), imu[0, 1].item()
-        if not ((imu[:, 0] == imu_time).all() and (imu[:, 1] == dt).all()):
+        first = imu[0, :2]
+        if not (imu[:, :2] == first).all():
             return None
+        imu_time, dt = first.tolist()
         nav_time = self.nav_time
         if not (imu_time > nav_time + 0.5 * dt and dt > 0
                 and same_time(imu_time - dt, nav_time, dt)):
@@ -240,8 +242,9 @@ class InsGnssFilterBatch(ComponentBatch):
         self._after_interval()
         due = checkpoint_due(imu_time, self.last_checkpoint, dt, self.max_fix_age + dt,
                              self.dense)
-        for b in np.flatnonzero(due).tolist():    # its latency history checkpoints now
-            self._lend(b)
+        if due.any():
+            for b in np.flatnonzero(due).tolist():    # its latency history checkpoints now
+                self._lend(b)
 
     def _after_interval(self) -> None:
         """Hook: the runs' own code an engine runs after an interval (none for the Kf)."""
@@ -272,6 +275,8 @@ class InsGnssFilterBatch(ComponentBatch):
         out[:, c + 15:c + 15 + len(_STD_NAMES)] = np.sqrt(np.maximum(diagonal, 0.0))
         out[:, self.columns["nav_time"]] = self.nav_time
         out[:, self.columns["updated"]] = 0.0
+        if math.isfinite(out.sum()):     # NaN or inf anywhere makes the sum non-finite
+            return
         for b in np.flatnonzero(~np.isfinite(out).all(axis=1)).tolist():
             self._by_itself(b, lambda m: m._write_solution())
 

@@ -22,6 +22,7 @@ each row with the component run alone, bit for bit.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+import math
 from typing import Any, Dict, List, Mapping, Sequence, Tuple
 
 import numpy as np
@@ -97,17 +98,25 @@ class ComponentBatch(ABC):
         :meth:`~navcore.core.component.Component.check_inputs` enforces; a run refused here
         gets its own component's error from its own code)."""
         cache = self.__dict__.setdefault("_ranges", {})
-        ranges = cache.get(names)
-        if ranges is None:
-            ports = self.component_class._input_ports()
-            limits = [ports[n].limits if n in ports else FINITE for n in names]
-            ranges = cache[names] = tuple(np.array(a) for a in zip(*[
-                (x.low, x.high, x.low_open or not np.isfinite(x.low),
-                 x.high_open or not np.isfinite(x.high)) for x in limits]))
-        low, high, low_open, high_open = ranges
-        ok = np.where(low_open, values > low, values >= low)
-        ok &= np.where(high_open, values < high, values <= high)
+        bounds = cache.get(names)
+        if bounds is None:
+            bounds = cache[names] = self._open_bounds(names)
+        low, high = bounds
+        ok = values > low
+        ok &= values < high
         return ok.all(axis=1)
+
+    def _open_bounds(self, names: Tuple[str, ...]) -> Tuple[np.ndarray, np.ndarray]:
+        """The ranges of the inputs ``names`` as open bounds (low, high): a closed bound is
+        the next float outside it (``x >= low`` is ``x > nextafter(low, -inf)`` for every
+        float x; NaN passes neither), an infinite one stays open (refusing the infinity)."""
+        ports = self.component_class._input_ports()
+        limits = [ports[n].limits if n in ports else FINITE for n in names]
+        low = [x.low if x.low_open or not math.isfinite(x.low) else
+               math.nextafter(x.low, -math.inf) for x in limits]
+        high = [x.high if x.high_open or not math.isfinite(x.high) else
+                math.nextafter(x.high, math.inf) for x in limits]
+        return np.array(low, dtype=float), np.array(high, dtype=float)
 
     def _by_itself(self, b: int, call) -> None:
         """``call(member)`` for run b on its own objects, given the batch's values first

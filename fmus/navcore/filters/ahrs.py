@@ -86,6 +86,19 @@ def _rotvec_quat(x, y, z):
     return (math.cos(0.5 * t), s * x, s * y, s * z)
 
 
+def rotvec_quat_rows(v):
+    """:func:`_rotvec_quat` of every row of ``v`` (N, 3): the (4, N) quaternions, each the
+    floats of :func:`_rotvec_quat` (the same arithmetic on arrays, ``math``'s sine and cosine
+    per element; a square root rounds alike in both)."""
+    x, y, z = v.T
+    t = np.sqrt(x * x + y * y + z * z)
+    half = (0.5 * t).tolist()
+    large = t > 1e-6
+    s = np.where(large, np.array(list(map(math.sin, half))) / np.where(large, t, 1.0),
+                 0.5 - t * t / 48.0)
+    return np.array((list(map(math.cos, half)), s * x, s * y, s * z))
+
+
 def _euler_of_quat(w, x, y, z, atan2, hypot):
     """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z) (Groves
     eq. 2.38 via eq. 2.34), normalised first: floats, or arrays with ``atan2``/``hypot``
@@ -322,11 +335,12 @@ class FuzzyAdaptiveR:
     """
 
     state_fields = ("residuals", "count", "e", "de")
-    derived_fields = ("inference", "window", "r_scale_min", "r_scale_max")
+    derived_fields = ("inference", "blocks", "window", "r_scale_min", "r_scale_max")
 
     def __init__(self, inference: FuzzyRScale, window: int, r_scale_min: float,
                  r_scale_max: float):
         self.inference = inference
+        self.blocks = inference.stacked(2)        # the inference of both blocks at once
         self.window = int(window)
         self.r_scale_min = float(r_scale_min)
         self.r_scale_max = float(r_scale_max)
@@ -336,21 +350,53 @@ class FuzzyAdaptiveR:
         self.de = np.zeros(2)
 
     def step(self, innovation, Pzz, R0, r_scale):
-        """New block scales after the innovation ``innovation`` (see the class docstring)."""
-        self.residuals[self.count % self.window] = innovation
-        self.count += 1
-        if self.count < self.window:
-            return r_scale
-        Pz = np.diag(Pzz) + np.diag(R0) * np.repeat(r_scale, 3)
-        Cz = np.mean(self.residuals * self.residuals, axis=0)
-        new = np.array(r_scale, dtype=float)
-        e_new = np.empty(2)
-        for b in range(2):
-            block = slice(3 * b, 3 * b + 3)
-            e_new[b] = (Cz[block].sum() - Pz[block].sum()) / Pz[block].sum()
-        de = e_new - self.e if self.count > self.window else np.zeros(2)
-        self.e, self.de = e_new, de
-        for b in range(2):
-            new[b] = min(max(r_scale[b] * self.inference(e_new[b], de[b]), self.r_scale_min),
-                         self.r_scale_max)
-        return new
+        """New block scales after the innovation ``innovation`` (see the class docstring);
+        ``r_scale`` itself until the window is full."""
+        new, adapted = adapt_r_scales([self], self.blocks, np.asarray(innovation)[None],
+                                      np.asarray(Pzz)[None], np.asarray(R0)[None],
+                                      np.asarray(r_scale, dtype=float)[None])
+        return new[0] if adapted[0] else r_scale
+
+
+def adapt_r_scales(adaptives, blocks, innovations, Pzz, R0, r_scales):
+    """:meth:`FuzzyAdaptiveR.step` of the adaptations ``adaptives`` (n, one per filter) at
+    once, with their innovations (n, 6), ``Pzz`` and ``R0`` (n, 6, 6) and scales (n, 2);
+    ``blocks`` the :class:`~navcore.filters.fuzzy.StackedInference` of their 2n blocks
+    (filter i's accelerometer then magnetometer).  Returns the new scales (n, 2) and which
+    filters adapted them (a list of n bools: their window is full); the others' rows are
+    their scales.  Each filter's floats are those of its step alone (numpy's reductions
+    over the window and over a block's 3 values add in the same order stacked)."""
+    for a, innovation in zip(adaptives, innovations):
+        a.residuals[a.count % a.window] = innovation
+        a.count += 1
+    adapted = [a.count >= a.window for a in adaptives]
+    new = np.array(r_scales, dtype=float)
+    if not any(adapted):
+        return new, adapted
+    if all(adapted):
+        rows, ready, scales = slice(None), adaptives, new
+    else:
+        rows = np.flatnonzero(adapted)
+        ready = [adaptives[i] for i in rows.tolist()]
+        scales = new[rows]
+        Pzz, R0 = Pzz[rows], R0[rows]
+        blocks = blocks.rows(np.repeat(2 * rows, 2) + np.tile([0, 1], len(rows)))
+    Pz = (np.diagonal(Pzz, axis1=1, axis2=2)
+          + np.diagonal(R0, axis1=1, axis2=2) * np.repeat(scales, 3, axis=1))
+    if len({a.window for a in ready}) == 1:
+        residuals = np.stack([a.residuals for a in ready])
+        Cz = np.mean(residuals * residuals, axis=1)
+    else:
+        Cz = np.array([np.mean(a.residuals * a.residuals, axis=0) for a in ready])
+    Pz_sum = Pz.reshape(-1, 2, 3).sum(axis=2)
+    e_new = (Cz.reshape(-1, 2, 3).sum(axis=2) - Pz_sum) / Pz_sum
+    de = np.zeros_like(e_new)
+    for i, a in enumerate(ready):
+        if a.count > a.window:
+            de[i] = e_new[i] - a.e
+        a.e, a.de = e_new[i].copy(), de[i].copy()
+    factors = blocks(e_new.reshape(-1), de.reshape(-1)).reshape(-1, 2)
+    low = np.array([a.r_scale_min for a in ready])[:, None]
+    high = np.array([a.r_scale_max for a in ready])[:, None]
+    new[rows] = np.minimum(np.maximum(scales * factors, low), high)
+    return new, adapted

@@ -168,13 +168,57 @@ class FuzzyRScale:
 
     def __call__(self, e: float, de: float) -> float:
         """The factor F for inputs ``e``, ``de`` (1 when no rule fires)."""
-        mu_e = memberships(e, E_VERTICES, self.e_feet)
-        mu_de = memberships(de, DE_VERTICES, self.de_feet)
-        strength = np.minimum.outer(mu_e, mu_de)           # 3 x 3 rule firing strengths
-        fired = np.zeros(5)
-        np.maximum.at(fired, RULES.ravel(), strength.ravel())
-        aggregate = np.max(np.minimum(self.output_sets, fired[:, None]), axis=0)
-        total = aggregate.sum()
-        if total <= 0.0:
-            return 1.0
-        return float(np.exp(aggregate @ self.grid / total))
+        return float(self.stacked(1)(np.array([e]), np.array([de]))[0])
+
+    def stacked(self, copies: int) -> "StackedInference":
+        """This inference ``copies`` times, as one :class:`StackedInference`."""
+        return StackedInference([self] * copies)
+
+
+#: row j: the flat indices (e row, de column) of the rules of RULES that fire output set j,
+#: padded with index 9 (a row of zero strengths)
+_FIRING = np.array([np.pad(np.flatnonzero(RULES.ravel() == j), (0, 3), constant_values=9)[:3]
+                    for j in range(5)])
+
+
+class StackedInference:
+    """Several :class:`FuzzyRScale` inferences (one per row, each with its own sets) run at
+    once by :meth:`__call__`, each giving the floats it gives alone: the memberships are the
+    scalar functions per element, min and max are exact in any order, and each centroid's
+    dot product is numpy's 1-D product of its row (the stacked matrix product rounds
+    otherwise)."""
+
+    def __init__(self, inferences: Sequence[FuzzyRScale]):
+        self.inferences = list(inferences)
+        self.e_feet = [list(c) for c in zip(*(f.e_feet for f in inferences))]   # 4 x K
+        self.de_feet = [list(c) for c in zip(*(f.de_feet for f in inferences))]
+        self.output_sets = np.stack([f.output_sets for f in inferences])  # (K, 5, grid)
+        self.grids = [f.grid for f in inferences]
+
+    def rows(self, indices: Sequence[int]) -> "StackedInference":
+        """The inferences of the rows ``indices``, in that order."""
+        return StackedInference([self.inferences[i] for i in indices])
+
+    def __call__(self, e: np.ndarray, de: np.ndarray) -> np.ndarray:
+        """The factors F (K,) for the inputs ``e``, ``de`` (K,), row k by inference k."""
+        mu_e = membership_rows(e.tolist(), E_VERTICES, self.e_feet)         # (3, K)
+        mu_de = membership_rows(de.tolist(), DE_VERTICES, self.de_feet)
+        strength = np.minimum(mu_e[:, None], mu_de[None]).reshape(9, -1)  # rule firing
+        fired = np.concatenate((strength, np.zeros((1, len(e)))))[_FIRING].max(axis=1)
+        aggregate = np.max(np.minimum(self.output_sets, fired.T[:, :, None]), axis=1)
+        total = aggregate.sum(axis=1)
+        centroid = np.array([a @ grid for a, grid in zip(aggregate, self.grids)])
+        fires = ~(total <= 0.0)
+        return np.where(fires, np.exp(centroid / np.where(fires, total, 1.0)), 1.0)
+
+
+def membership_rows(x: Sequence[float], vertices: Sequence[float],
+                    feet: Sequence[Sequence[float]]) -> np.ndarray:
+    """:func:`memberships` of every element of ``x`` (K floats), each with its own feet
+    (``feet``: 4 lists of K): the (3, K) degrees of N, Z, P."""
+    n_v, z_v, p_v = vertices
+    n_right, z_left, z_right, p_left = feet
+    k = len(x)
+    return np.array((list(map(_shoulder_left, x, [n_v] * k, n_right)),
+                     list(map(_triangle, x, z_left, [z_v] * k, z_right)),
+                     list(map(_shoulder_right, x, p_left, [p_v] * k))))

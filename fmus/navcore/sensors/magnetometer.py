@@ -53,7 +53,10 @@ _AXIS_PHASES = np.array([0.0, 2.0, 4.0]) * math.pi / 3
 class MagnetometerModel:
     """Magnetometer and vibration disturbance of the module docstring."""
 
-    state_fields = ("rng", "_z")
+    #: samples whose normals are drawn in one call
+    NORMALS_BLOCK = 256
+
+    state_fields = ("rng", "_normals", "_n_used")
     derived_fields = ("field_ned", "noise", "hard_iron", "soft_iron", "vibration_start",
                       "vibration_noise", "vibration_amplitude", "vibration_frequency",
                       "vibration_mag_factor", "vibration_on")
@@ -110,16 +113,35 @@ class MagnetometerModel:
         self.vibration_on = (self.vibration_noise > 0.0 or self.vibration_amplitude > 0.0
                              or self.vibration_mag_factor != 1.0)
         self.rng = np.random.default_rng([int(seed), 3003])
-        self._z = np.zeros(6)          # the current sample's normals (measure, then accel)
+        # the normals of NORMALS_BLOCK samples, drawn at once (the generator gives the
+        # numbers it gives one sample at a time); row _n_used - 1 is the current sample's
+        # (measure, then accel_disturbance)
+        self._normals = np.zeros((self.NORMALS_BLOCK, 6))
+        self._n_used = self.NORMALS_BLOCK
+
+    def _next_normals(self) -> np.ndarray:
+        """The 6 normals of a new sample (3 magnetometer noise, 3 vibration noise)."""
+        n = self._n_used
+        if n == len(self._normals):
+            self._normals = self.rng.standard_normal((self.NORMALS_BLOCK, 6))
+            n = 0
+        self._n_used = n + 1
+        return self._normals[n]
 
     def vibrating(self, t: float) -> bool:
         """The vibration disturbance acts at time ``t``."""
         return self.vibration_on and t >= self.vibration_start
 
+    def _noise_factor(self, t: float) -> float:
+        """The factor of the magnetometer noise at time ``t``."""
+        return self.vibration_mag_factor if self.vibrating(t) else 1.0
+
     def measure(self, t: float, C_bn: np.ndarray) -> np.ndarray:
         """Magnetometer reading [T] at time ``t`` for the attitude ``C_bn``; draws the sample's
         random numbers (call once per sample, then :meth:`accel_disturbance`)."""
-        return measure_rows([self], t, C_bn)[0]
+        z = self._next_normals()
+        body = self.soft_iron @ (C_bn.T @ self.field_ned)
+        return _reading(body, self.hard_iron, self.noise * self._noise_factor(t), z[:3])
 
     def accel_disturbance(self, t: float) -> np.ndarray:
         """Extra specific force [m/s^2] of the vibration at time ``t`` (zero before it)."""
@@ -127,7 +149,7 @@ class MagnetometerModel:
             return np.zeros(3)
         phase = 2.0 * math.pi * self.vibration_frequency * (t - self.vibration_start)
         sine = self.vibration_amplitude * np.sin(phase + _AXIS_PHASES)
-        return sine + self.vibration_noise * self._z[3:]
+        return sine + self.vibration_noise * self._normals[self._n_used - 1, 3:]
 
 
 def measure_rows(models: List["MagnetometerModel"], t: float, C_bn: np.ndarray) -> np.ndarray:
@@ -135,17 +157,20 @@ def measure_rows(models: List["MagnetometerModel"], t: float, C_bn: np.ndarray) 
     for one attitude ``C_bn`` (the runs of a batch share their truth): each model draws its
     own numbers; the field in body axes is one product per distinct field and soft iron (the
     products of one model alone)."""
-    z = np.array([m.rng.standard_normal(6) for m in models])
-    factor = np.empty(len(models))
+    z = np.array([m._next_normals() for m in models])
+    scale = np.empty((len(models), 1))
     body = np.empty((len(models), 3))
     fields: Dict[bytes, np.ndarray] = {}
     for b, m in enumerate(models):
-        m._z = z[b]
-        factor[b] = m.vibration_mag_factor if m.vibrating(t) else 1.0
+        scale[b] = m.noise * m._noise_factor(t)
         key = m.field_ned.tobytes() + m.soft_iron.tobytes()
         if key not in fields:
             fields[key] = m.soft_iron @ (C_bn.T @ m.field_ned)
         body[b] = fields[key]
-    hard = np.array([m.hard_iron for m in models])
-    noise = np.array([m.noise for m in models])
-    return body + hard + (noise * factor)[:, None] * z[:, :3]
+    return _reading(body, np.array([m.hard_iron for m in models]), scale, z[:, :3])
+
+
+def _reading(body, hard_iron, scale, normals):
+    """The reading [T] (any leading axes): the field in body axes ``body`` plus the hard iron
+    plus the noise sigma ``scale`` times the sample's normals."""
+    return body + hard_iron + scale * normals
