@@ -251,16 +251,28 @@ def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():
         assert np.array_equal(model.accel_disturbance(0.01 * k), 0.2 * z[3:])
 
 
-def test_rotation_vector_quaternions_of_rows_are_those_of_each_vector():
-    """rotvec_quat_rows against _rotvec_quat bit for bit, on both sides of the small-angle
-    series (|v| = 1e-6) and at zero."""
-    from navcore.filters.ahrs import _rotvec_quat, rotvec_quat_rows
+@pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "source"])
+def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
+    """accumulate_rows and turn_rows against _qmul and _rotvec_quat of each row (the single
+    engine's accumulate and current_quat) bit for bit, compiled and as their Python source,
+    on both sides of the small-angle series (|v| = 1e-6) and at zero."""
+    from navcore.filters.ahrs import _qmul, _rotvec_quat, accumulate_rows, turn_rows
+    accumulate = accumulate_rows if compiled else accumulate_rows.py_func
+    turn = turn_rows if compiled else turn_rows.py_func
     rng = np.random.default_rng(5)
     v = rng.normal(size=(800, 3)) * np.repeat([1e-9, 1e-7, 6e-7, 1e-5, 1e-3, 0.1, 1.0, 3.0],
                                               100)[:, None]
     v[0] = 0.0
-    rows = rotvec_quat_rows(v)
-    assert np.array_equal(_bits(rows.T), _bits([_rotvec_quat(*r) for r in v.tolist()]))
+    dq, q = rng.normal(size=(800, 4)), rng.normal(size=(800, 4))
+    got = dq.copy()
+    accumulate(got, v)
+    assert np.array_equal(_bits(got), _bits([_qmul(tuple(a), _rotvec_quat(*b))
+                                             for a, b in zip(dq.tolist(), v.tolist())]))
+    got = q.copy()
+    turn(got, dq, v)
+    assert np.array_equal(_bits(got), _bits([_qmul(_qmul(tuple(a), tuple(b)), _rotvec_quat(*c))
+                                             for a, b, c in zip(q.tolist(), dq.tolist(),
+                                                                v.tolist())]))
     norms = np.linalg.norm(v, axis=1)
     assert (norms < 1e-6).any() and (norms > 1e-6).any()
 

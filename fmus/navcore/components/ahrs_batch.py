@@ -19,12 +19,15 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
   one :func:`~navcore.filters.ahrs.adapt_r_scales` call (each run's window and state its own
   object's, the inferences of all runs' blocks stacked);
 * the solution outputs.  The quaternion products of the outputs and of the gyro increments
-  are the single engine's float formulas (``_qmul``) on arrays; in the rotation-vector
-  quaternions and the Euler angles the arithmetic is on arrays too, but ``sin``/``cos``/
-  ``atan2``/``hypot`` stay libm's per element (:func:`~navcore.filters.ahrs.rotvec_quat_rows`,
-  :func:`~navcore.filters.ahrs.quat_euler_rows`): numpy's ``arctan2`` differs from libm's in
-  the last place for about 8 % of arguments, so numpy's would not give each run the floats
-  of its single run.
+  and the rotation-vector quaternions of the gyro increments and of the outputs are the
+  single engine's float formulas (``_qmul``, ``_rotvec_quat``) compiled into kernels over
+  the runs (:func:`~navcore.filters.ahrs.accumulate_rows`,
+  :func:`~navcore.filters.ahrs.turn_rows`; compiled ``sin``, ``cos`` and ``atan2`` are
+  libm's, as Python's), and so are the Euler angles' terms
+  (:func:`~navcore.filters.ahrs.quat_euler_rows`), whose ``hypot`` stays Python's ``math``
+  per element: numpy's and the compiled ``hypot`` differ from Python's (which is not
+  libm's) in the last place for about 0.6 % of arguments, as numpy's ``arctan2`` does from
+  libm's for about 8 %, so they would not give each run the floats of its single run.
 
 Everything else is the run's own component, given the batch's values first (:meth:`_lend`)
 and taken back after (:meth:`_adopt`): a run not started yet (TRIAD from its first samples),
@@ -42,10 +45,9 @@ import numpy as np
 from ..core import signals
 from ..core.batch import ComponentBatch
 from ..core.timing import same_time_rows
-from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, _qmul, adapt_r_scales,
+from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adapt_r_scales,
                             attitude_process_noise, euler_sigma_rows, measure_points,
-                            propagate_points, quat_euler_rows, rotvec_quat_rows,
-                            shadow_switched)
+                            propagate_points, quat_euler_rows, shadow_switched, turn_rows)
 from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
                                  points_from_sqrt_rows, predicted_moments_rows,
@@ -210,8 +212,9 @@ class AhrsFilterBatch(ComponentBatch):
         f_b = v[:, 5:8] / dt[:, None]
         mag_fresh = np.abs(v[:, 8] - imu_time) <= self.max_mag_age[rows] + 1e-9
         self.nav_time[rows] = imu_time
-        increments = rotvec_quat_rows(v[:, 2:5])
-        self.dq[rows] = np.array(_qmul(self.dq[rows].T, increments)).T
+        dq = self.dq[rows]
+        accumulate_rows(dq, np.ascontiguousarray(v[:, 2:5]))
+        self.dq[rows] = dq
         self.interval[rows] += dt
         picked = mag_fresh & (imu_time - self.last_update[rows]
                               >= self.update_interval[rows] - 1e-9)
@@ -342,8 +345,9 @@ class AhrsFilterBatch(ComponentBatch):
         T = self.interval[rows]
         pending = T > 0.0
         if pending.any():
-            turn = rotvec_quat_rows(-x[pending, 3:] * T[pending, None])
-            q[:, pending] = _qmul(_qmul(q[:, pending], self.dq[rows[pending]].T), turn)
+            turned = np.ascontiguousarray(q[:, pending].T)
+            turn_rows(turned, self.dq[rows[pending]], -x[pending, 3:] * T[pending, None])
+            q[:, pending] = turned.T
         out[rows, col["nav_time"]] = self.nav_time[rows]
         out[rows, col["aligned"]] = 1.0
         out[rows, col["nav_roll"]:col["nav_yaw"] + 1] = quat_euler_rows(q).T

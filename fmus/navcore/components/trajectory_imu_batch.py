@@ -56,6 +56,7 @@ class TrajectoryImuBatch(ComponentBatch):
         self.generator = first.generator
         self.errors = ImuErrorBatch([m.errors for m in self.models])
         self.mag_rows = [b for b, m in enumerate(self.models) if alive[b] and m.mag_on]
+        self._magnetometers()
         self.dt, self.start_time, self.n = first.dt, start_time, 0
         for b, m in enumerate(self.models):
             out[b] = [m.out[name] for name in self.columns]
@@ -73,7 +74,15 @@ class TrajectoryImuBatch(ComponentBatch):
         self.models = [self.models[i] for i in rows]
         self.errors.keep(rows)
         self.mag_rows = [rows.index(b) for b in self.mag_rows if b in rows]
+        self._magnetometers()
         self.out = self.out[rows]
+
+    def _magnetometers(self) -> None:
+        """The magnetometer models of the rows that sample one, and of those whose vibration
+        disturbance can act."""
+        self.mag_models = [self.models[b].magnetometer for b in self.mag_rows]
+        self.vibration_rows = [(b, m) for b, m in zip(self.mag_rows, self.mag_models)
+                          if m.vibration_on]
 
     def advance(self, t, h, inputs) -> np.ndarray:
         for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):
@@ -101,11 +110,10 @@ class TrajectoryImuBatch(ComponentBatch):
         """The magnetometer rows (:func:`~navcore.sensors.magnetometer.measure_rows`, the
         function each run's ImuMeasurement calls with its one model)."""
         rows = self.mag_rows
-        models = [self.models[b].magnetometer for b in rows]
         C_bn = np.array(_euler_rows(truth["roll"], truth["pitch"], truth["yaw"]))
         out[rows, self._mag_cols[0]] = t_end
-        out[np.ix_(rows, self._mag_cols[1:])] = measure_rows(models, t_end, C_bn)
-        for b, model in zip(rows, models):
+        out[np.ix_(rows, self._mag_cols[1:])] = measure_rows(self.mag_models, t_end, C_bn)
+        for b, model in self.vibration_rows:
             if model.vibrating(t_end):
                 measured[b, 3:] = measured[b, 3:] + model.accel_disturbance(t_end) * dt
 

@@ -42,6 +42,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..core.kernels import jitable, kernel
 from ..errors import InputError
 from .fuzzy import FuzzyRScale
 from ..ins.mrp import (dcm_to_mrp, mrp_to_dcm_batch, mrp_to_quat, nearest_set, quat_to_mrp, shadow,
@@ -70,6 +71,7 @@ def triad_attitude(f_b, m_b, inclination):
     return np.vstack((north, east, down))     # rows: the NED axes in body coordinates
 
 
+@jitable
 def _qmul(p, q):
     """Hamilton product of two quaternions given as float tuples (one IMU sample's work:
     plain floats cost less than numpy for 4 numbers)."""
@@ -79,6 +81,7 @@ def _qmul(p, q):
             w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)
 
 
+@jitable
 def _rotvec_quat(x, y, z):
     """Quaternion of the rotation vector (x, y, z) as a float tuple."""
     t = math.sqrt(x * x + y * y + z * z)
@@ -86,50 +89,65 @@ def _rotvec_quat(x, y, z):
     return (math.cos(0.5 * t), s * x, s * y, s * z)
 
 
-def rotvec_quat_rows(v):
-    """:func:`_rotvec_quat` of every row of ``v`` (N, 3): the (4, N) quaternions, each the
-    floats of :func:`_rotvec_quat` (the same arithmetic on arrays, ``math``'s sine and cosine
-    per element; a square root rounds alike in both)."""
-    x, y, z = v.T
-    t = np.sqrt(x * x + y * y + z * z)
-    half = (0.5 * t).tolist()
-    large = t > 1e-6
-    s = np.where(large, np.array(list(map(math.sin, half))) / np.where(large, t, 1.0),
-                 0.5 - t * t / 48.0)
-    return np.array((list(map(math.cos, half)), s * x, s * y, s * z))
+@kernel
+def accumulate_rows(dq, dtheta):
+    """:meth:`UkfAhrsEngine.accumulate`'s quaternion of every run of a batch: each row of
+    ``dq`` (B, 4), in place, times the quaternion of the gyro increment in the row of
+    ``dtheta`` (B, 3)."""
+    for b in range(dq.shape[0]):
+        q = _qmul((dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]),
+                  _rotvec_quat(dtheta[b, 0], dtheta[b, 1], dtheta[b, 2]))
+        dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3] = q
 
 
-def _euler_of_quat(w, x, y, z, atan2, hypot):
-    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z) (Groves
-    eq. 2.38 via eq. 2.34), normalised first: floats, or arrays with ``atan2``/``hypot``
-    taken element by element."""
+@kernel
+def turn_rows(q, dq, turn):
+    """The pending rotation of :meth:`UkfAhrsEngine.current_quat` for every run of a batch:
+    each row of ``q`` (B, 4), in place, times the row of ``dq`` (B, 4) times the quaternion
+    of the rotation vector in the row of ``turn`` (B, 3)."""
+    for b in range(q.shape[0]):
+        p = _qmul((q[b, 0], q[b, 1], q[b, 2], q[b, 3]), (dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]))
+        p = _qmul(p, _rotvec_quat(turn[b, 0], turn[b, 1], turn[b, 2]))
+        q[b, 0], q[b, 1], q[b, 2], q[b, 3] = p
+
+
+@jitable
+def _euler_terms(w, x, y, z):
+    """ZYX roll and yaw (not yet folded into (-pi, pi]) of the C_bn of quaternion (w, x, y,
+    z) (Groves eq. 2.38 via eq. 2.34), normalised first, and the terms of its pitch: the
+    pitch is the atan2 of the third and of the hypot of the last two."""
     n = w * w + x * x + y * y + z * z
     a = 2.0 * (w * x + y * z)
     b = n - 2.0 * (x * x + y * y)
-    return (atan2(a, b), atan2(2.0 * (w * y - z * x), hypot(a, b)),
-            atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z)))
+    return (math.atan2(a, b), math.atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z)),
+            2.0 * (w * y - z * x), a, b)
 
 
 def quat_euler(q):
     """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (a 4-sequence of
     floats), yaw in (-pi, pi]."""
-    roll, pitch, yaw = _euler_of_quat(*q, math.atan2, math.hypot)
-    return roll, pitch, (math.pi if yaw <= -math.pi else yaw)
+    roll, yaw, sine, a, b = _euler_terms(*q)
+    return roll, math.atan2(sine, math.hypot(a, b)), (math.pi if yaw <= -math.pi else yaw)
 
 
-def _libm(function):
-    """``function`` of two arrays element by element: Python's ``math`` (numpy's vectorized
-    ``arctan2`` and ``hypot`` round otherwise, see navcore.ins.rotations)."""
-    return lambda a, b: np.array(list(map(function, a.tolist(), b.tolist())))
-
-
-_ATAN2, _HYPOT = _libm(math.atan2), _libm(math.hypot)
+@kernel
+def _euler_terms_rows(q, out):
+    """:func:`_euler_terms` of every column of ``q`` (4, N) into the columns of ``out``
+    (5, N)."""
+    for i in range(q.shape[1]):
+        terms = _euler_terms(q[0, i], q[1, i], q[2, i], q[3, i])
+        out[0, i], out[1, i], out[2, i], out[3, i], out[4, i] = terms
 
 
 def quat_euler_rows(q):
     """:func:`quat_euler` of every column of ``q`` (4, N): the (3, N) roll, pitch and yaw,
-    each the floats of :func:`quat_euler`."""
-    roll, pitch, yaw = _euler_of_quat(*q, _ATAN2, _HYPOT)
+    each the floats of :func:`quat_euler` (its terms compiled, whose ``atan2`` is libm's as
+    Python's; the pitch's ``hypot`` Python's per element: a compiled one, or numpy's, rounds
+    otherwise)."""
+    terms = np.empty((5, q.shape[1]))
+    _euler_terms_rows(np.ascontiguousarray(q, dtype=float), terms)
+    roll, yaw, sine, a, b = terms
+    pitch = list(map(math.atan2, sine.tolist(), map(math.hypot, a.tolist(), b.tolist())))
     return np.array((roll, pitch, np.where(yaw <= -math.pi, math.pi, yaw)))
 
 

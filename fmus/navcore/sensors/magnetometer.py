@@ -59,7 +59,7 @@ class MagnetometerModel:
     state_fields = ("rng", "_normals", "_n_used")
     derived_fields = ("field_ned", "noise", "hard_iron", "soft_iron", "vibration_start",
                       "vibration_noise", "vibration_amplitude", "vibration_frequency",
-                      "vibration_mag_factor", "vibration_on")
+                      "vibration_mag_factor", "vibration_on", "field_key")
 
     #: name -> (default, unit, description) of every parameter
     PARAMETERS: Dict[str, Tuple[Any, str, str, Any]] = {
@@ -104,6 +104,8 @@ class MagnetometerModel:
         self.noise = value("mag_noise_T", nonnegative=True)
         self.hard_iron = np.array([value(f"mag_hard_iron_{a}") for a in "xyz"])
         self.soft_iron = _soft_iron(params.get("mag_soft_iron", ""))
+        #: the field and soft iron as bytes: models with one key share their body field
+        self.field_key = self.field_ned.tobytes() + self.soft_iron.tobytes()
         self.vibration_start = value("vibration_start_s")
         self.vibration_noise = value("vibration_accel_noise_mps2", nonnegative=True)
         self.vibration_amplitude = value("vibration_accel_amplitude_mps2", nonnegative=True)
@@ -163,7 +165,7 @@ def measure_rows(models: List["MagnetometerModel"], t: float, C_bn: np.ndarray) 
     fields: Dict[bytes, np.ndarray] = {}
     for b, m in enumerate(models):
         scale[b] = m.noise * m._noise_factor(t)
-        key = m.field_ned.tobytes() + m.soft_iron.tobytes()
+        key = m.field_key
         if key not in fields:
             fields[key] = m.soft_iron @ (C_bn.T @ m.field_ned)
         body[b] = fields[key]
