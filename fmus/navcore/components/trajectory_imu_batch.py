@@ -82,7 +82,7 @@ class TrajectoryImuBatch(ComponentBatch):
         disturbance can act."""
         self.mag_models = [self.models[b].magnetometer for b in self.mag_rows]
         self.vibration_rows = [(b, m) for b, m in zip(self.mag_rows, self.mag_models)
-                          if m.vibration_on]
+                               if m.vibration_on]
 
     def advance(self, t, h, inputs) -> np.ndarray:
         for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):

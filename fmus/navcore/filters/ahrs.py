@@ -151,14 +151,19 @@ def quat_euler_rows(q):
     return np.array((roll, pitch, np.where(yaw <= -math.pi, math.pi, yaw)))
 
 
+@kernel
+def _qmul_rows(p, q, out):
+    """:func:`_qmul` of the rows of ``p`` and ``q`` (N, 4) into the rows of ``out``."""
+    for i in range(p.shape[0]):
+        r = _qmul((p[i, 0], p[i, 1], p[i, 2], p[i, 3]), (q[i, 0], q[i, 1], q[i, 2], q[i, 3]))
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = r
+
+
 def _quat_multiply_rows(p, q):
     """Hamilton products of the rows of ``p`` (N, 4) with the rows of ``q`` (N, 4)."""
-    w1, x1, y1, z1 = p.T
-    w2, x2, y2, z2 = q.T
-    return np.stack((w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-                     w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2), axis=-1)
+    out = np.empty(np.shape(p))
+    _qmul_rows(np.ascontiguousarray(p, dtype=float), np.ascontiguousarray(q, dtype=float), out)
+    return out
 
 
 def _bias_quats(b, T):

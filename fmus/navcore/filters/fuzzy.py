@@ -168,7 +168,10 @@ class FuzzyRScale:
 
     def __call__(self, e: float, de: float) -> float:
         """The factor F for inputs ``e``, ``de`` (1 when no rule fires)."""
-        return float(self.stacked(1)(np.array([e]), np.array([de]))[0])
+        alone = self.__dict__.get("_alone")
+        if alone is None:
+            alone = self._alone = self.stacked(1)
+        return float(alone(np.array([e]), np.array([de]))[0])
 
     def stacked(self, copies: int) -> "StackedInference":
         """This inference ``copies`` times, as one :class:`StackedInference`."""
