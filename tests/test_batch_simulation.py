@@ -75,13 +75,14 @@ def test_every_run_of_a_batch_records_the_arrays_of_its_single_run(
 
 @pytest.mark.parametrize("scenario, filter_name", [
     ("aircraft_500s", "Kf"), ("aircraft_500s", "Ukf"), ("ahrs_turntable", "FuzzyUkfAhrs")])
-def test_the_trajectory_and_the_filter_of_a_batch_are_stepped_natively(scenario, filter_name):
+def test_the_sensors_and_the_filter_of_a_batch_are_stepped_natively(scenario, filter_name):
     assert sensor_components.TrajectoryImu.batch_class is not None
+    assert sensor_components.GnssReceiver.batch_class is not None
     model = swap_filter(load_scenario(MODELS / scenario), filter_name)
     sim = BatchSimulation(model, registry(), _seed_sets(model, 4))
     kinds = {d.spec.name: type(sim._batch_instance(d, 4, {})).__name__
              for d in sim.components}
-    gnss = {"gnss": "LoopBatchInstance"} if "gnss" in kinds else {}
+    gnss = {"gnss": "NativeBatchInstance"} if "gnss" in kinds else {}
     assert kinds == {"trajectory": "NativeBatchInstance", "filter": "NativeBatchInstance",
                      **gnss}
 

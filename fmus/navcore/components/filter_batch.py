@@ -31,11 +31,12 @@ import numpy as np
 
 from ..core import signals
 from ..core.batch import ComponentBatch
+from ..core.kernels import kernel
 from ..core.timing import same_time
 from ..filters.ins_gnss_kf import KfEngine, propagate_rows
 from ..filters.latency import checkpoint_due
 from ..ins.error_model import transition_template
-from ..ins.strapdown import Strapdown, solution_columns
+from ..ins.strapdown import Strapdown
 
 _IMU = ("imu_time", "imu_dt", "imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x",
         "imu_dvel_y", "imu_dvel_z")
@@ -264,17 +265,16 @@ class InsGnssFilterBatch(ComponentBatch):
     def _write_solutions(self) -> None:
         """The solution outputs of every run (InsGnssFilter._write_solution's values)."""
         out = self.out
+        rows = self.rows
         stack = self.stack
-        diagonal = self._covariance_diagonals()
         c = self._solution_col
-        position_velocity, euler = solution_columns(self.rows)
-        out[:, c:c + 6] = position_velocity
-        out[:, c + 6:c + 9] = np.array(euler).T
-        out[:, c + 9:c + 12] = stack["gyro_bias"]
-        out[:, c + 12:c + 15] = stack["accel_bias"]
-        out[:, c + 15:c + 15 + len(_STD_NAMES)] = np.sqrt(np.maximum(diagonal, 0.0))
-        out[:, self.columns["nav_time"]] = self.nav_time
-        out[:, self.columns["updated"]] = 0.0
+        _solution_rows(out, c, rows, stack["gyro_bias"], stack["accel_bias"],
+                       self._covariance_diagonals(), float(self.nav_time), self.columns["nav_time"],
+                       self.columns["updated"])
+        # the pitch by Python's math.hypot (its own algorithm, not the C library's): as
+        # euler_from_columns, so as the run alone
+        out[:, c + 7] = list(map(math.atan2, (-rows[:, 12]).tolist(),
+                                 map(math.hypot, rows[:, 13].tolist(), rows[:, 14].tolist())))
         if math.isfinite(out.sum()):     # NaN or inf anywhere makes the sum non-finite
             return
         for b in np.flatnonzero(~np.isfinite(out).all(axis=1)).tolist():
@@ -286,6 +286,34 @@ class InsGnssFilterBatch(ComponentBatch):
         phi = stack["phi_acc"]
         return (np.einsum("bij,bij->bi", phi @ stack["P"], phi)
                 + np.diagonal(stack["q_acc"], axis1=1, axis2=2))
+
+
+@kernel
+def _solution_rows(out, col, rows, gyro_bias, accel_bias, diagonal, nav_time, time_col,
+                   updated_col):
+    """The solution outputs of every run but the pitch, into ``out`` (B, n_outputs) from
+    column ``col`` on, in :data:`~navcore.core.signals.FILTER_OUTPUTS`' order: position and
+    velocity (the strapdown rows' first six columns), roll and yaw
+    (:func:`~navcore.ins.rotations.euler_from_columns`: compiled ``atan2`` is the C
+    library's, as Python's ``math.atan2``), the biases, the sigmas ``sqrt(max(d, 0))`` of the
+    covariance diagonals ``d`` (numpy's ``maximum``: NaN and -0.0 pass), then ``nav_time``
+    and ``updated`` = 0."""
+    for b in range(rows.shape[0]):
+        o = out[b]
+        r = rows[b]
+        for j in range(6):
+            o[col + j] = r[j]
+        o[col + 6] = math.atan2(r[13], r[14])          # C_bn[2][1], C_bn[2][2]
+        yaw = math.atan2(r[9], r[6])                   # C_bn[1][0], C_bn[0][0]
+        o[col + 8] = math.pi if yaw <= -math.pi else yaw
+        for j in range(3):
+            o[col + 9 + j] = gyro_bias[b, j]
+            o[col + 12 + j] = accel_bias[b, j]
+        for j in range(diagonal.shape[1]):
+            d = diagonal[b, j]
+            o[col + 15 + j] = math.sqrt(d if d >= 0.0 or d != d else 0.0)
+        o[time_col] = nav_time
+        o[updated_col] = 0.0
 
 
 __all__ = ["InsGnssFilterBatch"]

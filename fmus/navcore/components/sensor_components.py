@@ -20,6 +20,7 @@ from ..ins.rotations import dcm_to_rotvec, euler_to_dcm
 from .imu_measurement import ERROR_PARAMETERS, SEED_LIMITS, ImuMeasurement, ports_from_table
 from ..core.timing import samples_reached, time_tolerance
 from ..ins.trajectory import TrajectoryGenerator
+from .gnss_receiver_batch import GnssReceiverBatch
 from .trajectory_imu_batch import TrajectoryImuBatch
 
 # ---------------------------------------------------------------------------------------
@@ -131,6 +132,8 @@ class GnssReceiver(Component):
     inputs = signals.TRUTH
     outputs = signals.GNSS + signals.GNSS_INJECTED
     default_experiment = (0.0, 500.0, 1.0)
+    #: many receivers in one call (navcore.core.batch)
+    batch_class = GnssReceiverBatch
     state_fields = ("model", "next_fix", "n_fix", "out", "queue", "attitude_prev")
     derived_fields = ("interval", "delay", "start_time", "lever")
 

@@ -32,18 +32,21 @@ def time_tolerance(period: float, t: float = 0.0) -> float:
     return TIME_TOLERANCE * abs(period) + _ULPS * math.ulp(abs(t))
 
 
+def time_tolerance_rows(period, t):
+    """:func:`time_tolerance` of arrays, element by element (``np.spacing`` of a
+    non-negative time is its ``math.ulp``)."""
+    return TIME_TOLERANCE * np.abs(period) + _ULPS * np.spacing(np.abs(t))
+
+
 def same_time(a: float, b: float, period: float) -> bool:
     """``a`` and ``b`` are the same instant on a grid of ``period`` seconds."""
     return abs(a - b) <= time_tolerance(period, max(abs(a), abs(b)))
 
 
 def same_time_rows(a, b, period):
-    """:func:`same_time` of arrays, element by element (``np.spacing`` of a non-negative
-    time is its ``math.ulp``)."""
+    """:func:`same_time` of arrays, element by element."""
     a, b, period = np.asarray(a), np.asarray(b), np.asarray(period)
-    tolerance = TIME_TOLERANCE * np.abs(period) + _ULPS * np.spacing(
-        np.maximum(np.abs(a), np.abs(b)))
-    return np.abs(a - b) <= tolerance
+    return np.abs(a - b) <= time_tolerance_rows(period, np.maximum(np.abs(a), np.abs(b)))
 
 
 def samples_reached(start: float, period: float, t_end: float) -> int:
