@@ -63,32 +63,36 @@ def test_a_batch_of_models_in_one_call_equals_each_model_alone():
     rng = np.random.default_rng(2)
     models = [ImuErrorModel(_params(vibration_gyro_rps=1e-3 * (i % 2),
                                     vibration_accel_mps2=0.02 * (i % 2),
-                                    noise_intensity_gain=0.5 * i), seed=100 + i)
+                                    noise_intensity_gain=0.5 * i,
+                                    noise_level_windows="0.2,0.5,3; 0.4,0.6,0.5" if i == 3
+                                    else ""), seed=100 + i)
               for i in range(5)]
     batch = [copy.deepcopy(m) for m in models]
     dtheta, dvel = _inputs(rng, 80)
-    intensity = rng.uniform(0, 2, (80, 5))
+    # the manoeuvre intensity is the trajectory's, shared by the runs (zero: no vibration)
+    intensity = np.where(rng.random(80) < 0.2, 0.0, rng.uniform(0, 2, 80))
     for k in range(80):
-        alone = np.array([np.concatenate(m.apply((k + 1) * 0.01, 0.01, dtheta[k], dvel[k],
-                                                 intensity[k, i]))
-                          for i, m in enumerate(models)])
-        rows = []
-        for i, m in enumerate(batch):            # the per-run parts apply() computes
+        t_end = (k + 1) * 0.01
+        alone = np.array([np.concatenate(m.apply(t_end, 0.01, dtheta[k], dvel[k],
+                                                 intensity[k]))
+                          for m in models])
+        ideal, normals = [], []
+        for m in batch:            # the per-run parts apply() computes
             if m._cached_dt != 0.01:
                 m._set_dt(0.01)
             if m._n_used == m.NORMALS_BLOCK:
                 m._normals, m._n_used = m.rng.standard_normal(m._normals.shape), 0
-            scale = 1.0 + m.noise_intensity_gain * intensity[k, i]
-            vib = intensity[k, i] if m._vibration_on and intensity[k, i] > 0 else -1.0
-            rows.append((m._increment_matrix @ np.concatenate((dtheta[k], dvel[k])),
-                         m._normals[m._n_used], (scale, vib, 0.01)))
+            ideal.append(m._increment_matrix @ np.concatenate((dtheta[k], dvel[k])))
+            normals.append(m._normals[m._n_used])
             m._n_used += 1
         out = np.empty((5, 6))
         gm = np.concatenate([m.gm_bias for m in batch])
         coefficients = np.concatenate([m._coefficients for m in batch], axis=1)
-        apply_rows(out, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+        apply_rows(out, np.array(ideal), np.array(normals)[:, None], 0,
                    np.concatenate([m._level_bias for m in batch]), gm, *coefficients,
-                   np.array([r[2] for r in rows]))
+                   np.array([m.noise_factor(t_end - 0.005) for m in batch]),
+                   np.array([m.noise_intensity_gain for m in batch]),
+                   np.array([m._vibration_on for m in batch]), float(intensity[k]), 0.01)
         for i, m in enumerate(batch):
             m.gm_bias[0] = gm[i]
         assert np.array_equal(_bits(out), _bits(alone)), k
@@ -98,18 +102,18 @@ def test_the_compiled_kernel_gives_the_floats_of_its_interpreted_source():
     """Compiled against interpreted: the same source (the compiler, not the equations)."""
     rng = np.random.default_rng(3)
     n = 500
-    args = [rng.normal(0, 1e-2, (n, 6)), rng.normal(size=(n, 12)), rng.normal(0, 1e-3, (n, 6)),
-            rng.normal(0, 1e-4, (n, 6)), rng.uniform(0.9, 1, (n, 6)), rng.uniform(0, 1e-4, (n, 6)),
+    args = [rng.normal(0, 1e-2, (n, 6)), rng.normal(size=(n, 3, 12)), 1,
+            rng.normal(0, 1e-3, (n, 6)), rng.normal(0, 1e-4, (n, 6)),
+            rng.uniform(0.9, 1, (n, 6)), rng.uniform(0, 1e-4, (n, 6)),
             rng.uniform(0, 1e-3, (n, 6)), rng.uniform(0, 1e-3, (n, 6))]
-    factors = np.column_stack((rng.uniform(0, 3, n), np.where(rng.random(n) < 0.5, -1.0,
-                                                              rng.uniform(0, 2, n)),
-                               np.full(n, 0.01)))
-    compiled, interpreted = np.empty((n, 6)), np.empty((n, 6))
-    gm_c, gm_i = args[3].copy(), args[3].copy()
-    apply_rows(compiled, args[0], args[1], args[2], gm_c, *args[4:], factors)
-    apply_rows.py_func(interpreted, args[0], args[1], args[2], gm_i, *args[4:], factors)
-    assert np.array_equal(_bits(compiled), _bits(interpreted))
-    assert np.array_equal(_bits(gm_c), _bits(gm_i))
+    per_run = (rng.uniform(0.5, 3, n), rng.uniform(0, 2, n), rng.random(n) < 0.5)
+    for intensity in (0.0, 0.7):
+        compiled, interpreted = np.empty((n, 6)), np.empty((n, 6))
+        gm_c, gm_i = args[4].copy(), args[4].copy()
+        apply_rows(compiled, *args[:4], gm_c, *args[5:], *per_run, intensity, 0.01)
+        apply_rows.py_func(interpreted, *args[:4], gm_i, *args[5:], *per_run, intensity, 0.01)
+        assert np.array_equal(_bits(compiled), _bits(interpreted))
+        assert np.array_equal(_bits(gm_c), _bits(gm_i))
 
 
 def test_a_state_restored_in_the_middle_of_a_block_continues_the_same_stream():

@@ -36,6 +36,7 @@ from ..core.timing import same_time
 from ..filters.ins_gnss_kf import KfEngine, propagate_rows
 from ..filters.latency import checkpoint_due
 from ..ins.error_model import transition_template
+from ..ins.rotations import roll_yaw_from_elements, pitch_from_elements
 from ..ins.strapdown import Strapdown
 
 _IMU = ("imu_time", "imu_dt", "imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x",
@@ -134,10 +135,13 @@ class InsGnssFilterBatch(ComponentBatch):
         self.max_fix_age[b] = member.max_fix_age
         self.dense[b] = member.late_fixes
 
-    def _lend(self, b: int, hold_last: bool = False) -> None:
+    def _lend(self, b: int, hold_last: bool = False, fix_time=None) -> None:
         """Give run b's engine, history and clocks what the batch did since its last turn
         (``hold_last``: the history all but the latest interval, which
-        :meth:`_record_last` adds after the engine's own work on that interval)."""
+        :meth:`_record_last` adds after the engine's own work on that interval;
+        ``fix_time``: the time of a valid fix the run receives next, whose
+        :meth:`~InsGnssFilter.applies_at_once` leaves its history untouched, as the update
+        restarts it)."""
         member = self.members[b]
         engine = member.engine
         for name, stacked in self.stack.items():
@@ -149,7 +153,8 @@ class InsGnssFilterBatch(ComponentBatch):
                 engine.advance_clocks(entry[3])
         if entries:
             member.nav_time, member.imu_dt = entries[-1][0], entries[-1][3]
-        if entries and member.applies_fixes:
+        if entries and member.applies_fixes and (
+                fix_time is None or not member.applies_at_once(fix_time)):
             # only the latest interval can be due for a checkpoint: the batch lends a run
             # at every interval that is (_propagate)
             # (views: the log's arrays are never written after they are logged)
@@ -207,7 +212,9 @@ class InsGnssFilterBatch(ComponentBatch):
         self._write_solutions()
         for b in np.flatnonzero(inputs["gnss_epoch"] != self.last_epoch).tolist():
             if b not in self._failures:
-                self._by_itself(b, lambda m, b=b: self._epoch(m, self._inputs_of(b, inputs)))
+                values = self._inputs_of(b, inputs)
+                self._by_itself(b, lambda m: self._epoch(m, values),
+                                fix_time=values["gnss_time"] if values["gnss_valid"] else None)
         self._trim_log()
         return self.out
 
@@ -271,10 +278,8 @@ class InsGnssFilterBatch(ComponentBatch):
         _solution_rows(out, c, rows, stack["gyro_bias"], stack["accel_bias"],
                        self._covariance_diagonals(), float(self.nav_time), self.columns["nav_time"],
                        self.columns["updated"])
-        # the pitch by Python's math.hypot (its own algorithm, not the C library's): as
-        # euler_from_columns, so as the run alone
-        out[:, c + 7] = list(map(math.atan2, (-rows[:, 12]).tolist(),
-                                 map(math.hypot, rows[:, 13].tolist(), rows[:, 14].tolist())))
+        # the pitch by Python's math (its hypot is not the C library's), as the run alone
+        out[:, c + 7] = list(map(pitch_from_elements, *rows[:, 12:15].T.tolist()))
         if math.isfinite(out.sum()):     # NaN or inf anywhere makes the sum non-finite
             return
         for b in np.flatnonzero(~np.isfinite(out).all(axis=1)).tolist():
@@ -294,8 +299,8 @@ def _solution_rows(out, col, rows, gyro_bias, accel_bias, diagonal, nav_time, ti
     """The solution outputs of every run but the pitch, into ``out`` (B, n_outputs) from
     column ``col`` on, in :data:`~navcore.core.signals.FILTER_OUTPUTS`' order: position and
     velocity (the strapdown rows' first six columns), roll and yaw
-    (:func:`~navcore.ins.rotations.euler_from_columns`: compiled ``atan2`` is the C
-    library's, as Python's ``math.atan2``), the biases, the sigmas ``sqrt(max(d, 0))`` of the
+    (:func:`~navcore.ins.rotations.roll_yaw_from_elements`, as :meth:`Strapdown.solution`),
+    the biases, the sigmas ``sqrt(max(d, 0))`` of the
     covariance diagonals ``d`` (numpy's ``maximum``: NaN and -0.0 pass), then ``nav_time``
     and ``updated`` = 0."""
     for b in range(rows.shape[0]):
@@ -303,9 +308,8 @@ def _solution_rows(out, col, rows, gyro_bias, accel_bias, diagonal, nav_time, ti
         r = rows[b]
         for j in range(6):
             o[col + j] = r[j]
-        o[col + 6] = math.atan2(r[13], r[14])          # C_bn[2][1], C_bn[2][2]
-        yaw = math.atan2(r[9], r[6])                   # C_bn[1][0], C_bn[0][0]
-        o[col + 8] = math.pi if yaw <= -math.pi else yaw
+        # C_bn by rows in columns 6..14: C[i][j] is column 6 + 3 i + j
+        o[col + 6], o[col + 8] = roll_yaw_from_elements(r[6], r[9], r[13], r[14])
         for j in range(3):
             o[col + 9 + j] = gyro_bias[b, j]
             o[col + 12 + j] = accel_bias[b, j]

@@ -340,8 +340,7 @@ class InsGnssFilter(Component):
         age = self.nav_time - fix[0]
         self.out["fix_age"] = age
         half = self._half_interval()
-        bound = self.max_fix_age + time_tolerance(self.imu_dt, self.nav_time)
-        too_far = abs(age) > bound
+        too_far = self._beyond_latency_bound(age)
         # (within the bound the history reaches back far enough unless a fix was applied)
         before_applied = not too_far and fix[0] < self.history.oldest_time() - half
         if too_far or before_applied:
@@ -352,6 +351,18 @@ class InsGnssFilter(Component):
             self._apply(fix)
         else:
             self._apply_in_the_past(fix, half)
+
+    def _beyond_latency_bound(self, age):
+        return abs(age) > self.max_fix_age + time_tolerance(self.imu_dt, self.nav_time)
+
+    def applies_at_once(self, gnss_time):
+        """Whether :meth:`_receive_fix` applies a fix taken at ``gnss_time`` at the current
+        IMU epoch, the history then restarting there (not stale, not held for later, no
+        rollback: a fix within half an interval is never before the oldest checkpoint,
+        which is at or before ``nav_time``)."""
+        half = self._half_interval()
+        return (not self._beyond_latency_bound(self.nav_time - gnss_time)
+                and self.nav_time - half <= gnss_time <= self.nav_time + half)
 
     def _stale(self, gnss_time, age, before_applied):
         self.n_stale += 1

@@ -89,12 +89,12 @@ class UkfFilterBatch(InsGnssFilterBatch):
         super()._adopt(b)
         self._diagonal[b] = np.diagonal(engine.prediction_covariance())
 
-    def _lend(self, b: int, hold_last: bool = False) -> None:
+    def _lend(self, b: int, hold_last: bool = False, fix_time=None) -> None:
         ukf = self.members[b].engine.ukf
         for name, stacked in self._ukf.items():
             value = stacked[b]
             setattr(ukf, name, int(value) if value.ndim == 0 else value.copy())
-        super()._lend(b, hold_last)
+        super()._lend(b, hold_last, fix_time)
 
     def _kept(self, rows: List[int]) -> None:
         started = hasattr(self, "rows")

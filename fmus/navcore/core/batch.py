@@ -118,11 +118,11 @@ class ComponentBatch(ABC):
                 math.nextafter(x.high, math.inf) for x in limits]
         return np.array(low, dtype=float), np.array(high, dtype=float)
 
-    def _by_itself(self, b: int, call) -> None:
+    def _by_itself(self, b: int, call, **lend) -> None:
         """``call(member)`` for run b on its own objects, given the batch's values first
-        (:meth:`_lend`) and taken back after (:meth:`_adopt`); an error fails that run
-        alone."""
-        self._lend(b)
+        (:meth:`_lend`, with ``lend``) and taken back after (:meth:`_adopt`); an error fails
+        that run alone."""
+        self._lend(b, **lend)
         try:
             call(self.members[b])
         except Exception as exc:          # the run's own error (InputError, divergence)

@@ -126,22 +126,31 @@ def _euler_rows_of(sr, cr, sp, cp, sy, cy):
     ]
 
 
-def euler_from_columns(c00, c10, c20, c21, c22):
-    """ZYX Euler angles (lists of roll, pitch, yaw) of many DCMs given by their elements
-    ``C[i][j]`` as sequences: Python's ``math`` on each (numpy's vectorized ``arctan2`` and
-    ``hypot`` round otherwise)."""
-    roll = list(map(math.atan2, c21, c22))
+@jitable
+def roll_yaw_from_elements(c00, c10, c21, c22):
+    """Roll and yaw (in (-pi, pi]) of the ZYX Euler angles of a DCM from its elements
+    ``C[i][j]`` (compiled ``atan2`` is the C library's, as Python's ``math.atan2``)."""
+    yaw = math.atan2(c10, c00)
+    return math.atan2(c21, c22), (math.pi if yaw <= -math.pi else yaw)
+
+
+def pitch_from_elements(c20, c21, c22):
+    """Pitch of the ZYX Euler angles of a DCM from its elements ``C[i][j]``, by Python's
+    ``math`` (numpy's vectorized ``arctan2`` and ``hypot`` round otherwise, and a compiled
+    ``hypot`` is the C library's, not Python's own algorithm)."""
     # atan2 instead of asin: exact near +-90 deg and immune to |C20| > 1 by rounding
-    pitch = list(map(math.atan2, [-x for x in c20], map(math.hypot, c21, c22)))
-    yaw = [math.pi if y <= -math.pi else y for y in map(math.atan2, c10, c00)]
-    return roll, pitch, yaw
+    return math.atan2(-c20, math.hypot(c21, c22))
+
+
+def euler_from_elements(c00, c10, c20, c21, c22):
+    """ZYX Euler angles (roll, pitch, yaw) of one DCM from its elements ``C[i][j]``."""
+    roll, yaw = roll_yaw_from_elements(c00, c10, c21, c22)
+    return roll, pitch_from_elements(c20, c21, c22), yaw
 
 
 def _euler_from_rows(m):
-    """ZYX Euler angles of one DCM given by rows (:func:`euler_from_columns`)."""
-    (roll,), (pitch,), (yaw,) = euler_from_columns((m[0][0],), (m[1][0],), (m[2][0],),
-                                                   (m[2][1],), (m[2][2],))
-    return roll, pitch, yaw
+    """ZYX Euler angles of one DCM given by rows (:func:`euler_from_elements`)."""
+    return euler_from_elements(m[0][0], m[1][0], m[2][0], m[2][1], m[2][2])
 
 
 @jitable

@@ -61,7 +61,7 @@ import numpy as np
 from ..core.kernels import jitable, kernel
 from . import earth
 from .rotations import (_euler_from_rows, _euler_rows, _matmul_rows, _matTmul_rows,
-    _rodrigues_delta_rows, _rodrigues_rows, _rotvec_from_rows, euler_from_columns)
+    _rodrigues_delta_rows, _rodrigues_rows, _rotvec_from_rows, euler_from_elements)
 
 _A = earth.A
 _E2 = earth.E2
@@ -270,22 +270,6 @@ def _column(index):
     return property(get, put)
 
 
-def solution_columns(rows):
-    """The solution of every state row of ``rows`` (B, :data:`N_COLUMNS`): the position and
-    velocity columns (a (B, 6) view) and the lists of roll, pitch and yaw (by
-    :func:`~navcore.ins.rotations.euler_from_columns`)."""
-    # C_bn by rows in columns 6..14: C[i][j] is column 6 + 3 i + j
-    c = rows[:, (6, 9, 12, 13, 14)].T.tolist()
-    return rows[:, :6], euler_from_columns(*c)
-
-
-def solutions(rows):
-    """:meth:`Strapdown.solution` of every state row of ``rows``: a list of (lat, lon, h, vn,
-    ve, vd, roll, pitch, yaw) tuples of floats (:func:`solution_columns`)."""
-    position_velocity, euler = solution_columns(rows)
-    return list(zip(*position_velocity.T.tolist(), *euler))
-
-
 class _StateRow:
     """One state row of the kernels (a batch of one run) behind a subclass's declared
     state fields; the position columns as float attributes."""
@@ -358,7 +342,8 @@ class Strapdown(_StateRow):
 
     def solution(self):
         """(lat, lon, h, vn, ve, vd, roll, pitch, yaw) as floats (one read of the row)."""
-        return solutions(self.rows)[0]
+        r = self.rows[0].tolist()      # C_bn by rows in columns 6..14: C[i][j] is 6 + 3 i + j
+        return (*r[:6], *euler_from_elements(r[6], r[9], r[12], r[13], r[14]))
 
     # -- forward mechanization ---------------------------------------------------------
     def update(self, dtheta, dvel, dt):

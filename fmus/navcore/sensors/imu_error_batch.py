@@ -39,6 +39,7 @@ class ImuErrorBatch:
         self.normals = np.stack([m._normals for m in models])
         self.gain = np.array([m.noise_intensity_gain for m in models])
         self.vibration_on = np.array([m._vibration_on for m in models])
+        self.unit_window = np.ones(len(models))
         self.windows = any(m.noise_level_windows for m in models)
         self.coefficients = np.concatenate([m._coefficients for m in models], axis=1)
 
@@ -47,7 +48,7 @@ class ImuErrorBatch:
         rows = list(rows)
         self.models = [self.models[i] for i in rows]
         for name in ("increment_matrix", "level_bias", "gm", "normals", "gain",
-                     "vibration_on"):
+                     "vibration_on", "unit_window"):
             setattr(self, name, getattr(self, name)[rows])
         self.coefficients = self.coefficients[:, rows]
 
@@ -67,16 +68,12 @@ class ImuErrorBatch:
             n = 0
         self.n_used = n + 1
         window = (np.array([m.noise_factor(t_end - 0.5 * dt) for m in models])
-                  if self.windows else 1.0)
-        factors = np.empty((len(models), 3))
-        factors[:, 0] = window * (1.0 + self.gain * intensity)
-        factors[:, 1] = (np.where(self.vibration_on, window * intensity, -1.0)
-                         if intensity > 0.0 else -1.0)
-        factors[:, 2] = dt
+                  if self.windows else self.unit_window)
         out = np.empty((len(models), 6))
         phi, drive, white, vibration = self.coefficients
-        apply_rows(out, self.increment_matrix @ x, np.ascontiguousarray(self.normals[:, n]),
-                   self.level_bias, self.gm, phi, drive, white, vibration, factors)
+        apply_rows(out, self.increment_matrix @ x, self.normals, n, self.level_bias, self.gm,
+                   phi, drive, white, vibration, window, self.gain, self.vibration_on,
+                   float(intensity), float(dt))
         return out
 
 

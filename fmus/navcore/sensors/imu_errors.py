@@ -188,7 +188,7 @@ class ImuErrorModel:
                       "g_sensitivity", "gyro_matrix", "accel_matrix", "_increment_matrix",
                       "_reference_offset", "_level_bias",
                       "_gm_sigma", "_gm_tau", "_white_density", "_vibration_sigma",
-                      "_vibration_on")
+                      "_vibration_on", "_gain_row", "_vibration_row", "_unit_window")
 
     #: name -> (default, unit, description) of every parameter, for components declaring them
     PARAMETERS: Dict[str, Tuple[Any, str, str, Limits]] = {
@@ -238,6 +238,10 @@ class ImuErrorModel:
         self._white_density = np.repeat([si["gyro_arw"], si["accel_vrw"]], 3)
         self._vibration_sigma = np.repeat([si["vib_gyro"], si["vib_accel"]], 3)
         self._vibration_on = bool(si["vib_gyro"] > 0.0 or si["vib_accel"] > 0.0)
+        # the per-run arguments of apply_rows for this model alone (a batch of one)
+        self._gain_row = np.array([self.noise_intensity_gain])
+        self._vibration_row = np.array([self._vibration_on])
+        self._unit_window = np.ones(1)
 
         # coefficients that depend on dt only, recomputed when dt changes, rows of the
         # kernel's argument (state: a restored model keeps its dt and these): the Gauss-Markov
@@ -387,32 +391,36 @@ class ImuErrorModel:
             self._normals = self.rng.standard_normal(self._normals.shape)
             n = 0
         self._n_used = n + 1
-        window = self.noise_factor(t_end - 0.5 * dt) if self.noise_level_windows else 1.0
-        # white = white_sigma_dt * (window * (1 + gain * intensity)); vibration at
-        # window * intensity when it is on and the caller reports a manoeuvre, else off (-1)
-        scale = window * (1.0 + self.noise_intensity_gain * intensity)
-        vib_scale = window * intensity if self._vibration_on and intensity > 0.0 else -1.0
+        window = (np.array((self.noise_factor(t_end - 0.5 * dt),))
+                  if self.noise_level_windows else self._unit_window)
         out = np.empty((1, 6))
         phi, drive, white, vibration = self._coefficients
-        apply_rows(out, (self._increment_matrix @ x).reshape(1, 6), self._normals[n:n + 1],
-                   self._level_bias, self.gm_bias, phi, drive, white, vibration,
-                   np.array(((scale, vib_scale, dt),)))
+        apply_rows(out, (self._increment_matrix @ x).reshape(1, 6), self._normals[None], n,
+                   self._level_bias, self.gm_bias, phi, drive, white, vibration, window,
+                   self._gain_row, self._vibration_row, float(intensity), float(dt))
         return out[0, :3], out[0, 3:]
 
 
 @kernel
-def apply_rows(out, ideal, z, level_bias, gm, phi, drive, white, vibration, factors):
+def apply_rows(out, ideal, normals, n, level_bias, gm, phi, drive, white, vibration, window,
+               gain, vibration_on, intensity, dt):
     """The arithmetic of :meth:`ImuErrorModel.apply` for every run of a batch (B rows each):
     ``out`` the measured increments from ``ideal`` (the increment matrix times the ideal
-    increments), the normals ``z`` (6 white, then 6 Gauss-Markov driving), the constant term
-    ``level_bias``, the Gauss-Markov state ``gm`` (advanced in place), its ``phi`` and
-    ``drive``, the ``white`` and ``vibration`` sigmas per sample, and ``factors`` (B, 3): the
-    white-noise scale, the vibration scale (negative: off) and dt."""
+    increments), sample ``n`` of each run's block of ``normals`` (B, block, 12: 6 white, then
+    6 Gauss-Markov driving), the constant term ``level_bias``, the Gauss-Markov state ``gm``
+    (advanced in place), its ``phi`` and ``drive``, the ``white`` and ``vibration`` sigmas
+    per sample; per run the ``noise_level_windows`` factor ``window``, the
+    ``noise_intensity_gain`` ``gain`` and whether its ``vibration_on``; the caller's
+    manoeuvre ``intensity`` and ``dt``, shared."""
     for b in range(out.shape[0]):
-        scale, vib_scale, dt = factors[b, 0], factors[b, 1], factors[b, 2]
+        # white = white_sigma_dt * (window * (1 + gain * intensity)); vibration at
+        # window * intensity when it is on and the caller reports a manoeuvre, else off
+        scale = window[b] * (1.0 + gain[b] * intensity)
+        vib_scale = window[b] * intensity if vibration_on[b] and intensity > 0.0 else -1.0
+        z = normals[b, n]
         for i in range(6):
             g0 = gm[b, i]
-            g1 = phi[b, i] * g0 + drive[b, i] * z[b, 6 + i]     # gm_end = phi gm + drive z
+            g1 = phi[b, i] * g0 + drive[b, i] * z[6 + i]     # gm_end = phi gm + drive z
             gm[b, i] = g1
             w = white[b, i] * scale
             if vib_scale >= 0.0:
@@ -420,4 +428,4 @@ def apply_rows(out, ideal, z, level_bias, gm, phi, drive, white, vibration, fact
                 v = vibration[b, i] * vib_scale
                 w = math.sqrt(w * w + v * v)
             # out = M x + ((constant - reference) + (gm_start + gm_end) / 2) dt + white z
-            out[b, i] = (ideal[b, i] + (level_bias[b, i] + 0.5 * (g0 + g1)) * dt) + w * z[b, i]
+            out[b, i] = (ideal[b, i] + (level_bias[b, i] + 0.5 * (g0 + g1)) * dt) + w * z[i]
