@@ -15,7 +15,8 @@ import pytest
 from navcore.components.kf_components import Iakf, Kf, NewtonRobustKf
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.core.batch import BatchInputs
-from navcore.filters.ins_gnss_kf import KfConfig, KfEngine, propagate_rows
+from navcore.filters.ins_gnss_kf import (KfConfig, KfEngine, add_noise_rows, compensate_rows,
+                                         propagate_rows)
 from navcore.ins.error_model import transition_template
 from navcore.ins.strapdown import Strapdown
 from orchestrator.cosim.master import Simulation
@@ -40,6 +41,35 @@ def _engines(runs, rng):
         engine.accel_bias = rng.normal(0, 1e-3, 3)
         engines.append(engine)
     return engines
+
+
+def _bits(a):
+    return np.ascontiguousarray(a).view(np.int64)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_interval_kernels_give_the_floats_of_the_numpy_expressions(compiled):
+    """compensate_rows and add_noise_rows, compiled and as source, against the numpy
+    expressions of the same arithmetic (IEEE operations one by one: the same floats), on
+    strided views as the batch passes them."""
+    rng = np.random.default_rng(5)
+    runs = 40
+    imu = rng.normal(0, 1e-2, (runs, 8))
+    dtheta, dvel = imu[:, 2:5], imu[:, 5:8]
+    gyro_bias, accel_bias = rng.normal(0, 1e-5, (runs, 3)), rng.normal(0, 1e-3, (runs, 3))
+    dt = 0.0100000001
+    compensate = compensate_rows if compiled else compensate_rows.py_func
+    add_noise = add_noise_rows if compiled else add_noise_rows.py_func
+    got = [np.empty((runs, 3)) for _ in range(4)]
+    compensate(dtheta, dvel, gyro_bias, accel_bias, dt, *got)
+    dtheta_c, dvel_c = dtheta - gyro_bias * dt, dvel - accel_bias * dt
+    for a, b in zip(got, (dtheta_c, dvel_c, dtheta_c / dt, dvel_c / dt)):
+        assert np.array_equal(_bits(a), _bits(b))
+    q_acc, q_density = rng.normal(size=(runs, 15, 15)), rng.uniform(0, 1e-6, (runs, 15))
+    expected = q_acc.copy()
+    expected.reshape(runs, -1)[:, ::16] += q_density * dt
+    add_noise(q_acc, q_density, dt)
+    assert np.array_equal(_bits(q_acc), _bits(expected))
 
 
 def test_the_batched_propagation_gives_each_engine_the_floats_of_its_own():

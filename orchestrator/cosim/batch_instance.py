@@ -195,6 +195,7 @@ class NativeBatchInstance(BatchInstance):
         self._in_names = [(self.input_names[t], buf) for t, buf in
                           (("Integer", self.int_in), ("Boolean", self.bool_in))
                           if self.input_names[t]]
+        self._column_index = {}           # BatchInputs.real_columns' cache for this layout
         connected = set(sum(self.input_names.values(), ()))
         self._held_inputs = {name: np.array([run[name] for run in self._start_inputs])
                              for name in self._start_inputs[0] if name not in connected}
@@ -278,7 +279,7 @@ class NativeBatchInstance(BatchInstance):
         values.update(zip(self.input_names["Real"], real.T))
         for names, buf in self._in_names:
             values.update(zip(names, buf.T.copy()))
-        return BatchInputs(values, real, self.input_names["Real"])
+        return BatchInputs(values, real, self.input_names["Real"], self._column_index)
 
     def set_inputs(self, real_values=None, int_values=None, bool_values=None) -> None:
         self._copy_in(real_values, int_values, bool_values)

@@ -32,9 +32,9 @@ import numpy as np
 from ..core import signals
 from ..core.batch import ComponentBatch
 from ..core.kernels import kernel
-from ..core.timing import same_time
+from ..core.timing import same_time, time_tolerance
 from ..filters.ins_gnss_kf import KfEngine, propagate_rows
-from ..filters.latency import checkpoint_due
+from ..filters.latency import checkpoint_due, checkpoint_spacing
 from ..ins.error_model import transition_template
 from ..ins.rotations import roll_yaw_from_elements, pitch_from_elements
 from ..ins.strapdown import Strapdown
@@ -68,6 +68,7 @@ class InsGnssFilterBatch(ComponentBatch):
         self.last_checkpoint = np.full(runs, np.inf)
         self.max_fix_age = np.zeros(runs)
         self.dense = np.zeros(runs, dtype=bool)
+        self._earliest_checkpoint = None        # (time, dt): no checkpoint due before
         self.seen: List[int] = [0] * runs       # log entries each run's engine has seen
         self.log: List[tuple] = []              # (imu_time, dtheta (B,3), dvel (B,3), dt)
         self.first_entry = 0                    # log index of self.log[0]
@@ -134,6 +135,7 @@ class InsGnssFilterBatch(ComponentBatch):
                                    else np.inf)
         self.max_fix_age[b] = member.max_fix_age
         self.dense[b] = member.late_fixes
+        self._earliest_checkpoint = None
 
     def _lend(self, b: int, hold_last: bool = False, fix_time=None) -> None:
         """Give run b's engine, history and clocks what the batch did since its last turn
@@ -185,6 +187,7 @@ class InsGnssFilterBatch(ComponentBatch):
                      "max_fix_age", "dense"):
             setattr(self, name, getattr(self, name)[rows])
         self.stack = {k: v[rows] for k, v in self.stack.items()}
+        self._earliest_checkpoint = None
         self.seen = [self.first_entry + len(self.log)] * len(rows)
         self._views = [None] * len(rows)
         for b, member in enumerate(members):
@@ -248,6 +251,14 @@ class InsGnssFilterBatch(ComponentBatch):
         self.log.append((imu_time, dtheta, dvel, dt))
         self.nav_time = imu_time
         self._after_interval()
+        earliest = self._earliest_checkpoint
+        if earliest is None or earliest[1] != dt:
+            times = self.last_checkpoint + checkpoint_spacing(self.max_fix_age + dt, self.dense)
+            earliest = self._earliest_checkpoint = (float(times.min(initial=np.inf)), dt)
+        # no run's checkpoint falls due before its last one plus its spacing, less the time
+        # tolerance (twice: the rounding of both sums)
+        if imu_time < earliest[0] - 2.0 * time_tolerance(dt, imu_time):
+            return
         due = checkpoint_due(imu_time, self.last_checkpoint, dt, self.max_fix_age + dt,
                              self.dense)
         if due.any():

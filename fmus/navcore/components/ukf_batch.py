@@ -28,6 +28,7 @@ from typing import List
 import numpy as np
 
 from ..filters.imm import ImmBank, imm_combine
+from ..filters.ins_gnss_kf import compensate_rows
 from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise,
                                        interval_means, predict_filter_groups, predict_rows,
@@ -110,9 +111,10 @@ class UkfFilterBatch(InsGnssFilterBatch):
         """:meth:`UkfEngine.propagate` of every run up to its prediction."""
         stack = self.stack
         runs = len(self.rows)
-        dtheta_c = dtheta - stack["gyro_bias"] * dt
-        dvel_c = dvel - stack["accel_bias"] * dt
-        stack["rate_ib"] = dtheta_c / dt
+        dtheta_c, dvel_c, rate_ib, f_body = (np.empty((runs, 3)) for _ in range(4))
+        compensate_rows(dtheta, dvel, stack["gyro_bias"], stack["accel_bias"], float(dt),
+                        dtheta_c, dvel_c, rate_ib, f_body)
+        stack["rate_ib"] = rate_ib
         before = self.rows.copy()
         dts = np.full(runs, float(dt))
         update_rows(self.rows, dtheta_c, dvel_c, dts)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 import math
-from typing import Any, Dict, List, Mapping, Sequence, Tuple
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -35,14 +35,21 @@ class BatchInputs(dict):
     """The inputs of a batch's step: ``name -> (B,) array``, and the Real ones also as one
     ``(B, n)`` matrix (:attr:`real`, its columns named by :attr:`real_names`)."""
 
-    def __init__(self, values, real: np.ndarray, real_names: Tuple[str, ...]):
+    def __init__(self, values, real: np.ndarray, real_names: Tuple[str, ...],
+                 index_cache: Optional[Dict[Tuple[str, ...], np.ndarray]] = None):
         super().__init__(values)
         self.real = real
         self.real_names = real_names
+        #: names -> their columns in ``real``: a caller stepping with the same ``real_names``
+        #: may pass one dict for all its steps
+        self._index = {} if index_cache is None else index_cache
 
     def real_columns(self, names: Tuple[str, ...]) -> np.ndarray:
         """The Real inputs ``names`` as a (B, len(names)) matrix."""
-        index = [self.real_names.index(n) for n in names]
+        index = self._index.get(names)
+        if index is None:
+            index = self._index[names] = np.array([self.real_names.index(n) for n in names],
+                                                  dtype=np.intp)
         return self.real[:, index]
 
 

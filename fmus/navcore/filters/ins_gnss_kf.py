@@ -28,13 +28,13 @@ import numpy as np
 from ..ins import earth
 from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
     transition_rows, transition_template)
+from ..core.kernels import kernel
 from .innovation_stats import nis
 from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
 from ..ins.strapdown import Strapdown, update_rows
 
 #: measurement modes and their dimension
 MEASUREMENTS = {"position": 3, "position_velocity": 6}
-_DIAGONAL = slice(None, None, N_STATES + 1)
 
 
 @dataclass
@@ -76,12 +76,12 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     floats of its own 2-D product (``tests/test_kf_batch.py``).  ``mechanize(dtheta_c,
     dvel_c)``, when given, advances the rows instead of :func:`update_rows` (a strapdown
     subclass's own ``update``)."""
-    dtheta_c = dtheta - gyro_bias * dt
-    dvel_c = dvel - accel_bias * dt
-    rate_ib = dtheta_c / dt
     runs = len(nav_rows)
+    dtheta_c, dvel_c, rate_ib, f_body = (np.empty((runs, 3)) for _ in range(4))
+    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), dtheta_c, dvel_c, rate_ib,
+                    f_body)
     C_bn = nav_rows[:, 6:15].reshape(runs, 3, 3)
-    f_ned = (C_bn @ (dvel_c / dt)[:, :, None])[:, :, 0]   # with the attitude at the start
+    f_ned = (C_bn @ f_body[:, :, None])[:, :, 0]   # with the attitude at the start
     dts = np.full(runs, dt)
     if mechanize is None:
         update_rows(nav_rows, dtheta_c, dvel_c, dts)
@@ -91,8 +91,30 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     transition_rows(phi, nav_rows, f_ned, dts, template)
     phi_acc = phi @ phi_acc
     q_acc = phi @ q_acc @ np.ascontiguousarray(phi.transpose(0, 2, 1))
-    q_acc.reshape(runs, -1)[:, _DIAGONAL] += q_density * dt   # a view: C-contiguous
+    add_noise_rows(q_acc, q_density, float(dt))
     return phi_acc, q_acc, rate_ib
+
+
+@kernel
+def compensate_rows(dtheta, dvel, gyro_bias, accel_bias, dt, dtheta_c, dvel_c, rate_ib,
+                    f_body):
+    """The bias-compensated increments of every run (B, 3 each) over one interval ``dt``:
+    ``dtheta_c = dtheta - gyro_bias dt``, ``dvel_c = dvel - accel_bias dt``, the body rate
+    ``dtheta_c / dt`` and the specific force ``dvel_c / dt``."""
+    for b in range(dtheta.shape[0]):
+        for i in range(3):
+            theta = dtheta[b, i] - gyro_bias[b, i] * dt
+            vel = dvel[b, i] - accel_bias[b, i] * dt
+            dtheta_c[b, i], dvel_c[b, i] = theta, vel
+            rate_ib[b, i], f_body[b, i] = theta / dt, vel / dt
+
+
+@kernel
+def add_noise_rows(q_acc, q_density, dt):
+    """``Q_acc += diag(q_density dt)`` for every run (B, 15, 15), in place."""
+    for b in range(q_acc.shape[0]):
+        for i in range(q_acc.shape[1]):
+            q_acc[b, i, i] += q_density[b, i] * dt
 
 
 class KfEngine:

@@ -51,14 +51,19 @@ CHECKPOINT_INTERVAL = 0.1
 Increment = Tuple[float, object, object, float]
 
 
+def checkpoint_spacing(keep, dense):
+    """Seconds between two checkpoints: :data:`CHECKPOINT_INTERVAL` if ``dense`` (late
+    fixes were seen), else ``keep``; numpy arrays give it for every run of a batch."""
+    if isinstance(dense, np.ndarray):
+        return np.where(dense, CHECKPOINT_INTERVAL, keep)
+    return CHECKPOINT_INTERVAL if dense else keep
+
+
 def checkpoint_due(time, last, dt, keep, dense):
     """Whether an interval of ``dt`` ending at ``time`` is checkpointed after the checkpoint
-    at ``last`` (every :data:`CHECKPOINT_INTERVAL` if ``dense``, else every ``keep``
-    seconds); numpy arrays of ``last``, ``keep``, ``dense`` give it for every run of a
-    batch."""
-    spacing = np.where(dense, CHECKPOINT_INTERVAL, keep) if isinstance(dense, np.ndarray) \
-        else (CHECKPOINT_INTERVAL if dense else keep)
-    return time - last >= spacing - time_tolerance(dt, time)
+    at ``last`` (:func:`checkpoint_spacing` apart); numpy arrays of ``last``, ``keep``,
+    ``dense`` give it for every run of a batch."""
+    return time - last >= checkpoint_spacing(keep, dense) - time_tolerance(dt, time)
 
 
 class SolutionHistory:

@@ -37,7 +37,7 @@ from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from ..ins.error_model import ATT, BA, BG, N_STATES, POS, VEL
 from .imm import ImmBank, imm_combine
 from .innovation_stats import nis
-from .ins_gnss_kf import KfEngine, UpdateResult
+from .ins_gnss_kf import KfEngine, UpdateResult, compensate_rows
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
 from .ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise, interval_means,
                               predict_unscented_filters, prediction_due)
@@ -86,14 +86,15 @@ class UkfEngine(KfEngine):
         """Mechanize one IMU interval with bias-compensated increments; accumulate the interval
         means (:func:`accumulate_rows` of this run) and run the UKF prediction when
         ``predict_interval`` is complete."""
-        dtheta_c = dtheta - self.gyro_bias * dt
-        dvel_c = dvel - self.accel_bias * dt
-        self.rate_ib = dtheta_c / dt
+        dtheta_c, dvel_c, rate_ib, f_body = (np.empty((1, 3)) for _ in range(4))
+        compensate_rows(np.reshape(dtheta, (1, 3)), np.reshape(dvel, (1, 3)),
+                        self.gyro_bias.reshape(1, 3), self.accel_bias.reshape(1, 3), float(dt),
+                        dtheta_c, dvel_c, rate_ib, f_body)
+        self.rate_ib = rate_ib[0]
         nav = self.nav
         before = nav.rows.copy()
-        nav.update(dtheta_c, dvel_c, dt)
-        accumulate_rows(self.sums, before, nav.rows, np.reshape(dvel_c, (1, 3)),
-                        np.full(1, float(dt)))
+        nav.update(dtheta_c[0], dvel_c[0], dt)
+        accumulate_rows(self.sums, before, nav.rows, dvel_c, np.full(1, float(dt)))
         if prediction_due(self._T, self.predict_interval):
             self._predict()
         self.advance_clocks(dt)
