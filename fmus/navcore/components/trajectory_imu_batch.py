@@ -18,6 +18,7 @@ import numpy as np
 
 from ..core import signals
 from ..core.batch import ComponentBatch
+from ..core.kernels import kernel
 from ..core.timing import samples_reached
 from ..errors import ParameterError
 from ..sensors.imu_error_batch import ImuErrorBatch
@@ -62,9 +63,15 @@ class TrajectoryImuBatch(ComponentBatch):
             out[b] = [m.out[name] for name in self.columns]
         self.out = out
         c = self.columns
-        self._truth_cols = [c[f"truth_{k}"] for k in _TRUTH_KEYS]
-        self._imu_cols = [c[n] for n in signals.IMU_DTHETA_NAMES + signals.IMU_DVEL_NAMES]
-        self._rate_cols = [c[n] for n in signals.IMU_GYRO_NAMES + signals.IMU_ACCEL_NAMES]
+        # the columns every run shares (truth_time, imu_time, imu_dt, the truth), their
+        # values of a sample, and the IMU's columns
+        self._shared_cols = np.array([c["truth_time"], c["imu_time"], c["imu_dt"]]
+                                     + [c[f"truth_{k}"] for k in _TRUTH_KEYS], dtype=np.intp)
+        self._shared = np.zeros(len(self._shared_cols))
+        self._imu_cols = np.array([c[n] for n in signals.IMU_DTHETA_NAMES
+                                   + signals.IMU_DVEL_NAMES], dtype=np.intp)
+        self._rate_cols = np.array([c[n] for n in signals.IMU_GYRO_NAMES
+                                    + signals.IMU_ACCEL_NAMES], dtype=np.intp)
         self._mag_cols = [c["mag_time"]] + [c[n] for n in signals.MAG_NAMES]
         return out.copy()
 
@@ -99,12 +106,11 @@ class TrajectoryImuBatch(ComponentBatch):
         out = self.out
         if self.mag_rows:
             self._magnetometer(out, measured, t_end, dt, truth)
-        out[:, self.columns["truth_time"]] = self.start_time + truth["time"]
-        out[:, self._truth_cols] = [truth[k] for k in _TRUTH_KEYS]
-        out[:, self.columns["imu_time"]] = t_end
-        out[:, self.columns["imu_dt"]] = dt
-        out[:, self._imu_cols] = measured
-        out[:, self._rate_cols] = measured / dt
+        shared = self._shared
+        shared[0], shared[1], shared[2] = self.start_time + truth["time"], t_end, dt
+        shared[3:] = [truth[k] for k in _TRUTH_KEYS]
+        _sample_rows(out, self._shared_cols, shared, self._imu_cols, self._rate_cols, measured,
+                     dt)
 
     def _magnetometer(self, out, measured, t_end, dt, truth) -> None:
         """The magnetometer rows (:func:`~navcore.sensors.magnetometer.measure_rows`, the
@@ -116,6 +122,19 @@ class TrajectoryImuBatch(ComponentBatch):
         for b, model in self.vibration_rows:
             if model.vibrating(t_end):
                 measured[b, 3:] = measured[b, 3:] + model.accel_disturbance(t_end) * dt
+
+
+@kernel
+def _sample_rows(out, shared_cols, shared, imu_cols, rate_cols, measured, dt):
+    """One sample's outputs of every run: the values ``shared`` by the runs in their
+    columns, each run's measured increments (B, 6) and rates (increments / ``dt``)."""
+    for b in range(out.shape[0]):
+        o = out[b]
+        for j in range(shared_cols.shape[0]):
+            o[shared_cols[j]] = shared[j]
+        for j in range(6):
+            o[imu_cols[j]] = measured[b, j]
+            o[rate_cols[j]] = measured[b, j] / dt
 
 
 __all__ = ["TrajectoryImuBatch", "SHARED_PARAMETERS"]
