@@ -200,8 +200,7 @@ class NativeBatchInstance(BatchInstance):
         self._held_inputs = {name: np.array([run[name] for run in self._start_inputs])
                              for name in self._start_inputs[0] if name not in connected}
         columns = self.batch.columns
-        self._out_columns = [(np.array([columns[n] for n in self.output_names[t]],
-                                       dtype=np.intp), buf)
+        self._out_columns = [(_columns_index([columns[n] for n in self.output_names[t]]), buf)
                              for t, buf in (("Real", self.real_out), ("Integer", self.int_out),
                                             ("Boolean", self.bool_out))
                              if self.output_names[t]]
@@ -275,11 +274,12 @@ class NativeBatchInstance(BatchInstance):
 
     def _inputs(self) -> BatchInputs:
         real = self.real_in.copy()         # the batch may keep what it is given
-        values: Dict[str, np.ndarray] = dict(self._held_inputs)
-        values.update(zip(self.input_names["Real"], real.T))
+        names = self.input_names["Real"]
+        values = BatchInputs(self._held_inputs, real, names, self._column_index)
+        values.update(zip(names, real.T))
         for names, buf in self._in_names:
             values.update(zip(names, buf.T.copy()))
-        return BatchInputs(values, real, self.input_names["Real"], self._column_index)
+        return values
 
     def set_inputs(self, real_values=None, int_values=None, bool_values=None) -> None:
         self._copy_in(real_values, int_values, bool_values)
@@ -302,6 +302,15 @@ class NativeBatchInstance(BatchInstance):
 
     def terminate(self) -> None:
         pass
+
+
+def _columns_index(columns):
+    """An index of the columns ``columns``: a slice where they are consecutive (a view, no
+    gather), else the array of them."""
+    first = columns[0]
+    if columns == list(range(first, first + len(columns))):
+        return slice(first, first + len(columns))
+    return np.array(columns, dtype=np.intp)
 
 
 __all__ = ["BatchInstance", "LoopBatchInstance", "NativeBatchInstance"]

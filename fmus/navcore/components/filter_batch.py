@@ -36,7 +36,7 @@ from ..core.timing import same_time, time_tolerance
 from ..filters.ins_gnss_kf import KfEngine, propagate_rows
 from ..filters.latency import checkpoint_due, checkpoint_spacing
 from ..ins.error_model import transition_template
-from ..ins.rotations import roll_yaw_from_elements, pitch_from_elements
+from ..ins.rotations import pitch_from_elements, roll_yaw_from_elements
 from ..ins.strapdown import Strapdown
 
 _IMU = ("imu_time", "imu_dt", "imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x",
@@ -286,9 +286,10 @@ class InsGnssFilterBatch(ComponentBatch):
         rows = self.rows
         stack = self.stack
         c = self._solution_col
+        columns = self.columns
         _solution_rows(out, c, rows, stack["gyro_bias"], stack["accel_bias"],
-                       self._covariance_diagonals(), float(self.nav_time), self.columns["nav_time"],
-                       self.columns["updated"])
+                       self._covariance_diagonals(), float(self.nav_time),
+                       columns["nav_time"], columns["updated"])
         # the pitch by Python's math (its hypot is not the C library's), as the run alone
         out[:, c + 7] = list(map(pitch_from_elements, *rows[:, 12:15].T.tolist()))
         if math.isfinite(out.sum()):     # NaN or inf anywhere makes the sum non-finite
@@ -311,9 +312,8 @@ def _solution_rows(out, col, rows, gyro_bias, accel_bias, diagonal, nav_time, ti
     column ``col`` on, in :data:`~navcore.core.signals.FILTER_OUTPUTS`' order: position and
     velocity (the strapdown rows' first six columns), roll and yaw
     (:func:`~navcore.ins.rotations.roll_yaw_from_elements`, as :meth:`Strapdown.solution`),
-    the biases, the sigmas ``sqrt(max(d, 0))`` of the
-    covariance diagonals ``d`` (numpy's ``maximum``: NaN and -0.0 pass), then ``nav_time``
-    and ``updated`` = 0."""
+    the biases, the sigmas ``sqrt(max(d, 0))`` of the covariance diagonals ``d`` (as numpy's
+    ``maximum``: NaN and -0.0 pass), then ``nav_time`` and ``updated`` = 0."""
     for b in range(rows.shape[0]):
         o = out[b]
         r = rows[b]

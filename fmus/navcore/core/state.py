@@ -73,7 +73,10 @@ def _known_fields(cls) -> frozenset:
 def undeclared_attributes(obj: Any) -> Tuple[str, ...]:
     """Instance attributes of ``obj`` that are neither state nor derived fields."""
     known = _known_fields(type(obj))
-    return tuple(sorted(a for a in vars(obj) if a not in known))
+    attributes = vars(obj)
+    if known.issuperset(attributes):     # the usual case, by one set operation
+        return ()
+    return tuple(sorted(a for a in attributes if a not in known))
 
 
 def capture(obj: Any, where: str = "") -> Dict[str, Any]:
@@ -87,10 +90,16 @@ def capture(obj: Any, where: str = "") -> Dict[str, Any]:
     state, _ = declared_fields(type(obj))
     tree = {}
     for name in state:
-        if not hasattr(obj, name):
+        # one lookup: a field may be a property that computes its value
+        value = getattr(obj, name, _NOT_SET)
+        if value is _NOT_SET:
             raise StateError(f"{where}.{name}: declared state field is not set")
-        tree[name] = capture_value(getattr(obj, name), f"{where}.{name}")
+        tree[name] = capture_value(value, f"{where}.{name}")
     return tree
+
+
+#: what :func:`capture` reads for a declared field an object does not have
+_NOT_SET = object()
 
 
 #: types a tree holds as they are (immutable): the common case, checked first
