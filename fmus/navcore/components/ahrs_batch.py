@@ -228,12 +228,11 @@ class AhrsFilterBatch(ComponentBatch):
     def _update_rows(self, rows: np.ndarray, f_b: np.ndarray, m_b: np.ndarray,
                      imu_time: np.ndarray) -> np.ndarray:
         """:meth:`UkfAhrsEngine.update` of the runs ``rows``; the rows that updated."""
-        usable = np.ones(len(rows), dtype=bool)
-        for i, b in enumerate(rows.tolist()):
-            error = state_error(self.x[b], self.P[b])
-            if error is not None:                # checked_covariance's error
-                self.fail(b, error)
-                usable[i] = False
+        # checked_covariance's state_error is None for every run whose x and P are finite
+        usable = (np.isfinite(self.x[rows]).all(axis=1)
+                  & np.isfinite(self.P[rows]).all(axis=(1, 2)))
+        for i in np.flatnonzero(~usable).tolist():
+            self.fail(int(rows[i]), state_error(self.x[rows[i]], self.P[rows[i]]))
         rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
         ok = self._predict_rows(rows)
         rows, f_b, m_b, imu_time = rows[ok], f_b[ok], m_b[ok], imu_time[ok]
