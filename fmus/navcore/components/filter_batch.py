@@ -150,9 +150,11 @@ class InsGnssFilterBatch(ComponentBatch):
             value = stacked[b]
             setattr(engine, name, value.item() if value.ndim == 0 else value.copy())
         entries = self.log[self.seen[b] - self.first_entry:]
-        if type(engine).advance_clocks is not KfEngine.advance_clocks:
+        if type(engine).advance_clocks is not KfEngine.advance_clocks:   # its own, per dt
             for entry in entries:
                 engine.advance_clocks(entry[3])
+        elif type(engine).advance_clocks_over is not KfEngine.advance_clocks_over:
+            engine.advance_clocks_over([entry[3] for entry in entries])
         if entries:
             member.nav_time, member.imu_dt = entries[-1][0], entries[-1][3]
         if entries and member.applies_fixes and (

@@ -320,10 +320,13 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
         self.rejected = np.zeros(self.m, dtype=bool)
         self.n_rejected = 0
 
-    def advance_clocks(self, dt):
+    def advance_clocks_over(self, dts):
         """Count time for the history's epoch index."""
-        super().advance_clocks(dt)
-        self.time += dt
+        super().advance_clocks_over(dts)
+        time = self.time
+        for dt in dts:
+            time += dt
+        self.time = time
 
     def _next_epoch(self):
         if self.last_update_time is None:

@@ -160,8 +160,13 @@ class KfEngine:
         self.advance_clocks(dt)
 
     def advance_clocks(self, dt):
-        """What else an IMU interval of ``dt`` advances (a subclass's time counters): pure
-        sums of the intervals, so a batch may add them later in the same order."""
+        """What else an IMU interval of ``dt`` advances (:meth:`advance_clocks_over`)."""
+        self.advance_clocks_over((dt,))
+
+    def advance_clocks_over(self, dts):
+        """What else the IMU intervals ``dts`` advance, one after the other (a subclass's
+        time counters): pure sums of the intervals, so a batch may add them later, in the
+        same order and in one call."""
 
     def predicted_parts(self):
         """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}."""

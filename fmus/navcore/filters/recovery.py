@@ -151,7 +151,14 @@ class RecoveryGuard:
         self.n_reacquired = 0
 
     def advance(self, dt):
-        self.elapsed += dt
+        self.advance_over((dt,))
+
+    def advance_over(self, dts):
+        """The IMU intervals ``dts`` since the last call, one after the other."""
+        elapsed = self.elapsed
+        for dt in dts:
+            elapsed += dt
+        self.elapsed = elapsed
 
     def open_epoch(self):
         gap = self.elapsed
@@ -201,9 +208,9 @@ class GuardedEngine:
     def init_guard(self, *, recovery, recovery_epochs):
         self.guard = RecoveryGuard(self.m, recovery=recovery, recovery_epochs=recovery_epochs)
 
-    def advance_clocks(self, dt):
-        super().advance_clocks(dt)
-        self.guard.advance(dt)
+    def advance_clocks_over(self, dts):
+        super().advance_clocks_over(dts)
+        self.guard.advance_over(dts)
 
 
 __all__ = ["RECOVERY_PARAMETERS", "R_MAX_SCALE", "GuardedEngine", "RecoveryGuard", "bounded_r",
