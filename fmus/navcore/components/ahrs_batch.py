@@ -152,7 +152,7 @@ class AhrsFilterBatch(ComponentBatch):
         self.started[b] = engine.started
         self.last_update[b] = member.last_update
         self.nav_time[b] = member.nav_time
-        self.out[b] = [member.out[name] for name in self.columns]
+        self.out[b] = self._outputs_of(member)
 
     def _lend(self, b: int) -> None:
         """Give run b's engine and shell the batch's values."""

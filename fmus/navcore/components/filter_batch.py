@@ -123,7 +123,7 @@ class InsGnssFilterBatch(ComponentBatch):
             stacked[b] = getattr(engine, name)
         self.q_density[b] = engine.q_density
         self.seen[b] = self.first_entry + len(self.log)
-        self.out[b] = [member.out[name] for name in self.columns]
+        self.out[b] = self._outputs_of(member)
         self._sync(b)
 
     def _sync(self, b: int) -> None:

@@ -51,7 +51,7 @@ class GnssReceiverBatch(ComponentBatch):
 
     def _adopt(self, b: int) -> None:
         member = self.members[b]
-        self.out[b] = [member.out[name] for name in self.columns]
+        self.out[b] = self._outputs_of(member)
         self.next_fix[b] = member.next_fix
         self.interval[b] = member.interval
         self.busy[b] = self._own_class[b] or member.lever is not None or bool(member.queue)

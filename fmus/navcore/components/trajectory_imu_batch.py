@@ -60,7 +60,7 @@ class TrajectoryImuBatch(ComponentBatch):
         self._magnetometers()
         self.dt, self.start_time, self.n = first.dt, start_time, 0
         for b, m in enumerate(self.models):
-            out[b] = [m.out[name] for name in self.columns]
+            out[b] = self._outputs_of(m)
         self.out = out
         c = self.columns
         # the columns every run shares (truth_time, imu_time, imu_dt, the truth), their

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 import math
+import operator
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -136,6 +137,15 @@ class ComponentBatch(ABC):
             self.fail(b, exc)
             return
         self._adopt(b)
+
+    def _outputs_of(self, member) -> Tuple[Any, ...]:
+        """Run ``member``'s outputs (its ``out`` dict) in the batch's column order."""
+        getter = self.__dict__.get("_output_getter")
+        if getter is None:
+            names = tuple(self.columns)
+            getter = self._output_getter = (operator.itemgetter(*names) if len(names) > 1
+                                            else lambda out: (out[names[0]],))
+        return getter(member.out)
 
     @staticmethod
     def _inputs_of(b: int, inputs) -> Dict[str, float]:
