@@ -7,10 +7,9 @@ own component; a fix, a rollback, a checkpoint or a run not started yet runs the
 code, lent the batch's values first) with the UKF engines' time update
 (:meth:`~navcore.filters.ukf_filters.UkfEngine.propagate`) in place of the Kf's:
 
-* every IMU interval of all runs: the bias compensation, the mechanization
-  (:func:`~navcore.ins.strapdown.update_rows`) and the interval sums
-  (:func:`~navcore.filters.ukf_time_update.accumulate_rows`), the functions each engine calls
-  with one run;
+* every IMU interval of all runs: the bias compensation, the mechanization and the interval
+  sums in one :func:`~navcore.filters.ukf_time_update.advance_interval_rows` call, the
+  function each engine calls with one run;
 * the runs whose prediction interval is complete predict together: one
   :func:`~navcore.filters.ukf_time_update.predict_rows` call, the function each engine calls
   with one run (with the models of its bank for the IMM: the models of all runs' banks in
@@ -28,13 +27,11 @@ from typing import List
 import numpy as np
 
 from ..filters.imm import ImmBank, imm_combine
-from ..filters.ins_gnss_kf import compensate_rows
 from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
-from ..filters.ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise,
+from ..filters.ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
                                        interval_means, predict_filter_groups, predict_rows,
                                        prediction_due)
 from ..filters.unscented import predicted_state_error
-from ..ins.strapdown import update_rows
 from .filter_batch import InsGnssFilterBatch
 
 #: the unscented filter's attributes stacked for a natively predicted engine
@@ -110,15 +107,9 @@ class UkfFilterBatch(InsGnssFilterBatch):
     def _propagate_rows(self, dtheta, dvel, dt: float) -> None:
         """:meth:`UkfEngine.propagate` of every run up to its prediction."""
         stack = self.stack
-        runs = len(self.rows)
-        dtheta_c, dvel_c, rate_ib, f_body = (np.empty((runs, 3)) for _ in range(4))
-        compensate_rows(dtheta, dvel, stack["gyro_bias"], stack["accel_bias"], float(dt),
-                        dtheta_c, dvel_c, rate_ib, f_body)
-        stack["rate_ib"] = rate_ib
-        before = self.rows.copy()
-        dts = np.full(runs, float(dt))
-        update_rows(self.rows, dtheta_c, dvel_c, dts)
-        accumulate_rows(stack["sums"].reshape(runs, N_SUMS), before, self.rows, dvel_c, dts)
+        stack["rate_ib"] = advance_interval_rows(
+            self.rows, stack["sums"].reshape(len(self.rows), N_SUMS), dtheta, dvel,
+            stack["gyro_bias"], stack["accel_bias"], dt)
 
     def _after_interval(self) -> None:
         """The runs whose prediction interval is complete predict, together where they can,

@@ -79,6 +79,10 @@ def undeclared_attributes(obj: Any) -> Tuple[str, ...]:
     return tuple(sorted(a for a in attributes if a not in known))
 
 
+#: what :func:`capture` reads for a declared field an object does not have
+_NOT_SET = object()
+
+
 def capture(obj: Any, where: str = "") -> Dict[str, Any]:
     """The state tree of a declared object (see the module docstring)."""
     where = where or type(obj).__name__
@@ -97,9 +101,6 @@ def capture(obj: Any, where: str = "") -> Dict[str, Any]:
         tree[name] = capture_value(value, f"{where}.{name}")
     return tree
 
-
-#: what :func:`capture` reads for a declared field an object does not have
-_NOT_SET = object()
 
 
 #: types a tree holds as they are (immutable): the common case, checked first

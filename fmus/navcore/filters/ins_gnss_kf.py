@@ -25,10 +25,10 @@ from typing import Optional
 
 import numpy as np
 
+from ..core.kernels import kernel
 from ..ins import earth
 from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
     transition_rows, transition_template)
-from ..core.kernels import kernel
 from .innovation_stats import nis
 from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
 from ..ins.strapdown import Strapdown, update_rows
@@ -77,9 +77,7 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     dvel_c)``, when given, advances the rows instead of :func:`update_rows` (a strapdown
     subclass's own ``update``)."""
     runs = len(nav_rows)
-    dtheta_c, dvel_c, rate_ib, f_body = (np.empty((runs, 3)) for _ in range(4))
-    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), dtheta_c, dvel_c, rate_ib,
-                    f_body)
+    dtheta_c, dvel_c, rate_ib, f_body = compensated_rows(dtheta, dvel, gyro_bias, accel_bias, dt)
     C_bn = nav_rows[:, 6:15].reshape(runs, 3, 3)
     f_ned = (C_bn @ f_body[:, :, None])[:, :, 0]   # with the attitude at the start
     dts = np.full(runs, dt)
@@ -93,6 +91,14 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     q_acc = phi @ q_acc @ np.ascontiguousarray(phi.transpose(0, 2, 1))
     add_noise_rows(q_acc, q_density, float(dt))
     return phi_acc, q_acc, rate_ib
+
+
+def compensated_rows(dtheta, dvel, gyro_bias, accel_bias, dt):
+    """(dtheta_c, dvel_c, body rate, specific force) of every run (B, 3 each):
+    :func:`compensate_rows` into new arrays."""
+    out = tuple(np.empty((len(dtheta), 3)) for _ in range(4))
+    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), *out)
+    return out
 
 
 @kernel

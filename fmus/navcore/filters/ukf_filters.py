@@ -35,12 +35,13 @@ import numpy as np
 
 from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from ..ins.error_model import ATT, BA, BG, N_STATES, POS, VEL
+from ..ins.strapdown import Strapdown
 from .imm import ImmBank, imm_combine
 from .innovation_stats import nis
-from .ins_gnss_kf import KfEngine, UpdateResult, compensate_rows
+from .ins_gnss_kf import KfEngine, UpdateResult
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
-from .ukf_time_update import (N_SUMS, accumulate_rows, discrete_process_noise, interval_means,
-                              predict_unscented_filters, prediction_due)
+from .ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
+                              interval_means, predict_unscented_filters, prediction_due)
 from .unscented import UnscentedKalmanFilter
 
 
@@ -83,18 +84,15 @@ class UkfEngine(KfEngine):
         return self.sums[0, 0].item()
 
     def propagate(self, dtheta, dvel, dt):
-        """Mechanize one IMU interval with bias-compensated increments; accumulate the interval
-        means (:func:`accumulate_rows` of this run) and run the UKF prediction when
-        ``predict_interval`` is complete."""
-        dtheta_c, dvel_c, rate_ib, f_body = (np.empty((1, 3)) for _ in range(4))
-        compensate_rows(np.reshape(dtheta, (1, 3)), np.reshape(dvel, (1, 3)),
-                        self.gyro_bias.reshape(1, 3), self.accel_bias.reshape(1, 3), float(dt),
-                        dtheta_c, dvel_c, rate_ib, f_body)
-        self.rate_ib = rate_ib[0]
+        """Mechanize one IMU interval with bias-compensated increments and accumulate the
+        interval means (:func:`advance_interval_rows` of this run); run the UKF prediction
+        when ``predict_interval`` is complete."""
         nav = self.nav
-        before = nav.rows.copy()
-        nav.update(dtheta_c[0], dvel_c[0], dt)
-        accumulate_rows(self.sums, before, nav.rows, dvel_c, np.full(1, float(dt)))
+        mechanize = None if type(nav).update is Strapdown.update else (
+            lambda dtheta_c, dvel_c: nav.update(dtheta_c[0], dvel_c[0], dt))
+        self.rate_ib = advance_interval_rows(
+            nav.rows, self.sums, np.reshape(dtheta, (1, 3)), np.reshape(dvel, (1, 3)),
+            self.gyro_bias.reshape(1, 3), self.accel_bias.reshape(1, 3), dt, mechanize)[0]
         if prediction_due(self._T, self.predict_interval):
             self._predict()
         self.advance_clocks(dt)

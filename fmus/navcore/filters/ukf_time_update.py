@@ -71,7 +71,8 @@ import numpy as np
 from ..core.kernels import kernel
 from ..ins import earth
 from ..ins.error_model import N_STATES, POS, VEL
-from ..ins.strapdown import _gravity, _radii
+from ..ins.strapdown import _gravity, _radii, update_rows
+from .ins_gnss_kf import compensated_rows
 from .unscented import (points_from_sqrt_rows, predicted_moments_rows, predicted_state_error,
                         sqrt_rows)
 
@@ -168,6 +169,24 @@ def accumulate_rows(sums, before, after, dvel_c, dt):
             s[3 + i] += half * (r0[3 + i] + r1[3 + i])
         # C_prev @ dvel_c as numpy's product rounds it (BLAS from both)
         s[15:18] += np.ascontiguousarray(r0[6:15]).reshape(3, 3) @ dvel_c[b]
+
+
+def advance_interval_rows(nav_rows, sums, dtheta, dvel, gyro_bias, accel_bias, dt,
+                          mechanize=None):
+    """:meth:`UkfEngine.propagate`'s IMU interval of every run (B rows each): the bias
+    compensation (:func:`~navcore.filters.ins_gnss_kf.compensated_rows`), the mechanization
+    of the strapdown rows (:func:`update_rows`, or ``mechanize(dtheta_c, dvel_c)`` for a
+    strapdown subclass's own update) and the interval sums (:func:`accumulate_rows`), in
+    place.  Returns the body rates (B, 3)."""
+    dtheta_c, dvel_c, rate_ib, _ = compensated_rows(dtheta, dvel, gyro_bias, accel_bias, dt)
+    before = nav_rows.copy()
+    dts = np.full(len(nav_rows), float(dt))
+    if mechanize is None:
+        update_rows(nav_rows, dtheta_c, dvel_c, dts)
+    else:
+        mechanize(dtheta_c, dvel_c)
+    accumulate_rows(sums, before, nav_rows, dvel_c, dts)
+    return rate_ib
 
 
 def interval_means(sums):
