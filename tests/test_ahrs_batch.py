@@ -206,29 +206,43 @@ def test_a_filter_that_cannot_be_corrected_is_flagged_alone():
     assert "NaN or inf" in str(unscented.correction_error(result.status[2]))
 
 
-def test_magnetometer_rows_are_each_model_alone():
-    """Runs with their own field, hard and soft iron, noise and vibration: the readings of
-    measure_rows are each model's own measure, bit for bit, and each model's next draws
-    (its accel_disturbance) follow its own."""
+def test_magnetometer_batch_rows_are_each_model_alone():
+    """Runs with their own field, hard and soft iron, noise and vibration (noise, a
+    sinusoid, the magnetometer factor, each from its own start): over more than one block of
+    normals, the readings of MagnetometerBatch.sample are each model's own measure and the
+    extra specific force of the rows it names each model's own accel_disturbance, bit for
+    bit, after a row is dropped too."""
     from scipy.spatial.transform import Rotation
 
-    from navcore.sensors.magnetometer import MagnetometerModel, measure_rows
+    from navcore.sensors.magnetometer import MagnetometerModel
+    from navcore.sensors.magnetometer_batch import MagnetometerBatch
     base = dict(mag_field_T=5e-5, mag_noise_T=1e-7)
     params = [base, base, {**base, "mag_inclination": 0.3, "mag_hard_iron_y": 2e-6},
               {**base, "mag_soft_iron": "1.01,0.002,0,0,0.99,0.001,0,0,1",
                "vibration_start_s": 0.5, "vibration_accel_noise_mps2": 0.2,
-               "vibration_mag_factor": 3.0}]
-    together = [MagnetometerModel(p, seed) for p, seed in zip(params, (1, 2, 3, 4))]
-    alone = [MagnetometerModel(p, seed) for p, seed in zip(params, (1, 2, 3, 4))]
-    for k in range(20):
-        t = 0.1 * k
-        C_bn = Rotation.from_euler("ZYX", [0.3 * k, 0.1, -0.2]).as_matrix()
-        rows = measure_rows(together, t, C_bn)
-        for b, m in enumerate(alone):
-            assert np.array_equal(_bits(rows[b]), _bits(m.measure(t, C_bn))), (k, b)
-            assert np.array_equal(_bits(together[b].accel_disturbance(t)),
-                                  _bits(m.accel_disturbance(t)))
-    assert not np.array_equal(rows[0], rows[1])          # own seeds
+               "vibration_mag_factor": 3.0},
+              {**base, "vibration_start_s": 2.0, "vibration_accel_amplitude_mps2": 0.4,
+               "vibration_frequency_hz": 7.3, "vibration_accel_noise_mps2": 0.1},
+              {"vibration_start_s": 1.0, "vibration_mag_factor": 2.0}]
+    seeds = range(1, len(params) + 1)
+    batch = MagnetometerBatch([MagnetometerModel(p, seed) for p, seed in zip(params, seeds)])
+    alone = [MagnetometerModel(p, seed) for p, seed in zip(params, seeds)]
+    vibrated = set()
+    for k in range(MagnetometerModel.NORMALS_BLOCK + 40):
+        if k == 100:                                       # drop run 1
+            batch.keep([0, 2, 3, 4, 5])
+            alone.pop(1)
+        t = 0.01 * k
+        C_bn = Rotation.from_euler("ZYX", [0.03 * k, 0.1, -0.2]).as_matrix()
+        reading, rows, extra = batch.sample(t, C_bn)
+        expected = [m.measure(t, C_bn) for m in alone]
+        assert np.array_equal(_bits(reading), _bits(np.array(expected))), k
+        assert rows.tolist() == [b for b, m in enumerate(alone) if m.vibrating(t)]
+        for i, b in enumerate(rows.tolist()):
+            assert np.array_equal(_bits(extra[i]), _bits(alone[b].accel_disturbance(t))), (k, b)
+            vibrated.add(b)
+    assert vibrated == {2, 3, 4}                  # after the drop: rows of runs 3, 4, 5
+    assert not np.array_equal(reading[0], reading[1])     # own seeds
 
 
 def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():

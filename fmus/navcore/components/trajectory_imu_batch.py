@@ -5,9 +5,9 @@ The runs of a batch fly the same profile on the same grid (parameters ``profile`
 ``imu_period`` and ``extend_profile`` equal to the first run's; a run that sets them
 otherwise fails, naming the parameter), so one trajectory generator gives every run's truth
 and ideal increments, and the IMU errors of all runs are applied in one kernel call
-(:class:`~navcore.sensors.imu_error_batch.ImuErrorBatch`).  A run with its magnetometer or
-vibration switched on takes its magnetometer sample through the function its own component
-calls, with the other runs' (:func:`~navcore.sensors.magnetometer.measure_rows`).
+(:class:`~navcore.sensors.imu_error_batch.ImuErrorBatch`); so are the magnetometer samples and
+the vibration's extra specific force of the runs that have them switched on
+(:class:`~navcore.sensors.magnetometer_batch.MagnetometerBatch`).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from ..core.timing import samples_reached
 from ..errors import ParameterError
 from ..sensors.imu_error_batch import ImuErrorBatch
 from ..sensors.imu_errors import INTENSITY_REFERENCE_RATE
-from ..sensors.magnetometer import measure_rows
+from ..sensors.magnetometer_batch import MagnetometerBatch
 from ..ins.rotations import _euler_rows
 
 #: the parameters every run of a batch shares (one trajectory)
@@ -57,7 +57,8 @@ class TrajectoryImuBatch(ComponentBatch):
         self.generator = first.generator
         self.errors = ImuErrorBatch([m.errors for m in self.models])
         self.mag_rows = [b for b, m in enumerate(self.models) if alive[b] and m.mag_on]
-        self._magnetometers()
+        self.magnetometers = MagnetometerBatch([self.models[b].magnetometer
+                                                for b in self.mag_rows])
         self.dt, self.start_time, self.n = first.dt, start_time, 0
         for b, m in enumerate(self.models):
             out[b] = self._outputs_of(m)
@@ -73,6 +74,7 @@ class TrajectoryImuBatch(ComponentBatch):
         self._rate_cols = np.array([c[n] for n in signals.IMU_GYRO_NAMES
                                     + signals.IMU_ACCEL_NAMES], dtype=np.intp)
         self._mag_cols = [c["mag_time"]] + [c[n] for n in signals.MAG_NAMES]
+        self._mag_rows_changed()
         return out.copy()
 
     def _kept(self, rows: List[int]) -> None:
@@ -80,16 +82,14 @@ class TrajectoryImuBatch(ComponentBatch):
             return
         self.models = [self.models[i] for i in rows]
         self.errors.keep(rows)
+        self.magnetometers.keep([i for i, b in enumerate(self.mag_rows) if b in rows])
         self.mag_rows = [rows.index(b) for b in self.mag_rows if b in rows]
-        self._magnetometers()
+        self._mag_rows_changed()
         self.out = self.out[rows]
 
-    def _magnetometers(self) -> None:
-        """The magnetometer models of the rows that sample one, and of those whose vibration
-        disturbance can act."""
-        self.mag_models = [self.models[b].magnetometer for b in self.mag_rows]
-        self.vibration_rows = [(b, m) for b, m in zip(self.mag_rows, self.mag_models)
-                               if m.vibration_on]
+    def _mag_rows_changed(self) -> None:
+        self._mag_array = np.array(self.mag_rows, dtype=np.intp)
+        self._mag_index = np.ix_(self._mag_array, self._mag_cols[1:])
 
     def advance(self, t, h, inputs) -> np.ndarray:
         for _ in range(samples_reached(self.start_time, self.dt, t + h) - self.n):
@@ -113,15 +113,15 @@ class TrajectoryImuBatch(ComponentBatch):
                      dt)
 
     def _magnetometer(self, out, measured, t_end, dt, truth) -> None:
-        """The magnetometer rows (:func:`~navcore.sensors.magnetometer.measure_rows`, the
-        function each run's ImuMeasurement calls with its one model)."""
-        rows = self.mag_rows
+        """The magnetometer rows and the vibration's extra specific force, as each run's
+        ImuMeasurement.measure adds them (:class:`MagnetometerBatch`)."""
         C_bn = np.array(_euler_rows(truth["roll"], truth["pitch"], truth["yaw"]))
-        out[rows, self._mag_cols[0]] = t_end
-        out[np.ix_(rows, self._mag_cols[1:])] = measure_rows(self.mag_models, t_end, C_bn)
-        for b, model in self.vibration_rows:
-            if model.vibrating(t_end):
-                measured[b, 3:] = measured[b, 3:] + model.accel_disturbance(t_end) * dt
+        reading, vibrating, extra = self.magnetometers.sample(t_end, C_bn)
+        out[self._mag_array, self._mag_cols[0]] = t_end
+        out[self._mag_index] = reading
+        if vibrating.size:
+            vibrating = self._mag_array[vibrating]
+            measured[vibrating, 3:] = measured[vibrating, 3:] + extra * dt
 
 
 @kernel

@@ -25,7 +25,7 @@ magnetometer or vibration keeps its IMU numbers bit for bit.
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, List, Tuple
+from typing import Any, Dict, Tuple
 
 import numpy as np
 
@@ -152,24 +152,6 @@ class MagnetometerModel:
         phase = 2.0 * math.pi * self.vibration_frequency * (t - self.vibration_start)
         sine = self.vibration_amplitude * np.sin(phase + _AXIS_PHASES)
         return sine + self.vibration_noise * self._normals[self._n_used - 1, 3:]
-
-
-def measure_rows(models: List["MagnetometerModel"], t: float, C_bn: np.ndarray) -> np.ndarray:
-    """:meth:`MagnetometerModel.measure` of every model of ``models`` (B, 3) at time ``t``
-    for one attitude ``C_bn`` (the runs of a batch share their truth): each model draws its
-    own numbers; the field in body axes is one product per distinct field and soft iron (the
-    products of one model alone)."""
-    z = np.array([m._next_normals() for m in models])
-    scale = np.empty((len(models), 1))
-    body = np.empty((len(models), 3))
-    fields: Dict[bytes, np.ndarray] = {}
-    for b, m in enumerate(models):
-        scale[b] = m.noise * m._noise_factor(t)
-        key = m.field_key
-        if key not in fields:
-            fields[key] = m.soft_iron @ (C_bn.T @ m.field_ned)
-        body[b] = fields[key]
-    return _reading(body, np.array([m.hard_iron for m in models]), scale, z[:, :3])
 
 
 def _reading(body, hard_iron, scale, normals):
