@@ -267,28 +267,49 @@ def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():
 
 @pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "source"])
 def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
-    """accumulate_rows and turn_rows against _qmul and _rotvec_quat of each row (the single
-    engine's accumulate and current_quat) bit for bit, compiled and as their Python source,
-    on both sides of the small-angle series (|v| = 1e-6) and at zero."""
-    from navcore.filters.ahrs import _qmul, _rotvec_quat, accumulate_rows, turn_rows
+    """accumulate_rows against _qmul and _rotvec_quat of each row (the single engine's
+    accumulate), solution_rows with pitch_of_terms against quat_euler of the single engine's
+    _state_quat (its current_quat) and the state's bias and scales, and the time update's
+    kernel against its Python source, bit for bit, compiled and as their Python source, on
+    both sides of the small-angle series (|v| = 1e-6), at zero and with no pending interval."""
+    from navcore.filters.ahrs import (_propagate_rows, _qmul, _rotvec_quat, _state_quat,
+                                      accumulate_rows, pitch_of_terms, quat_euler,
+                                      solution_rows)
     accumulate = accumulate_rows if compiled else accumulate_rows.py_func
-    turn = turn_rows if compiled else turn_rows.py_func
+    solutions = solution_rows if compiled else solution_rows.py_func
     rng = np.random.default_rng(5)
     v = rng.normal(size=(800, 3)) * np.repeat([1e-9, 1e-7, 6e-7, 1e-5, 1e-3, 0.1, 1.0, 3.0],
                                               100)[:, None]
     v[0] = 0.0
-    dq, q = rng.normal(size=(800, 4)), rng.normal(size=(800, 4))
+    dq = rng.normal(size=(800, 4))
     got = dq.copy()
     accumulate(got, v)
     assert np.array_equal(_bits(got), _bits([_qmul(tuple(a), _rotvec_quat(*b))
                                              for a, b in zip(dq.tolist(), v.tolist())]))
-    got = q.copy()
-    turn(got, dq, v)
-    assert np.array_equal(_bits(got), _bits([_qmul(_qmul(tuple(a), tuple(b)), _rotvec_quat(*c))
-                                             for a, b, c in zip(q.tolist(), dq.tolist(),
-                                                                v.tolist())]))
     norms = np.linalg.norm(v, axis=1)
     assert (norms < 1e-6).any() and (norms > 1e-6).any()
+    # the outputs of 800 runs, every second one written, a quarter with no pending interval
+    x = np.concatenate((rng.normal(size=(800, 3)) * 0.7, v * 3e-3), axis=1)
+    interval = rng.uniform(0.0, 0.1, 800) * (np.arange(800) % 4 != 0)
+    nav_time, r_scale = rng.uniform(0, 100, 800), rng.uniform(0.5, 2.0, (800, 2))
+    rows = np.arange(0, 800, 2)
+    out = np.zeros((800, 12))
+    terms = np.empty((3, rows.size))
+    solutions(out, rows, x, interval, dq, nav_time, r_scale, np.arange(9), terms)
+    out[rows, 9] = pitch_of_terms(*terms)
+    for b in rows.tolist():
+        roll, pitch, yaw = quat_euler(_state_quat(*x[b].tolist(), interval[b].item(),
+                                                  tuple(dq[b].tolist())))
+        expected = [nav_time[b], 1.0, roll, yaw, *x[b, 3:], *r_scale[b], pitch]
+        assert np.array_equal(_bits(out[b, :10]), _bits(expected)), b
+    assert not out[1::2].any()
+    # the time update over the points of 50 filters, spread wide enough to need the shadow
+    X = rng.normal(size=(50, 13, 6)) * [1.0, 1.0, 1.0, 1e-3, 1e-3, 1e-3]
+    T = rng.uniform(0.0, 0.2, 50)
+    compiled_out, source_out = np.empty(X.shape), np.empty(X.shape)
+    _propagate_rows(X, dq[:50], T, compiled_out)
+    _propagate_rows.py_func(X, dq[:50], T, source_out)
+    assert np.array_equal(_bits(compiled_out), _bits(source_out))
 
 
 def test_same_time_of_arrays_is_same_time_of_each_element():

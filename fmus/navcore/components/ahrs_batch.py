@@ -10,24 +10,27 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
 * the gyro increment into the pending time update;
 * for the runs whose measurement update is due, the UKF time and measurement updates, by
   the functions the single engine calls with one run: the sigma points of all runs
-  (:func:`~navcore.filters.unscented.points_from_sqrt_rows`, one LAPACK square root per run
-  as one run alone calls it), :func:`~navcore.filters.ahrs.propagate_points` and
+  (:func:`~navcore.filters.unscented.points_from_sqrt_rows` on the roots of
+  :func:`~navcore.filters.unscented.sqrt_rows`: the LAPACK routine one run alone calls,
+  called from a kernel for every run), :func:`~navcore.filters.ahrs.propagate_points` and
   :func:`~navcore.filters.ahrs.measure_points` on the points of all runs, the stacked
   moments (:func:`~navcore.filters.unscented.predicted_moments_rows`,
   :func:`~navcore.filters.unscented.measurement_moments_rows`) and
   :func:`~navcore.filters.unscented.correct_rows`; the fuzzy adaptation of R of all runs in
   one :func:`~navcore.filters.ahrs.adapt_r_scales` call (each run's window and state its own
   object's, the inferences of all runs' blocks stacked);
-* the solution outputs.  The quaternion products of the outputs and of the gyro increments
-  and the rotation-vector quaternions of the gyro increments and of the outputs are the
-  single engine's float formulas (``_qmul``, ``_rotvec_quat``) compiled into kernels over
-  the runs (:func:`~navcore.filters.ahrs.accumulate_rows`,
-  :func:`~navcore.filters.ahrs.turn_rows`; compiled ``sin``, ``cos`` and ``atan2`` are
-  libm's, as Python's), and so are the Euler angles' terms
-  (:func:`~navcore.filters.ahrs.quat_euler_rows`), whose ``hypot`` stays Python's ``math``
-  per element: numpy's and the compiled ``hypot`` differ from Python's (which is not
-  libm's) in the last place for about 0.6 % of arguments, as numpy's ``arctan2`` does from
-  libm's for about 8 %, so they would not give each run the floats of its single run.
+* the solution outputs.  The quaternion products of the gyro increments and the
+  rotation-vector quaternions are the single engine's float formulas (``_qmul``,
+  ``_rotvec_quat``) compiled into a kernel over the runs
+  (:func:`~navcore.filters.ahrs.accumulate_rows`; compiled ``sin``, ``cos`` and ``atan2``
+  are libm's, as Python's), and the outputs but the sigmas and the pitch are one kernel call
+  (:func:`~navcore.filters.ahrs.solution_rows`: the engine's ``_state_quat`` and Euler
+  terms, the formulas the single run's ``current_quat`` and ``quat_euler`` call), whose
+  pitch's ``hypot`` stays Python's ``math`` per element
+  (:func:`~navcore.filters.ahrs.pitch_of_terms`): numpy's and the compiled ``hypot`` differ
+  from Python's (which is not libm's) in the last place for about 0.6 % of arguments, as
+  numpy's ``arctan2`` does from libm's for about 8 %, so they would not give each run the
+  floats of its single run.
 
 Everything else is the run's own component, given the batch's values first (:meth:`_lend`)
 and taken back after (:meth:`_adopt`): a run not started yet (TRIAD from its first samples),
@@ -46,15 +49,16 @@ from ..core import signals
 from ..core.batch import ComponentBatch
 from ..core.timing import same_time_rows
 from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adapt_r_scales,
-                            attitude_process_noise, euler_sigma_rows, measure_points,
-                            propagate_points, quat_euler_rows, shadow_switched, turn_rows)
+                            euler_sigma_rows, measure_points,
+                            pitch_of_terms, process_noise_diagonal, propagate_points,
+                            shadow_switched, solution_rows)
 from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
                                  points_from_sqrt_rows, predicted_moments_rows,
                                  predicted_state_error, sqrt_rows, state_error)
 
 _INPUT_NAMES = tuple(p.name for p in signals.AHRS_INPUTS)
-_POINTS = 13                      # 2 n + 1 sigma points of the 6-state filter
+_DIAGONAL = np.arange(6)
 #: (name, engine attribute path) of the per-run values the batch stacks
 _FIELDS = (("x", "ukf.x"), ("P", "ukf.P"), ("interval", "interval"), ("r_scale", "r_scale"),
            ("last_nis", "last_nis"), ("ukf_nis", "ukf.last_nis"),
@@ -97,6 +101,14 @@ class AhrsFilterBatch(ComponentBatch):
         alive = [b for b in range(runs) if b not in self._failures]
         self._blocks = {}            # the stacked fuzzy inferences of sets of runs
         self._native = bool(alive) and self._stands_for(alive)
+        col = self.columns
+        self._solution_columns = np.array(
+            [col[n] for n in ("nav_time", "aligned", "nav_roll", "nav_yaw",
+                              *signals.NAV_BG_NAMES, "r_scale_accel", "r_scale_mag")],
+            dtype=np.intp)
+        self._pitch_column = col["nav_pitch"]
+        self._std_columns = np.array([col[n] for n in ("std_roll", "std_pitch", "std_yaw")],
+                                     dtype=np.intp)
         self._constants(alive)
         for b in alive:
             self._adopt(b)
@@ -264,13 +276,15 @@ class AhrsFilterBatch(ComponentBatch):
     def _predict_rows(self, rows: np.ndarray) -> np.ndarray:
         """The time update of the runs ``rows``; which of them did not fail."""
         T = self.interval[rows]
-        Q = np.array([attitude_process_noise(self.x[b], T_b, *self.gyro_noise[b].tolist())
-                      for T_b, b in zip(T.tolist(), rows.tolist())]).reshape(-1, 6, 6)
+        x = self.x
+        diagonal = np.array([process_noise_diagonal(float(x[b, :3] @ x[b, :3]), T_b, arw, rw)
+                             for b, T_b, (arw, rw) in zip(rows.tolist(), T.tolist(),
+                                                          self.gyro_noise[rows].tolist())])
+        Q = np.zeros((len(rows), 6, 6))
+        Q[:, _DIAGONAL, _DIAGONAL] = np.repeat(diagonal, 3, axis=1)
         X = self._points(rows)
-        Y = propagate_points(X.reshape(-1, 6), np.repeat(self.dq[rows], _POINTS, axis=0),
-                             np.repeat(T, _POINTS)[:, None],
-                             np.repeat(X[:, 0, :3], _POINTS, axis=0))
-        x, P, finite = predicted_moments_rows(Y.reshape(X.shape), self.Wm, self.Wc, Q,
+        Y = propagate_points(X, self.dq[rows], T)
+        x, P, finite = predicted_moments_rows(Y, self.Wm, self.Wc, Q,
                                               np.ones(len(rows)))
         for b in rows[~finite].tolist():
             self.fail(b, predicted_state_error())
@@ -329,33 +343,19 @@ class AhrsFilterBatch(ComponentBatch):
     def _write_solutions(self, rows: np.ndarray, updated: np.ndarray) -> None:
         """:meth:`AhrsFilter._write_solution` of the runs ``rows`` (sigmas: ``updated``); a
         run whose state is not finite writes its own (its DivergenceError)."""
-        finite = np.isfinite(self.x[rows]).all(axis=1)
-        if not finite.all():
+        if not np.isfinite(self.x[rows]).all():
+            finite = np.isfinite(self.x[rows]).all(axis=1)
             for b in rows[~finite].tolist():
                 self._by_itself(b, lambda m: m._write_solution(sigmas=False))
             rows = rows[finite]
             updated = updated[np.isin(updated, rows)]
-        out, col = self.out, self.columns
-        x = self.x[rows]
-        x0, x1, x2 = x[:, 0], x[:, 1], x[:, 2]
-        s = x0 * x0 + x1 * x1 + x2 * x2                  # UkfAhrsEngine.current_quat
-        q = np.array(((1.0 - s) / (1.0 + s), 2.0 * x0 / (1.0 + s), 2.0 * x1 / (1.0 + s),
-                      2.0 * x2 / (1.0 + s)))
-        T = self.interval[rows]
-        pending = T > 0.0
-        if pending.any():
-            turned = np.ascontiguousarray(q[:, pending].T)
-            turn_rows(turned, self.dq[rows[pending]], -x[pending, 3:] * T[pending, None])
-            q[:, pending] = turned.T
-        out[rows, col["nav_time"]] = self.nav_time[rows]
-        out[rows, col["aligned"]] = 1.0
-        out[rows, col["nav_roll"]:col["nav_yaw"] + 1] = quat_euler_rows(q).T
+        pitch_terms = np.empty((3, len(rows)))
+        solution_rows(self.out, rows, self.x, self.interval, self.dq, self.nav_time,
+                      self.r_scale, self._solution_columns, pitch_terms)
+        self.out[rows, self._pitch_column] = pitch_of_terms(*pitch_terms)
         if updated.size:
-            out[updated, col["std_roll"]:col["std_yaw"] + 1] = euler_sigma_rows(
+            self.out[updated[:, None], self._std_columns] = euler_sigma_rows(
                 self._points(updated), self.Wm, self.Wc)
-        out[rows, col["nav_bg_x"]:col["nav_bg_z"] + 1] = x[:, 3:]
-        out[rows, col["r_scale_accel"]] = self.r_scale[rows, 0]
-        out[rows, col["r_scale_mag"]] = self.r_scale[rows, 1]
 
 
 __all__ = ["AhrsFilterBatch"]

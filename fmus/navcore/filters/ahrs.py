@@ -45,8 +45,8 @@ import numpy as np
 from ..core.kernels import jitable, kernel
 from ..errors import InputError
 from .fuzzy import FuzzyRScale
-from ..ins.mrp import (dcm_to_mrp, mrp_to_dcm_batch, mrp_to_quat, nearest_set, quat_to_mrp, shadow,
-    shadow_jacobian)
+from ..ins.mrp import (dcm_to_mrp, mrp_of_quat, mrp_to_dcm_batch, mrp_to_quat, nearer_set,
+                       quat_of_mrp, shadow, shadow_jacobian)
 from ..ins.rotations import wrap_angle
 from .unscented import UnscentedKalmanFilter
 
@@ -100,17 +100,6 @@ def accumulate_rows(dq, dtheta):
         dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3] = q
 
 
-@kernel
-def turn_rows(q, dq, turn):
-    """The pending rotation of :meth:`UkfAhrsEngine.current_quat` for every run of a batch:
-    each row of ``q`` (B, 4), in place, times the row of ``dq`` (B, 4) times the quaternion
-    of the rotation vector in the row of ``turn`` (B, 3)."""
-    for b in range(q.shape[0]):
-        p = _qmul((q[b, 0], q[b, 1], q[b, 2], q[b, 3]), (dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]))
-        p = _qmul(p, _rotvec_quat(turn[b, 0], turn[b, 1], turn[b, 2]))
-        q[b, 0], q[b, 1], q[b, 2], q[b, 3] = p
-
-
 @jitable
 def _euler_terms(w, x, y, z):
     """ZYX roll and yaw (not yet folded into (-pi, pi]) of the C_bn of quaternion (w, x, y,
@@ -123,11 +112,27 @@ def _euler_terms(w, x, y, z):
             2.0 * (w * y - z * x), a, b)
 
 
+@jitable
+def _state_quat(x0, x1, x2, x3, x4, x5, T, dq):
+    """:meth:`UkfAhrsEngine.current_quat` of the state ``x0 .. x5`` (MRP, gyro bias), the
+    pending interval ``T`` and its gyro quaternion ``dq`` (a float tuple)."""
+    q = quat_of_mrp(x0, x1, x2)
+    if T <= 0.0:
+        return q
+    return _qmul(_qmul(q, dq), _rotvec_quat(-x3 * T, -x4 * T, -x5 * T))
+
+
+@jitable
+def _folded_yaw(yaw):
+    """The yaw of :func:`_euler_terms` folded into (-pi, pi]."""
+    return math.pi if yaw <= -math.pi else yaw
+
+
 def quat_euler(q):
     """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (a 4-sequence of
     floats), yaw in (-pi, pi]."""
     roll, yaw, sine, a, b = _euler_terms(*q)
-    return roll, math.atan2(sine, math.hypot(a, b)), (math.pi if yaw <= -math.pi else yaw)
+    return roll, math.atan2(sine, math.hypot(a, b)), _folded_yaw(yaw)
 
 
 @kernel
@@ -147,46 +152,66 @@ def quat_euler_rows(q):
     terms = np.empty((5, q.shape[1]))
     _euler_terms_rows(np.ascontiguousarray(q, dtype=float), terms)
     roll, yaw, sine, a, b = terms
-    pitch = list(map(math.atan2, sine.tolist(), map(math.hypot, a.tolist(), b.tolist())))
-    return np.array((roll, pitch, np.where(yaw <= -math.pi, math.pi, yaw)))
+    return np.array((roll, pitch_of_terms(sine, a, b), np.where(yaw <= -math.pi, math.pi, yaw)))
+
+
+def pitch_of_terms(sine, a, b):
+    """The pitch of :func:`quat_euler` from the arrays of its terms: Python's ``math.atan2``
+    and ``math.hypot`` per element (numpy's and a compiled ``hypot`` round otherwise)."""
+    return list(map(math.atan2, sine.tolist(), map(math.hypot, a.tolist(), b.tolist())))
 
 
 @kernel
-def _qmul_rows(p, q, out):
-    """:func:`_qmul` of the rows of ``p`` and ``q`` (N, 4) into the rows of ``out``."""
-    for i in range(p.shape[0]):
-        r = _qmul((p[i, 0], p[i, 1], p[i, 2], p[i, 3]), (q[i, 0], q[i, 1], q[i, 2], q[i, 3]))
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = r
+def solution_rows(out, rows, x, interval, dq, nav_time, r_scale, columns, pitch_terms):
+    """:meth:`AhrsFilter._write_solution` without the sigmas for the batch rows ``rows``
+    (the state ``x`` (B, 6), pending ``interval`` (B,) and ``dq`` (B, 4), ``nav_time``
+    (B,), ``r_scale`` (B, 2)) into the rows of ``out``: ``columns`` of nav_time, aligned,
+    nav_roll, nav_yaw, nav_bg_x/y/z, r_scale_accel, r_scale_mag; the pitch is left to the
+    caller, its terms (sine, a, b) of row i of ``rows`` in the columns of ``pitch_terms``
+    (3, len(rows)) (:func:`pitch_of_terms`)."""
+    for i in range(rows.shape[0]):
+        b = rows[i]
+        r = x[b]
+        q = _state_quat(r[0], r[1], r[2], r[3], r[4], r[5], interval[b],
+                        (dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]))
+        roll, yaw, sine, ta, tb = _euler_terms(q[0], q[1], q[2], q[3])
+        o = out[b]
+        o[columns[0]] = nav_time[b]
+        o[columns[1]] = 1.0
+        o[columns[2]] = roll
+        o[columns[3]] = _folded_yaw(yaw)
+        o[columns[4]], o[columns[5]], o[columns[6]] = r[3], r[4], r[5]
+        o[columns[7]], o[columns[8]] = r_scale[b, 0], r_scale[b, 1]
+        pitch_terms[0, i], pitch_terms[1, i], pitch_terms[2, i] = sine, ta, tb
 
 
-def _quat_multiply_rows(p, q):
-    """Hamilton products of the rows of ``p`` (N, 4) with the rows of ``q`` (N, 4)."""
-    out = np.empty(np.shape(p))
-    _qmul_rows(np.ascontiguousarray(p, dtype=float), np.ascontiguousarray(q, dtype=float), out)
+@kernel
+def _propagate_rows(X, dq, T, out):
+    """:func:`propagate_points` of B filters: points ``X`` (B, P, 6), gyro quaternions
+    ``dq`` (B, 4), intervals ``T`` (B,), into ``out`` (B, P, 6); each filter's points
+    continued in the MRP set nearest its point 0."""
+    for b in range(X.shape[0]):
+        d = (dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3])
+        t = T[b]
+        rx, ry, rz = X[b, 0, 0], X[b, 0, 1], X[b, 0, 2]
+        for i in range(X.shape[1]):
+            x = X[b, i]
+            q = _qmul(_qmul(quat_of_mrp(x[0], x[1], x[2]), d),
+                      _rotvec_quat(-x[3] * t, -x[4] * t, -x[5] * t))
+            m = mrp_of_quat(q[0], q[1], q[2], q[3])
+            o = out[b, i]
+            o[0], o[1], o[2] = nearer_set(m[0], m[1], m[2], rx, ry, rz)
+            o[3], o[4], o[5] = x[3], x[4], x[5]
+
+
+def propagate_points(X, dq, T):
+    """The time update of the module docstring on the sigma points ``X`` (B, P, 6) of B
+    filters, with their gyro quaternions ``dq`` (B, 4) and intervals ``T`` (B,): (B, P, 6),
+    each filter's points continued in the MRP set nearest its point 0 (its prior mean)."""
+    out = np.empty(X.shape)
+    _propagate_rows(np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(dq, dtype=float),
+                    np.ascontiguousarray(T, dtype=float), out)
     return out
-
-
-def _bias_quats(b, T):
-    """Quaternions of the rotation vectors ``-b T`` (rows of ``b``, small angles)."""
-    phi = -b * T
-    t = np.sqrt(np.sum(phi * phi, axis=1, keepdims=True))
-    safe = np.where(t > 1e-6, t, 1.0)
-    s = np.where(t > 1e-6, np.sin(0.5 * safe) / safe, 0.5 - t * t / 48.0)   # sin(t/2)/t
-    return np.concatenate((np.cos(0.5 * t), s * phi), axis=1)
-
-
-def propagate_points(X, dq, T, reference):
-    """The time update of the module docstring on sigma points ``X`` (N, 6): gyro
-    increments ``dq`` (quaternion (4,), or one per point (N, 4)), interval ``T`` (scalar, or
-    (N, 1)); each point continued in the MRP set nearest ``reference`` (its filter's prior
-    mean: (3,), or one per point (N, 3))."""
-    q = mrp_to_quat(X[:, :3])
-    q = _quat_multiply_rows(_quat_multiply_rows(q, np.broadcast_to(dq, q.shape)),
-                            _bias_quats(X[:, 3:], T))
-    # the MRP moves continuously and leaves the unit sphere; shadow_switched then switches
-    # the mean and the covariance together
-    sigma = nearest_set(quat_to_mrp(q), reference)
-    return np.concatenate((sigma, X[:, 3:]), axis=1)
 
 
 def measure_points(X, gravity, field_unit):
@@ -197,11 +222,16 @@ def measure_points(X, gravity, field_unit):
     return np.concatenate((f, m), axis=1)
 
 
+def process_noise_diagonal(s, T, gyro_arw, gyro_bias_rw):
+    """The diagonal of Q of one time update over ``T`` as ``(q_att, q_bias)`` (module
+    docstring), ``s`` the squared norm of the MRP."""
+    return gyro_arw ** 2 * T * (1.0 + s) ** 2 / 16.0, gyro_bias_rw ** 2 * T
+
+
 def attitude_process_noise(x, T, gyro_arw, gyro_bias_rw):
     """Q of one time update over ``T`` from the state ``x`` (module docstring)."""
-    s = float(x[:3] @ x[:3])
-    q_att = gyro_arw ** 2 * T * (1.0 + s) ** 2 / 16.0
-    return np.diag([q_att] * 3 + [gyro_bias_rw ** 2 * T] * 3)
+    q_att, q_bias = process_noise_diagonal(float(x[:3] @ x[:3]), T, gyro_arw, gyro_bias_rw)
+    return np.diag([q_att] * 3 + [q_bias] * 3)
 
 
 def shadow_switched(x, P):
@@ -283,7 +313,7 @@ class UkfAhrsEngine:
             self.shadow_switches += 1
 
     def _process(self, X, dq, T):
-        return propagate_points(X, dq, T, X[0, :3])
+        return propagate_points(X[None], np.asarray(dq)[None], np.array([T]))[0]
 
     def predict(self):
         """UKF time update over the accumulated interval (nothing if it is empty)."""
@@ -318,14 +348,7 @@ class UkfAhrsEngine:
     def current_quat(self):
         """Quaternion of the attitude now: the state composed with the pending gyro
         increments and the bias over them (as the next time update will do)."""
-        x = self.ukf.x.tolist()
-        s = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
-        q = ((1.0 - s) / (1.0 + s), 2.0 * x[0] / (1.0 + s), 2.0 * x[1] / (1.0 + s),
-             2.0 * x[2] / (1.0 + s))
-        if self.interval <= 0.0:
-            return q
-        T = self.interval
-        return _qmul(_qmul(q, self.dq), _rotvec_quat(-x[3] * T, -x[4] * T, -x[5] * T))
+        return _state_quat(*self.ukf.x.tolist(), self.interval, self.dq)
 
     def euler(self):
         """(roll, pitch, yaw) now (paper 003 eq. 26, via the quaternion)."""

@@ -70,9 +70,10 @@ from typing import Any, Callable, Dict, NamedTuple, Optional, Tuple
 import numpy as np
 from scipy.linalg import lapack
 
+from navcore.core.kernels import kernel
+from navcore.core.lapack_kernels import potrf_lower, potrs_lower, trtrs_lower
 from navcore.errors import InputError, ParameterError
-from navcore.filters.innovation_stats import (gaussian_log_likelihood, log_det_from_cholesky,
-                                      nis_from_cholesky)
+from navcore.filters.innovation_stats import gaussian_log_likelihood
 
 
 # ---------------------------------------------------------------------------------------
@@ -124,12 +125,18 @@ def matrix_sqrt(A: np.ndarray) -> Tuple[np.ndarray, bool]:
 
 def _sqrt_symmetric(A: np.ndarray) -> Tuple[np.ndarray, bool]:
     # LAPACK dpotrf reads only the lower triangle of an already symmetric A; called directly
-    # it costs ~2.5 us for n = 15 against ~6.5 us for numpy.linalg.cholesky.
+    # it costs ~2.5 us for n = 15 against ~6.5 us for numpy.linalg.cholesky (sqrt_rows calls
+    # the same routine from a kernel for many matrices)
     L, info = lapack.dpotrf(A, lower=1, clean=1)
     if info == 0:
         return L, False
+    return _eigen_sqrt(A), True
+
+
+def _eigen_sqrt(A: np.ndarray) -> np.ndarray:
+    """The square root of :func:`matrix_sqrt` where the Cholesky factor does not exist."""
     eigval, eigvec = np.linalg.eigh(A)
-    return eigvec * np.sqrt(np.maximum(eigval, 0.0)), True
+    return eigvec * np.sqrt(np.maximum(eigval, 0.0))
 
 
 def sigma_points(x: np.ndarray, P: np.ndarray, lambda_: float) -> np.ndarray:
@@ -173,13 +180,34 @@ def points_from_sqrt_rows(x: np.ndarray, L: np.ndarray) -> np.ndarray:
 
 def sqrt_rows(P: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     """:func:`matrix_sqrt` of B symmetric matrices ``P`` (B, n, n) already symmetric: the
-    roots (B, n, n) and whether each needed the eigenvalue fallback (B,).  One LAPACK call
-    per matrix: numpy's stacked Cholesky rounds otherwise than the one a single filter calls."""
+    roots (B, n, n) and whether each needed the eigenvalue fallback (B,).  One LAPACK
+    ``dpotrf`` per matrix, called from a kernel (:mod:`navcore.core.lapack_kernels`) on the
+    Fortran copy scipy's wrapper would make, so each factor is the wrapper's: numpy's
+    stacked Cholesky rounds otherwise."""
+    P = np.ascontiguousarray(P, dtype=float)
+    n = P.shape[-1]
     L = np.empty_like(P)
-    fallback = np.zeros(len(P), dtype=bool)
-    for b in range(len(P)):
-        L[b], fallback[b] = _sqrt_symmetric(P[b])
+    info = np.empty(len(P), dtype=np.int64)
+    _cholesky_rows(P, np.empty((n, n), order="F"), L, info)
+    fallback = info != 0
+    for b in np.flatnonzero(fallback).tolist():
+        L[b] = _eigen_sqrt(P[b])
     return L, fallback
+
+
+@kernel
+def _cholesky_rows(P, factor, L, info):
+    """The lower Cholesky factor of every ``P[b]`` into ``L[b]`` (upper triangle 0), LAPACK's
+    info into ``info[b]``; ``factor`` a Fortran-ordered (n, n) work matrix."""
+    n = P.shape[1]
+    for b in range(P.shape[0]):
+        for i in range(n):
+            for j in range(n):
+                factor[i, j] = P[b, i, j]
+        info[b] = potrf_lower(factor)
+        for i in range(n):
+            for j in range(n):
+                L[b, i, j] = factor[i, j] if j <= i else 0.0
 
 
 def predicted_moments_rows(Y: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, Q: np.ndarray,
@@ -260,25 +288,54 @@ def correct_rows(x: np.ndarray, P: np.ndarray, z: np.ndarray, z_pred: np.ndarray
         status = np.where(np.isfinite(S).all(axis=(1, 2)) & np.isfinite(v).all(axis=1), 0,
                           _NOT_FINITE)
     K = np.zeros(Pxz.shape)
+    u, log_det = np.zeros((runs, m)), np.zeros(runs)
+    n = Pxz.shape[1]
+    _cholesky_solves(np.ascontiguousarray(S), np.ascontiguousarray(Pxz), v, status, K, u,
+                     log_det, np.empty((m, m), order="F"), np.empty((m, n), order="F"),
+                     np.empty((m, 1), order="F"))
     nis, log_likelihood = np.zeros(runs), np.zeros(runs)
-    for b in range(runs):
-        if status[b]:
-            continue
-        # S is never inverted explicitly; the numpy wrappers cost ~7 us each for a 3x3
-        Ls, info = lapack.dpotrf(S[b], lower=1, clean=1)
-        if info != 0:
-            status[b] = _NOT_POSITIVE
-            continue
-        Kt, _ = lapack.dpotrs(Ls, Pxz[b].T, lower=1)
-        K[b] = Kt.T
-        nis[b] = nis_from_cholesky(Ls, v[b])
-        log_likelihood[b] = gaussian_log_likelihood(nis[b], log_det_from_cholesky(Ls), m)
+    for b in np.flatnonzero(status == 0).tolist():
+        nis[b] = float(u[b] @ u[b])
+        log_likelihood[b] = gaussian_log_likelihood(nis[b], log_det[b], m)
     # a filter not corrected has K = 0 and may have a v that is not finite
     used = np.where(status[:, None] == 0, v, 0.0) if status.any() else v
     x = x + (K @ used[:, :, None])[:, :, 0]
     P = P - K @ Pxz.transpose(0, 2, 1)
     return CorrectedRows(x, 0.5 * (P + P.transpose(0, 2, 1)), v, S, K, nis, log_likelihood,
                          status)
+
+
+@kernel
+def _cholesky_solves(S, Pxz, v, status, K, u, log_det, factor, gain, solved):
+    """For every filter b with ``status[b]`` 0: the lower Cholesky factor of ``S[b]``
+    (``status[b]`` set to not positive definite where it does not exist), the gain ``K[b] =
+    Pxz[b] S[b]^-1`` (``dpotrs``), ``u[b] = L^-1 v[b]`` (``dtrtrs``: the NIS is ``|u|^2``)
+    and ``log det S[b] = 2 sum log L_ii`` (the sum from the first term, as Python's ``sum``).
+    ``factor`` (m, m), ``gain`` (m, n), ``solved`` (m, 1): Fortran-ordered work matrices
+    holding what scipy's wrappers would hand to LAPACK."""
+    m, n = S.shape[1], Pxz.shape[1]
+    for b in range(S.shape[0]):
+        if status[b]:
+            continue
+        for i in range(m):
+            for j in range(m):
+                factor[i, j] = S[b, i, j]
+        if potrf_lower(factor) != 0:
+            status[b] = _NOT_POSITIVE
+            continue
+        for i in range(m):
+            for j in range(n):
+                gain[i, j] = Pxz[b, j, i]
+            solved[i, 0] = v[b, i]
+        potrs_lower(factor, gain)
+        trtrs_lower(factor, solved)
+        total = 0.0
+        for i in range(m):
+            for j in range(n):
+                K[b, j, i] = gain[i, j]
+            u[b, i] = solved[i, 0]
+            total += math.log(factor[i, i])
+        log_det[b] = 2.0 * total
 
 
 def correction_error(status: int) -> InputError:

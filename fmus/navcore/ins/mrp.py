@@ -26,22 +26,84 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.kernels import jitable, kernel
 from .rotations import dcm_to_euler, euler_to_dcm, quat_from_dcm, quat_to_dcm
+
+
+@jitable
+def quat_of_mrp(x, y, z):
+    """The quaternion ``(w, x, y, z)`` of the MRP ``(x, y, z)`` as a float tuple (the module
+    docstring's formula; the squares summed left to right, as numpy's sum over 3 does)."""
+    s = x * x + y * y + z * z
+    return ((1.0 - s) / (1.0 + s), 2.0 * x / (1.0 + s), 2.0 * y / (1.0 + s),
+            2.0 * z / (1.0 + s))
+
+
+@jitable
+def mrp_of_quat(w, x, y, z):
+    """The MRP of the quaternion ``(w, x, y, z)`` in the set with ``|sigma| <= 1``."""
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    return x / (1.0 + w), y / (1.0 + w), z / (1.0 + w)
+
+
+@jitable
+def nearer_set(x, y, z, rx, ry, rz):
+    """The MRP ``(x, y, z)`` or its shadow, whichever lies nearer ``(rx, ry, rz)``."""
+    s = x * x + y * y + z * z
+    if s > 0.0:
+        ox, oy, oz = -x / s, -y / s, -z / s
+    else:
+        ox, oy, oz = x, y, z
+    d_own = (x - rx) * (x - rx) + (y - ry) * (y - ry) + (z - rz) * (z - rz)
+    d_other = (ox - rx) * (ox - rx) + (oy - ry) * (oy - ry) + (oz - rz) * (oz - rz)
+    if d_other < d_own:
+        return ox, oy, oz
+    return x, y, z
+
+
+@kernel
+def _quat_rows(sigma, out):
+    for i in range(sigma.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = quat_of_mrp(sigma[i, 0], sigma[i, 1],
+                                                                 sigma[i, 2])
+
+
+@kernel
+def _mrp_rows(q, out):
+    for i in range(q.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = mrp_of_quat(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
+
+
+@kernel
+def _nearer_rows(sigma, reference, out):
+    for i in range(sigma.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = nearer_set(sigma[i, 0], sigma[i, 1], sigma[i, 2],
+                                                     reference[i, 0], reference[i, 1],
+                                                     reference[i, 2])
+
+
+def _rows_of(function, values, width, *more):
+    """``function`` (a kernel over rows) of the last axis of ``values`` (any leading axes)
+    into rows of ``width``; ``more`` arrays broadcast to ``values``' rows."""
+    values = np.asarray(values, dtype=float)
+    rows = np.ascontiguousarray(values.reshape(-1, values.shape[-1]))
+    extra = [np.ascontiguousarray(np.broadcast_to(np.asarray(m, dtype=float), rows.shape))
+             for m in more]
+    out = np.empty((rows.shape[0], width))
+    function(rows, *extra, out)
+    return out.reshape(values.shape[:-1] + (width,))
 
 
 def mrp_to_quat(sigma):
     """Unit quaternion(s) ``[w, x, y, z]`` of MRP ``sigma`` (``w >= 0`` when ``|sigma| <= 1``)."""
-    sigma = np.asarray(sigma, dtype=float)
-    s = np.sum(sigma * sigma, axis=-1, keepdims=True)
-    return np.concatenate(((1.0 - s) / (1.0 + s), 2.0 * sigma / (1.0 + s)), axis=-1)
+    return _rows_of(_quat_rows, sigma, 4)
 
 
 def quat_to_mrp(q):
     """MRP of quaternion(s) ``q``, in the set with ``|sigma| <= 1`` (``q`` and ``-q`` give
     the same result)."""
-    q = np.asarray(q, dtype=float)
-    q = np.where(q[..., :1] < 0.0, -q, q)
-    return q[..., 1:] / (1.0 + q[..., :1])
+    return _rows_of(_mrp_rows, q, 3)
 
 
 def shadow(sigma):
@@ -59,15 +121,9 @@ def shadow_jacobian(sigma):
 
 def nearest_set(sigma, reference):
     """Each MRP of ``sigma`` (``(N, 3)``) or its shadow, whichever lies nearer ``reference``
-    (a 3-vector): the points of one unscented transform must be in the same set to be
-    averaged."""
-    sigma = np.asarray(sigma, dtype=float)
-    s = np.sum(sigma * sigma, axis=-1, keepdims=True)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        other = np.where(s > 0.0, -sigma / s, sigma)
-    d_own = np.sum((sigma - reference) ** 2, axis=-1, keepdims=True)
-    d_other = np.sum((other - reference) ** 2, axis=-1, keepdims=True)
-    return np.where(d_other < d_own, other, sigma)
+    (a 3-vector, or one per row): the points of one unscented transform must be in the same
+    set to be averaged."""
+    return _rows_of(_nearer_rows, sigma, 3, reference)
 
 
 def mrp_to_dcm(sigma):
