@@ -268,7 +268,7 @@ def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():
 @pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "source"])
 def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
     """accumulate_rows against _qmul and _rotvec_quat of each row (the single engine's
-    accumulate), solution_rows with pitch_of_terms against quat_euler of the single engine's
+    accumulate) and the shell's test of a due update, solution_rows with pitch_of_terms against quat_euler of the single engine's
     _state_quat (its current_quat) and the state's bias and scales, and the time update's
     kernel against its Python source, bit for bit, compiled and as their Python source, on
     both sides of the small-angle series (|v| = 1e-6), at zero and with no pending interval."""
@@ -282,10 +282,26 @@ def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
                                               100)[:, None]
     v[0] = 0.0
     dq = rng.normal(size=(800, 4))
-    got = dq.copy()
-    accumulate(got, v)
-    assert np.array_equal(_bits(got), _bits([_qmul(tuple(a), _rotvec_quat(*b))
-                                             for a, b in zip(dq.tolist(), v.tolist())]))
+    # every run but the first steps: its interval's end, the increment and whether an
+    # update is due (the magnetometer's age and the update interval, at and around each
+    # bound of 1e-9 s)
+    rows = np.arange(1, 800)
+    imu_time, dt = rng.uniform(0, 100, 799), rng.uniform(0.001, 0.02, 799)
+    last_update = imu_time - rng.choice([0.1, 0.1 - 1e-9, 0.1 - 2e-9, 0.05, 0.2], 799)
+    mag_time = imu_time + rng.choice([0.0, 0.05 + 1e-9, 0.05 + 2e-9, -0.06], 799)
+    nav_time, interval = np.zeros(800), rng.uniform(0, 0.1, 800)
+    got, due = dq.copy(), np.zeros(799, dtype=bool)
+    accumulate(rows, imu_time, dt, v[1:], mag_time, nav_time, got, interval.copy(),
+               np.concatenate(([0.0], last_update)), np.full(800, 0.1), np.full(800, 0.05),
+               due)
+    assert np.array_equal(_bits(got[1:]), _bits([_qmul(tuple(a), _rotvec_quat(*b))
+                                                 for a, b in zip(dq[1:].tolist(),
+                                                                 v[1:].tolist())]))
+    assert np.array_equal(got[0], dq[0]) and nav_time[0] == 0.0
+    assert np.array_equal(nav_time[1:], imu_time)
+    expected = [abs(m - t) <= 0.05 + 1e-9 and t - u >= 0.1 - 1e-9       # AhrsFilter.step
+                for m, t, u in zip(mag_time.tolist(), imu_time.tolist(), last_update.tolist())]
+    assert due.tolist() == expected and 0 < sum(expected) < 799
     norms = np.linalg.norm(v, axis=1)
     assert (norms < 1e-6).any() and (norms > 1e-6).any()
     # the outputs of 800 runs, every second one written, a quarter with no pending interval

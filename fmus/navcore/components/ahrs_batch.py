@@ -199,7 +199,8 @@ class AhrsFilterBatch(ComponentBatch):
     def advance(self, t, h, inputs) -> np.ndarray:
         values = inputs.real_columns(_INPUT_NAMES)
         imu_time, dt = values[:, 0], values[:, 1]
-        ready = self._alive() & self.started & self.accepted_rows(values, _INPUT_NAMES)
+        alive = self._alive()
+        ready = alive & self.started & self.accepted_rows(values, _INPUT_NAMES)
         ready &= self._native
         new = (imu_time > self.nav_time + 0.5 * dt) & (dt > 0)
         quiet = ready & ~new                  # no new IMU sample: the outputs hold
@@ -208,9 +209,11 @@ class AhrsFilterBatch(ComponentBatch):
         # a run whose interval does not start where its last one ended raises its own
         # StepSizeError
         joined = same_time_rows(imu_time[rows] - dt[rows], self.nav_time[rows], dt[rows])
-        self._step_rows(rows[joined], values[rows[joined]])
-        own = self._alive() & ~quiet
-        own[rows[joined]] = False
+        if not joined.all():
+            rows = rows[joined]
+        self._step_rows(rows, values[rows])
+        own = alive & ~quiet
+        own[rows] = False
         for b in np.flatnonzero(own).tolist():
             self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
         return self.out
@@ -220,21 +223,15 @@ class AhrsFilterBatch(ComponentBatch):
         on the new IMU interval that follows its last one."""
         if not rows.size:
             return
-        imu_time, dt = v[:, 0], v[:, 1]
-        f_b = v[:, 5:8] / dt[:, None]
-        mag_fresh = np.abs(v[:, 8] - imu_time) <= self.max_mag_age[rows] + 1e-9
-        self.nav_time[rows] = imu_time
-        dq = self.dq[rows]
-        accumulate_rows(dq, np.ascontiguousarray(v[:, 2:5]))
-        self.dq[rows] = dq
-        self.interval[rows] += dt
-        picked = mag_fresh & (imu_time - self.last_update[rows]
-                              >= self.update_interval[rows] - 1e-9)
+        due = np.empty(len(rows), dtype=bool)
+        accumulate_rows(rows, v[:, 0], v[:, 1], v[:, 2:5], v[:, 8], self.nav_time, self.dq,
+                        self.interval, self.last_update, self.update_interval,
+                        self.max_mag_age, due)
         self.out[rows, self.columns["updated"]] = 0.0
-        updated = rows[picked]
+        updated = rows[due]
         if updated.size:
-            updated = self._update_rows(updated, f_b[picked], v[picked, 9:12],
-                                        imu_time[picked])
+            v = v[due]
+            updated = self._update_rows(updated, v[:, 5:8] / v[:, 1:2], v[:, 9:12], v[:, 0])
         self._write_solutions(rows, updated)
 
     def _update_rows(self, rows: np.ndarray, f_b: np.ndarray, m_b: np.ndarray,

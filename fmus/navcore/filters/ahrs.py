@@ -90,14 +90,24 @@ def _rotvec_quat(x, y, z):
 
 
 @kernel
-def accumulate_rows(dq, dtheta):
-    """:meth:`UkfAhrsEngine.accumulate`'s quaternion of every run of a batch: each row of
-    ``dq`` (B, 4), in place, times the quaternion of the gyro increment in the row of
-    ``dtheta`` (B, 3)."""
-    for b in range(dq.shape[0]):
+def accumulate_rows(rows, imu_time, dt, dtheta, mag_time, nav_time, dq, interval, last_update,
+                    update_interval, max_mag_age, due):
+    """What :meth:`AhrsFilter.step` does on a new IMU interval, for the batch rows ``rows``
+    (their inputs ``imu_time``, ``dt``, ``dtheta`` (k, 3), ``mag_time``: row i of each is
+    run ``rows[i]``'s): the interval's end into ``nav_time``, the gyro increment into the
+    pending quaternion ``dq`` (B, 4) and ``interval`` (:meth:`UkfAhrsEngine.accumulate`), and
+    into ``due[i]`` whether the run's measurement update is due with a fresh magnetometer
+    sample (its ``update_interval`` and ``max_mag_age``, since its ``last_update``)."""
+    for i in range(rows.shape[0]):
+        b = rows[i]
+        t = imu_time[i]
+        nav_time[b] = t
         q = _qmul((dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]),
-                  _rotvec_quat(dtheta[b, 0], dtheta[b, 1], dtheta[b, 2]))
+                  _rotvec_quat(dtheta[i, 0], dtheta[i, 1], dtheta[i, 2]))
         dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3] = q
+        interval[b] += dt[i]
+        due[i] = (abs(mag_time[i] - t) <= max_mag_age[b] + 1e-9
+                  and t - last_update[b] >= update_interval[b] - 1e-9)
 
 
 @jitable
