@@ -201,3 +201,32 @@ def test_stacked_inferences_with_their_own_sets_against_loops():
     assert len(set(np.round(stacked, 6).tolist())) > 30           # the rows differ
     # each row is the single inference, bit for bit
     assert stacked.tolist() == [f(a, b) for f, a, b in zip(rows, e.tolist(), de.tolist())]
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "source"])
+def test_the_compiled_aggregation_is_numpy_s_minimum_and_maximum(compiled):
+    """The aggregated output sets of StackedInference's kernel against the same inference
+    in numpy (memberships per element, np.minimum of the rules' degrees, np.maximum over
+    each output set's rules and over the cut sets), bit for bit: inputs at the vertices and
+    feet, beyond the shoulders, random ones and NaN (which numpy's min and max propagate)."""
+    from navcore.filters import fuzzy
+    rng = np.random.default_rng(12)
+    inferences = [FuzzyRScale()] + [
+        FuzzyRScale({k: rng.uniform(lo, hi) for k, (_, lo, hi, _) in
+                     {**fuzzy.FEET, **fuzzy.OUTPUT_VERTICES}.items()}) for _ in range(3)]
+    rows = [inferences[k % 4] for k in range(80)]
+    e, de = rng.uniform(-1.5, 3.5, 80), rng.uniform(-1.5, 1.5, 80)
+    e[:8] = (-0.5, 0.0, 1.0, *rows[3].e_feet, np.nan)
+    de[8:16] = (-0.5, 0.0, 0.5, *rows[11].de_feet, np.nan)
+    stacked = fuzzy.StackedInference(rows)
+    got = np.empty((80, len(rows[0].grid)))
+    kernel = fuzzy._aggregate_rows if compiled else fuzzy._aggregate_rows.py_func
+    kernel(e, de, stacked.feet, stacked.output_sets, fuzzy._FIRING, got)
+    for k, f in enumerate(rows):
+        mu_e = memberships(e[k], fuzzy.E_VERTICES, f.e_feet)
+        mu_de = memberships(de[k], fuzzy.DE_VERTICES, f.de_feet)
+        strength = np.append(np.minimum(mu_e[:, None], mu_de[None]).ravel(), 0.0)
+        fired = strength[fuzzy._FIRING].max(axis=1)
+        expected = np.max(np.minimum(f.output_sets, fired[:, None]), axis=0)
+        assert np.array_equal(got[k], expected, equal_nan=True), k
+    assert np.isnan(got[7]).all() and np.isnan(got[15]).all()

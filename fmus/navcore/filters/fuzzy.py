@@ -55,6 +55,7 @@ from typing import Dict, Sequence
 
 import numpy as np
 
+from ..core.kernels import jitable, kernel
 from ..errors import ParameterError
 
 #: fixed vertices of the input sets N, Z, P
@@ -90,6 +91,7 @@ RULES = np.array([[0, 1, 2],
 _GRID_POINTS = 201
 
 
+@jitable
 def _shoulder_left(x, vertex, right):
     """1 up to ``vertex``, linear down to 0 at ``right``."""
     if x <= vertex:
@@ -99,6 +101,7 @@ def _shoulder_left(x, vertex, right):
     return (right - x) / (right - vertex)
 
 
+@jitable
 def _shoulder_right(x, left, vertex):
     """0 up to ``left``, linear up to 1 at ``vertex``, 1 beyond."""
     if x >= vertex:
@@ -108,6 +111,7 @@ def _shoulder_right(x, left, vertex):
     return (x - left) / (vertex - left)
 
 
+@jitable
 def _triangle(x, left, vertex, right):
     """1 at ``vertex``, linear down to 0 at each foot (a foot at the vertex: a vertical edge)."""
     if x == vertex:     # first: a vertical edge keeps the vertex at 1, as the shoulders do
@@ -186,15 +190,15 @@ _FIRING = np.array([np.pad(np.flatnonzero(RULES.ravel() == j), (0, 3), constant_
 
 class StackedInference:
     """Several :class:`FuzzyRScale` inferences (one per row, each with its own sets) run at
-    once by :meth:`__call__`, each giving the floats it gives alone: the memberships are the
-    scalar functions per element, min and max are exact in any order, and each centroid's
-    dot product is numpy's 1-D product of its row (the stacked matrix product rounds
-    otherwise)."""
+    once by :meth:`__call__`, each giving the floats it gives alone: the memberships (the
+    scalar functions), the rules' min and the aggregation's max of every row are one kernel
+    call (min and max are exact in any order), and each centroid's dot product is numpy's
+    1-D product of its row (the stacked matrix product rounds otherwise)."""
 
     def __init__(self, inferences: Sequence[FuzzyRScale]):
         self.inferences = list(inferences)
-        self.e_feet = [list(c) for c in zip(*(f.e_feet for f in inferences))]   # 4 x K
-        self.de_feet = [list(c) for c in zip(*(f.de_feet for f in inferences))]
+        #: (8, K): the e then the de feet of every inference
+        self.feet = np.array([f.e_feet + f.de_feet for f in inferences], dtype=float).T.copy()
         self.output_sets = np.stack([f.output_sets for f in inferences])  # (K, 5, grid)
         self.grids = [f.grid for f in inferences]
 
@@ -204,24 +208,59 @@ class StackedInference:
 
     def __call__(self, e: np.ndarray, de: np.ndarray) -> np.ndarray:
         """The factors F (K,) for the inputs ``e``, ``de`` (K,), row k by inference k."""
-        mu_e = membership_rows(e.tolist(), E_VERTICES, self.e_feet)         # (3, K)
-        mu_de = membership_rows(de.tolist(), DE_VERTICES, self.de_feet)
-        strength = np.minimum(mu_e[:, None], mu_de[None]).reshape(9, -1)  # rule firing
-        fired = np.concatenate((strength, np.zeros((1, len(e)))))[_FIRING].max(axis=1)
-        aggregate = np.max(np.minimum(self.output_sets, fired.T[:, :, None]), axis=1)
+        aggregate = np.empty((len(e), self.output_sets.shape[2]))
+        _aggregate_rows(np.asarray(e, dtype=float), np.asarray(de, dtype=float), self.feet,
+                        self.output_sets, _FIRING, aggregate)
         total = aggregate.sum(axis=1)
-        centroid = np.array([a @ grid for a, grid in zip(aggregate, self.grids)])
+        centroid = np.array(list(map(np.dot, aggregate, self.grids)))
         fires = ~(total <= 0.0)
         return np.where(fires, np.exp(centroid / np.where(fires, total, 1.0)), 1.0)
 
 
-def membership_rows(x: Sequence[float], vertices: Sequence[float],
-                    feet: Sequence[Sequence[float]]) -> np.ndarray:
-    """:func:`memberships` of every element of ``x`` (K floats), each with its own feet
-    (``feet``: 4 lists of K): the (3, K) degrees of N, Z, P."""
-    n_v, z_v, p_v = vertices
-    n_right, z_left, z_right, p_left = feet
-    k = len(x)
-    return np.array((list(map(_shoulder_left, x, [n_v] * k, n_right)),
-                     list(map(_triangle, x, z_left, [z_v] * k, z_right)),
-                     list(map(_shoulder_right, x, p_left, [p_v] * k))))
+@jitable
+def _minimum(a, b):
+    """numpy's ``minimum`` of two floats (a NaN wins, the first one first)."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a <= b else b
+
+
+@jitable
+def _maximum(a, b):
+    """numpy's ``maximum`` of two floats (a NaN wins, the first one first)."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+@kernel
+def _aggregate_rows(e, de, feet, output_sets, firing, aggregate):
+    """The aggregated output set (row k of ``aggregate``, on inference k's grid) of every
+    inference k for the inputs ``e[k]``, ``de[k]``: the memberships of the input sets
+    (``feet``: (8, K), the e then the de feet of :func:`memberships`), the rules' strengths
+    (AND = min), each output set's firing (aggregation = max over its rules, ``firing``: the
+    rule indices of each output set, 9 for none) and the sets cut at it, joined by max."""
+    strength = np.empty(10)
+    strength[9] = 0.0
+    for k in range(e.shape[0]):
+        f = feet[:, k]
+        mu_e = (_shoulder_left(e[k], E_VERTICES[0], f[0]),
+                _triangle(e[k], f[1], E_VERTICES[1], f[2]),
+                _shoulder_right(e[k], f[3], E_VERTICES[2]))
+        mu_de = (_shoulder_left(de[k], DE_VERTICES[0], f[4]),
+                 _triangle(de[k], f[5], DE_VERTICES[1], f[6]),
+                 _shoulder_right(de[k], f[7], DE_VERTICES[2]))
+        for i in range(3):
+            for j in range(3):
+                strength[3 * i + j] = _minimum(mu_e[i], mu_de[j])
+        row = aggregate[k]
+        for o in range(output_sets.shape[1]):
+            fired = _maximum(_maximum(strength[firing[o, 0]], strength[firing[o, 1]]),
+                             strength[firing[o, 2]])
+            for g in range(row.shape[0]):
+                cut = _minimum(output_sets[k, o, g], fired)
+                row[g] = cut if o == 0 else _maximum(row[g], cut)
