@@ -29,6 +29,7 @@ from typing import Any, Dict, Tuple
 
 import numpy as np
 
+from ..core.kernels import jitable
 from ..core.limits import FINITE, Limits
 from ..errors import ParameterError
 from .gnss_errors import check_known, read_declared
@@ -48,7 +49,7 @@ def _soft_iron(text: Any) -> np.ndarray:
 
 
 #: phases of the vibration on the three axes [rad]
-_AXIS_PHASES = np.array([0.0, 2.0, 4.0]) * math.pi / 3
+_AXIS_PHASES = (0.0, 2.0 * math.pi / 3, 4.0 * math.pi / 3)
 
 class MagnetometerModel:
     """Magnetometer and vibration disturbance of the module docstring."""
@@ -142,19 +143,32 @@ class MagnetometerModel:
         """Magnetometer reading [T] at time ``t`` for the attitude ``C_bn``; draws the sample's
         random numbers (call once per sample, then :meth:`accel_disturbance`)."""
         z = self._next_normals()
-        body = self.soft_iron @ (C_bn.T @ self.field_ned)
-        return _reading(body, self.hard_iron, self.noise * self._noise_factor(t), z[:3])
+        body = (self.soft_iron @ (C_bn.T @ self.field_ned)).tolist()
+        scale = self.noise * self._noise_factor(t)
+        return np.array([_reading(body[i], self.hard_iron[i], scale, z[i]) for i in range(3)])
 
     def accel_disturbance(self, t: float) -> np.ndarray:
         """Extra specific force [m/s^2] of the vibration at time ``t`` (zero before it)."""
         if not self.vibrating(t):
             return np.zeros(3)
-        phase = 2.0 * math.pi * self.vibration_frequency * (t - self.vibration_start)
-        sine = self.vibration_amplitude * np.sin(phase + _AXIS_PHASES)
-        return sine + self.vibration_noise * self._normals[self._n_used - 1, 3:]
+        return np.array(_disturbance(self.vibration_amplitude, self.vibration_frequency,
+                                     t - self.vibration_start, self.vibration_noise,
+                                     *self._normals[self._n_used - 1, 3:].tolist()))
 
 
-def _reading(body, hard_iron, scale, normals):
-    """The reading [T] (any leading axes): the field in body axes ``body`` plus the hard iron
-    plus the noise sigma ``scale`` times the sample's normals."""
-    return body + hard_iron + scale * normals
+@jitable
+def _reading(body, hard_iron, scale, normal):
+    """One axis's reading [T]: the field in body axes ``body`` plus the hard iron plus the
+    noise sigma ``scale`` times the sample's normal."""
+    return body + hard_iron + scale * normal
+
+
+@jitable
+def _disturbance(amplitude, frequency, elapsed, noise, z0, z1, z2):
+    """The vibration's extra specific force [m/s^2] on the three axes, ``elapsed`` seconds
+    after its start, with the sample's vibration normals ``z0 .. z2``: the sinusoid of
+    ``amplitude`` and ``frequency`` at each axis's phase plus ``noise`` times the normal."""
+    phase = 2.0 * math.pi * frequency * elapsed
+    return (amplitude * math.sin(phase + _AXIS_PHASES[0]) + noise * z0,
+            amplitude * math.sin(phase + _AXIS_PHASES[1]) + noise * z1,
+            amplitude * math.sin(phase + _AXIS_PHASES[2]) + noise * z2)
