@@ -4,8 +4,8 @@
 :class:`~navcore.sensors.magnetometer.MagnetometerModel` objects (noise, hard iron, the
 vibration's switch, start, factor, noise, amplitude and frequency, the blocks of normals of
 their own generators) and gives every run's reading of one sample, for one attitude shared
-by the runs, and the vibration's extra specific force of the runs it acts on, in one kernel call over
-the run axis.  Each of them is the formula a model alone evaluates
+by the runs, and the vibration's extra specific force of the runs it acts on, in one
+kernel call over the run axis.  Each of them is the formula a model alone evaluates
 (:meth:`~navcore.sensors.magnetometer.MagnetometerModel.measure`,
 :meth:`~navcore.sensors.magnetometer.MagnetometerModel.accel_disturbance`) on the same
 floats, so every row is its model's value bit for bit; the field in body axes is one product
