@@ -190,8 +190,9 @@ def sqrt_rows(P: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     info = np.empty(len(P), dtype=np.int64)
     _cholesky_rows(P, np.empty((n, n), order="F"), L, info)
     fallback = info != 0
-    for b in np.flatnonzero(fallback).tolist():
-        L[b] = _eigen_sqrt(P[b])
+    if fallback.any():
+        for b in np.flatnonzero(fallback).tolist():
+            L[b] = _eigen_sqrt(P[b])
     return L, fallback
 
 
