@@ -18,6 +18,8 @@ from test_ahrs import AHRS_PARAMS, SENSORS, TABLE, _trajectory, profiles  # noqa
 from navcore.components import ahrs_batch
 from navcore.components.ahrs_components import FuzzyUkfAhrs, UkfAhrs
 from navcore.core.batch import BatchInputs
+from navcore.core.kernels import kernel
+from navcore.core.timing import same_instant
 from navcore.errors import InputError
 from navcore.filters import unscented
 from navcore.filters.unscented import correct_rows, measurement_moments_rows
@@ -330,7 +332,8 @@ def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
 
 
 def test_same_time_of_arrays_is_same_time_of_each_element():
-    """Long runs (1e5 s), short ones, exact zeros, differences around the tolerance."""
+    """Long runs (1e5 s), short ones, exact zeros, differences around the tolerance; the
+    arrays' test and the compiled one (same_instant, in a kernel) against same_time."""
     from navcore.core.timing import same_time, same_time_rows
     rng = np.random.default_rng(0)
     a = np.concatenate([rng.uniform(-1e5, 1e5, 5000), rng.uniform(0, 1, 5000), np.zeros(5)])
@@ -341,6 +344,15 @@ def test_same_time_of_arrays_is_same_time_of_each_element():
     assert rows.tolist() == [same_time(*v) for v in zip(a.tolist(), b.tolist(),
                                                          period.tolist())]
     assert 0.3 < rows.mean() < 0.95                    # both answers occur
+    got = np.empty(a.size, dtype=bool)
+    _same_instants(a, b, period, got)
+    assert got.tolist() == rows.tolist()
+
+
+@kernel
+def _same_instants(a, b, period, out):
+    for i in range(a.shape[0]):
+        out[i] = same_instant(a[i], b[i], period[i])
 
 
 def test_euler_angles_of_quaternion_columns_are_those_of_each_quaternion():

@@ -46,8 +46,9 @@ from typing import List
 import numpy as np
 
 from ..core import signals
-from ..core.batch import ComponentBatch
-from ..core.timing import same_time_rows
+from ..core.batch import ComponentBatch, open_bounds, row_accepted
+from ..core.kernels import kernel
+from ..core.timing import same_instant
 from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adapt_r_scales,
                             euler_sigma_rows, measure_points,
                             pitch_of_terms, process_noise_diagonal, propagate_points,
@@ -70,6 +71,35 @@ _SHARED = ("gravity", "field_intensity", "inclination")
 _SHELL_METHODS = ("step", "_write_solution")
 _ENGINE_METHODS = ("accumulate", "predict", "update", "_process", "_measure",
                    "_switch_to_shadow", "current_quat", "euler", "euler_sigma")
+
+
+#: the steps of :func:`_steps_of_rows`
+_NONE, _QUIET, _NATIVE, _OWN = 0, 1, 2, 3
+
+
+@kernel
+def _steps_of_rows(values, low, high, alive, started, native, nav_time, out, updated, step):
+    """Which step each run takes on its inputs (``values`` (B, n), :data:`_INPUT_NAMES`)
+    into ``step``: none for a failed run; for a started run whose inputs lie in their open
+    bounds ``(low, high)`` (a ``native`` batch): quiet when no new IMU sample came (its
+    ``updated`` output column of ``out`` set to 0, the others hold), the batch's step
+    when the new interval starts at its ``nav_time`` (:func:`same_instant`); else its own
+    code (not started, an input refused, an interval that does not follow: its own error)."""
+    for b in range(values.shape[0]):
+        if not alive[b]:
+            step[b] = _NONE
+            continue
+        v = values[b]
+        imu_time, dt = v[0], v[1]
+        if not (native and started[b] and row_accepted(v, low, high)):
+            step[b] = _OWN
+        elif not (imu_time > nav_time[b] + 0.5 * dt and dt > 0):
+            out[b, updated] = 0.0
+            step[b] = _QUIET
+        elif same_instant(imu_time - dt, nav_time[b], dt):
+            step[b] = _NATIVE
+        else:
+            step[b] = _OWN
 
 
 def _engine_path(engine, path):
@@ -198,23 +228,13 @@ class AhrsFilterBatch(ComponentBatch):
     # -- stepping -------------------------------------------------------------------------
     def advance(self, t, h, inputs) -> np.ndarray:
         values = inputs.real_columns(_INPUT_NAMES)
-        imu_time, dt = values[:, 0], values[:, 1]
-        alive = self._alive()
-        ready = alive & self.started & self.accepted_rows(values, _INPUT_NAMES)
-        ready &= self._native
-        new = (imu_time > self.nav_time + 0.5 * dt) & (dt > 0)
-        quiet = ready & ~new                  # no new IMU sample: the outputs hold
-        self.out[quiet, self.columns["updated"]] = 0.0
-        rows = np.flatnonzero(ready & new)
-        # a run whose interval does not start where its last one ended raises its own
-        # StepSizeError
-        joined = same_time_rows(imu_time[rows] - dt[rows], self.nav_time[rows], dt[rows])
-        if not joined.all():
-            rows = rows[joined]
+        low, high = open_bounds(self, _INPUT_NAMES)
+        step = np.empty(self.runs, dtype=np.int8)
+        _steps_of_rows(values, low, high, self._alive(), self.started, self._native,
+                       self.nav_time, self.out, self.columns["updated"], step)
+        rows = np.flatnonzero(step == _NATIVE)
         self._step_rows(rows, values[rows])
-        own = alive & ~quiet
-        own[rows] = False
-        for b in np.flatnonzero(own).tolist():
+        for b in np.flatnonzero(step == _OWN).tolist():
             self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
         return self.out
 

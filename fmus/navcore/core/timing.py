@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 
+from .kernels import jitable
+
 #: relative tolerance on times, as a fraction of the period they are compared on
 TIME_TOLERANCE = 1e-9
 #: units in the last place of the compared time added to the tolerance (master rounding)
@@ -41,6 +43,13 @@ def time_tolerance_rows(period, t):
 def same_time(a: float, b: float, period: float) -> bool:
     """``a`` and ``b`` are the same instant on a grid of ``period`` seconds."""
     return abs(a - b) <= time_tolerance(period, max(abs(a), abs(b)))
+
+
+@jitable
+def same_instant(a, b, period):
+    """:func:`same_time` in a kernel (``np.spacing`` of a non-negative time is its
+    ``math.ulp``, as in :func:`time_tolerance_rows`)."""
+    return abs(a - b) <= TIME_TOLERANCE * abs(period) + _ULPS * np.spacing(max(abs(a), abs(b)))
 
 
 def same_time_rows(a, b, period):
