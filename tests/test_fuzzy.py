@@ -220,7 +220,8 @@ def test_the_compiled_aggregation_is_numpy_s_minimum_and_maximum(compiled):
     de[8:16] = (-0.5, 0.0, 0.5, *rows[11].de_feet, np.nan)
     stacked = fuzzy.StackedInference(rows)
     got = np.empty((80, len(rows[0].grid)))
-    kernel = fuzzy._aggregate_rows if compiled else fuzzy._aggregate_rows.py_func
+    kernel = (fuzzy._aggregate_rows if compiled
+              else getattr(fuzzy._aggregate_rows, "py_func", fuzzy._aggregate_rows))
     kernel(e, de, stacked.feet, stacked.output_sets, fuzzy._FIRING, got)
     for k, f in enumerate(rows):
         mu_e = memberships(e[k], fuzzy.E_VERTICES, f.e_feet)
