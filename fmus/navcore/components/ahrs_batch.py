@@ -272,11 +272,11 @@ class AhrsFilterBatch(ComponentBatch):
         self.out[rows, col["updated"]] = 1.0
         self.out[rows, col["nis"]] = self.last_nis[rows]
         self.out[rows, col["nis_dof"]] = 6.0
-        if "fuzzy_e_accel" in col:
-            for b in rows.tolist():
-                adaptive = self.members[b].engine.adaptive
-                self.out[b, [col["fuzzy_e_accel"], col["fuzzy_e_mag"]]] = adaptive.e
-                self.out[b, [col["fuzzy_de_accel"], col["fuzzy_de_mag"]]] = adaptive.de
+        if "fuzzy_e_accel" in col and rows.size:
+            adaptives = [self.members[b].engine.adaptive for b in rows.tolist()]
+            fuzzy = [col[n] for n in ("fuzzy_e_accel", "fuzzy_e_mag", "fuzzy_de_accel",
+                                      "fuzzy_de_mag")]
+            self.out[rows[:, None], fuzzy] = [(*a.e, *a.de) for a in adaptives]
         return rows
 
     def _points(self, rows: np.ndarray) -> np.ndarray:

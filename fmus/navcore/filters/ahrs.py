@@ -446,11 +446,10 @@ def adapt_r_scales(adaptives, blocks, innovations, Pzz, R0, r_scales):
         Cz = np.array([np.mean(a.residuals * a.residuals, axis=0) for a in ready])
     Pz_sum = Pz.reshape(-1, 2, 3).sum(axis=2)
     e_new = (Cz.reshape(-1, 2, 3).sum(axis=2) - Pz_sum) / Pz_sum
-    de = np.zeros_like(e_new)
-    for i, a in enumerate(ready):
-        if a.count > a.window:
-            de[i] = e_new[i] - a.e
-        a.e, a.de = e_new[i].copy(), de[i].copy()
+    going_on = np.array([a.count > a.window for a in ready])[:, None]
+    de = np.where(going_on, e_new - np.array([a.e for a in ready]), 0.0)
+    for a, e_row, de_row in zip(ready, e_new, de):      # rows of arrays of their own
+        a.e, a.de = e_row, de_row
     factors = blocks(e_new.reshape(-1), de.reshape(-1)).reshape(-1, 2)
     low = np.array([a.r_scale_min for a in ready])[:, None]
     high = np.array([a.r_scale_max for a in ready])[:, None]
