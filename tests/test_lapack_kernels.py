@@ -141,3 +141,23 @@ def test_a_kernel_read_from_the_cache_calls_this_process_s_routine(tmp_path):
                            text=True, check=True).stdout for _ in range(2)]
     assert runs[0] == runs[1] and runs[0].startswith("0x")
     assert any(tmp_path.rglob("*.nbi"))                  # the second run read the cache
+
+
+def test_sigma_points_rows_are_each_filter_s_own_points():
+    """sigma_points_rows against UnscentedKalmanFilter.sigma_points of each filter, bit for
+    bit: covariances of 6 and 15 states, one not symmetric (symmetrized for its points), one
+    singular (the eigenvalue fallback)."""
+    from navcore.filters.unscented import UnscentedKalmanFilter, sigma_points_rows
+    rng = np.random.default_rng(21)
+    for n in (6, 15):
+        P = _spd(rng, 30, n)
+        P[4, 0, 1] += 1e-9                                  # not symmetric
+        P[7] = 0.0
+        P[7, 1, 1] = 2.0                                    # singular
+        x = rng.normal(size=(30, n))
+        single = UnscentedKalmanFilter(n, 0.5, 2.0, 1.0)
+        X, fallback = sigma_points_rows(x, P, single._spread)
+        assert fallback.tolist() == [b == 7 for b in range(30)]
+        for b in range(30):
+            single.x, single.P = x[b].copy(), P[b].copy()
+            assert np.array_equal(_bits(X[b]), _bits(single.sigma_points())), (n, b)

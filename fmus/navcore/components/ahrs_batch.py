@@ -10,9 +10,8 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
 * the gyro increment into the pending time update;
 * for the runs whose measurement update is due, the UKF time and measurement updates, by
   the functions the single engine calls with one run: the sigma points of all runs
-  (:func:`~navcore.filters.unscented.points_from_sqrt_rows` on the roots of
-  :func:`~navcore.filters.unscented.sqrt_rows`: the LAPACK routine one run alone calls,
-  called from a kernel for every run), :func:`~navcore.filters.ahrs.propagate_points` and
+  (:func:`~navcore.filters.unscented.sigma_points_rows`: each covariance's Cholesky factor
+  by the LAPACK routine one run alone calls, from one kernel for all runs), :func:`~navcore.filters.ahrs.propagate_points` and
   :func:`~navcore.filters.ahrs.measure_points` on the points of all runs, the stacked
   moments (:func:`~navcore.filters.unscented.predicted_moments_rows`,
   :func:`~navcore.filters.unscented.measurement_moments_rows`) and
@@ -55,8 +54,8 @@ from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adap
                             shadow_switched, solution_rows)
 from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
-                                 points_from_sqrt_rows, predicted_moments_rows,
-                                 predicted_state_error, sqrt_rows, state_error)
+                                 predicted_moments_rows, predicted_state_error,
+                                 sigma_points_rows, state_error)
 
 _INPUT_NAMES = tuple(p.name for p in signals.AHRS_INPUTS)
 _DIAGONAL = np.arange(6)
@@ -283,12 +282,9 @@ class AhrsFilterBatch(ComponentBatch):
         """The sigma points of the runs ``rows`` (B, 13, 6), as each engine draws them
         (:meth:`UnscentedKalmanFilter.sigma_points`: a P that is not symmetric is
         symmetrized for them)."""
-        P = self.P[rows]
-        odd = ~(P == P.transpose(0, 2, 1)).all(axis=(1, 2))
-        P[odd] = 0.5 * (P[odd] + P[odd].transpose(0, 2, 1))
-        L, fallback = sqrt_rows(P)
+        X, fallback = sigma_points_rows(self.x[rows], self.P[rows], self.spread)
         self.fallbacks[rows] += fallback
-        return points_from_sqrt_rows(self.x[rows], L * self.spread)
+        return X
 
     def _predict_rows(self, rows: np.ndarray) -> np.ndarray:
         """The time update of the runs ``rows``; which of them did not fail."""

@@ -196,6 +196,52 @@ def sqrt_rows(P: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     return L, fallback
 
 
+def sigma_points_rows(x: np.ndarray, P: np.ndarray,
+                      spread: float) -> Tuple[np.ndarray, np.ndarray]:
+    """The sigma points (B, 2n + 1, n) of B filters from their states ``x`` (B, n) and
+    covariances ``P`` (B, n, n), each as its :meth:`UnscentedKalmanFilter.sigma_points` draws
+    them (``P`` symmetrized where it is not symmetric, its root as :func:`sqrt_rows` takes
+    it, scaled by ``spread``), and which filters needed the eigenvalue fallback (B,)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    P = np.ascontiguousarray(P, dtype=float)
+    runs, n = x.shape
+    X = np.empty((runs, 2 * n + 1, n))
+    info = np.empty(runs, dtype=np.int64)
+    _points_rows(x, P, float(spread), np.empty((n, n), order="F"), X, info)
+    fallback = info != 0
+    if fallback.any():
+        for b in np.flatnonzero(fallback).tolist():
+            A = P[b] if (P[b] == P[b].T).all() else 0.5 * (P[b] + P[b].T)
+            X[b] = points_from_sqrt_rows(x[b:b + 1], _eigen_sqrt(A)[None] * spread)[0]
+    return X, fallback
+
+
+@kernel
+def _points_rows(x, P, spread, factor, X, info):
+    """:func:`sigma_points_rows` of every filter whose Cholesky factor exists (LAPACK's info
+    of each into ``info``; the points of the others are left to the caller)."""
+    n = x.shape[1]
+    for b in range(x.shape[0]):
+        symmetric = True
+        for i in range(n):
+            for j in range(i + 1):
+                if not P[b, i, j] == P[b, j, i]:
+                    symmetric = False
+        for i in range(n):
+            for j in range(n):
+                factor[i, j] = P[b, i, j] if symmetric else 0.5 * (P[b, i, j] + P[b, j, i])
+        info[b] = potrf_lower(factor)
+        if info[b] != 0:
+            continue
+        for k in range(n):
+            X[b, 0, k] = x[b, k]
+        for i in range(n):                      # row 1 + i is x + column i of the root
+            for k in range(n):
+                root = (factor[k, i] if i <= k else 0.0) * spread
+                X[b, 1 + i, k] = x[b, k] + root
+                X[b, 1 + n + i, k] = x[b, k] - root
+
+
 @kernel
 def _cholesky_rows(P, factor, L, info):
     """The lower Cholesky factor of every ``P[b]`` into ``L[b]`` (upper triangle 0), LAPACK's
