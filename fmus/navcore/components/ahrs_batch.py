@@ -11,7 +11,8 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
 * for the runs whose measurement update is due, the UKF time and measurement updates, by
   the functions the single engine calls with one run: the sigma points of all runs
   (:func:`~navcore.filters.unscented.sigma_points_rows`: each covariance's Cholesky
-  factor by the LAPACK routine one run alone calls, from one kernel for all runs), :func:`~navcore.filters.ahrs.propagate_points` and
+  factor by the LAPACK routine one run alone calls, from one kernel for all runs),
+  :func:`~navcore.filters.ahrs.propagate_points` and
   :func:`~navcore.filters.ahrs.measure_points` on the points of all runs, the stacked
   moments (:func:`~navcore.filters.unscented.predicted_moments_rows`,
   :func:`~navcore.filters.unscented.measurement_moments_rows`) and
