@@ -146,19 +146,25 @@ def euler_to_mrp(roll, pitch, yaw):
     return dcm_to_mrp(euler_to_dcm(roll, pitch, yaw))
 
 
+@jitable
+def dcm_of_quat(w, x, y, z):
+    """``C_bn`` of the quaternion ``(w, x, y, z)`` by rows, 9 floats (Groves eq. 2.34,
+    scalar first)."""
+    return (w * w + x * x - y * y - z * z, 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+            2.0 * (x * y + w * z), w * w - x * x + y * y - z * z, 2.0 * (y * z - w * x),
+            2.0 * (x * z - w * y), 2.0 * (y * z + w * x), w * w - x * x - y * y + z * z)
+
+
+@kernel
+def _dcm_rows(sigma, out):
+    for i in range(sigma.shape[0]):
+        q = quat_of_mrp(sigma[i, 0], sigma[i, 1], sigma[i, 2])
+        c = dcm_of_quat(q[0], q[1], q[2], q[3])
+        for k in range(9):
+            out[i, k] = c[k]
+
+
 def mrp_to_dcm_batch(sigma):
     """``C_bn`` of every row of ``sigma`` (``(N, 3)``): shape ``(N, 3, 3)``, from the
-    quaternion (Groves eq. 2.34, scalar first)."""
-    q = mrp_to_quat(sigma)
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    C = np.empty((q.shape[0], 3, 3))
-    C[:, 0, 0] = w * w + x * x - y * y - z * z
-    C[:, 0, 1] = 2.0 * (x * y - w * z)
-    C[:, 0, 2] = 2.0 * (x * z + w * y)
-    C[:, 1, 0] = 2.0 * (x * y + w * z)
-    C[:, 1, 1] = w * w - x * x + y * y - z * z
-    C[:, 1, 2] = 2.0 * (y * z - w * x)
-    C[:, 2, 0] = 2.0 * (x * z - w * y)
-    C[:, 2, 1] = 2.0 * (y * z + w * x)
-    C[:, 2, 2] = w * w - x * x - y * y + z * z
-    return C
+    quaternion (:func:`dcm_of_quat`)."""
+    return _rows_of(_dcm_rows, sigma, 9).reshape(-1, 3, 3)
