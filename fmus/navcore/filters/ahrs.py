@@ -19,7 +19,7 @@ Time update, over the interval since the previous update with the gyro increment
     q(sigma+) = q(sigma) (x) dq (x) q(-b_g T),    b_g+ = b_g
 
 (first order in ``b_g T``; exact for a constant body rate), evaluated on every sigma point,
-points continued in the MRP set nearest the prior mean (:func:`navcore.ins.mrp.nearest_set`).
+points continued in the MRP set nearest the prior mean (:func:`navcore.ins.mrp.nearer_set`).
 Process noise: the gyro angle random walk ``N_g`` maps through the MRP kinematics
 ``d sigma / dt = B omega / 4`` with ``B B^T = (1 + s)^2 I`` (Schaub & Junkins eq. 3.163),
 so ``Q_sigma = N_g^2 T (1 + s)^2 / 16 I``; the bias walks with ``Q_b = N_b^2 T I``.
@@ -448,7 +448,7 @@ def adapt_r_scales(adaptives, blocks, innovations, Pzz, R0, r_scales):
     e_new = (Cz.reshape(-1, 2, 3).sum(axis=2) - Pz_sum) / Pz_sum
     going_on = np.array([a.count > a.window for a in ready])[:, None]
     de = np.where(going_on, e_new - np.array([a.e for a in ready]), 0.0)
-    for a, e_row, de_row in zip(ready, e_new, de):      # rows of arrays of their own
+    for a, e_row, de_row in zip(ready, e_new, de):      # views of arrays no one else holds
         a.e, a.de = e_row, de_row
     factors = blocks(e_new.reshape(-1), de.reshape(-1)).reshape(-1, 2)
     low = np.array([a.r_scale_min for a in ready])[:, None]
