@@ -30,7 +30,7 @@ from typing import Dict, List
 import numpy as np
 
 from ..core import signals
-from ..core.batch import ComponentBatch
+from ..core.batch import ComponentBatch, open_bounds, row_accepted
 from ..core.kernels import kernel
 from ..core.timing import same_time, time_tolerance
 from ..filters.ins_gnss_kf import KfEngine, propagate_rows
@@ -233,17 +233,15 @@ class InsGnssFilterBatch(ComponentBatch):
     def _common_interval(self, imu: np.ndarray):
         """(imu_time, imu_dt) when every run integrates that same new interval now; None
         when any run needs its own code for this step."""
-        if not self._native or not self._taus or self._failures or self.own.any():
+        if not self._native or not self._taus or self._failures:
             return None
-        first = imu[0, :2]
-        if not (imu[:, :2] == first).all():
+        low, high = open_bounds(self, _IMU)
+        if not _one_accepted_interval(imu, low, high, self.own):
             return None
-        imu_time, dt = first.tolist()
+        imu_time, dt = imu[0, :2].tolist()
         nav_time = self.nav_time
         if not (imu_time > nav_time + 0.5 * dt and dt > 0
                 and same_time(imu_time - dt, nav_time, dt)):
-            return None
-        if not self.accepted_rows(imu, _IMU).all():
             return None
         return imu_time, dt
 
@@ -305,6 +303,20 @@ class InsGnssFilterBatch(ComponentBatch):
         phi = stack["phi_acc"]
         return (np.einsum("bij,bij->bi", phi @ stack["P"], phi)
                 + np.diagonal(stack["q_acc"], axis1=1, axis2=2))
+
+
+@kernel
+def _one_accepted_interval(imu, low, high, own) -> bool:
+    """Whether every run's IMU inputs (rows of ``imu``, columns :data:`_IMU`) have the first
+    run's ``imu_time`` and ``imu_dt`` and lie in their ranges (:func:`~navcore.core.batch.
+    row_accepted`), and no run is ``own``."""
+    imu_time, dt = imu[0, 0], imu[0, 1]
+    for b in range(imu.shape[0]):
+        if own[b] or imu[b, 0] != imu_time or imu[b, 1] != dt:
+            return False
+        if not row_accepted(imu[b], low, high):
+            return False
+    return True
 
 
 @kernel

@@ -29,6 +29,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from ..errors import NavcoreError
+from .kernels import jitable, kernel
 from .limits import FINITE
 
 
@@ -105,14 +106,10 @@ class ComponentBatch(ABC):
         input lies in its port's range and is finite (what
         :meth:`~navcore.core.component.Component.check_inputs` enforces; a run refused here
         gets its own component's error from its own code)."""
-        cache = self.__dict__.setdefault("_ranges", {})
-        bounds = cache.get(names)
-        if bounds is None:
-            bounds = cache[names] = self._open_bounds(names)
-        low, high = bounds
-        ok = values > low
-        ok &= values < high
-        return ok.all(axis=1)
+        low, high = open_bounds(self, names)
+        accepted = np.empty(len(values), dtype=bool)
+        accepted_into(values, low, high, accepted)
+        return accepted
 
     def _open_bounds(self, names: Tuple[str, ...]) -> Tuple[np.ndarray, np.ndarray]:
         """The ranges of the inputs ``names`` as open bounds (low, high): a closed bound is
@@ -185,6 +182,34 @@ class ComponentBatch(ABC):
     @abstractmethod
     def advance(self, t: float, h: float, inputs: Mapping[str, np.ndarray]) -> np.ndarray:
         """Step every run from ``t`` to ``t + h``; the outputs (module docstring)."""
+
+
+def open_bounds(batch: ComponentBatch, names: Tuple[str, ...]) -> Tuple[np.ndarray, np.ndarray]:
+    """The ranges of ``batch``'s inputs ``names`` as open bounds
+    (:meth:`ComponentBatch._open_bounds`), built once per batch."""
+    cache = batch.__dict__.setdefault("_ranges", {})
+    bounds = cache.get(names)
+    if bounds is None:
+        bounds = cache[names] = batch._open_bounds(names)
+    return bounds
+
+
+@jitable
+def row_accepted(row, low, high) -> bool:
+    """Whether every value of ``row`` lies inside its open bounds ``(low, high)``
+    (:meth:`ComponentBatch.open_bounds`; NaN lies inside none)."""
+    for j in range(row.shape[0]):
+        x = row[j]
+        if not (x > low[j] and x < high[j]):
+            return False
+    return True
+
+
+@kernel
+def accepted_into(values, low, high, accepted) -> None:
+    """:func:`row_accepted` of every row of ``values`` (B, n), into ``accepted`` (B,)."""
+    for b in range(values.shape[0]):
+        accepted[b] = row_accepted(values[b], low, high)
 
 
 __all__ = ["ComponentBatch"]
