@@ -231,3 +231,28 @@ def test_a_run_that_diverges_inside_a_batch_fails_alone(component_class, poison,
     out = batch.advance(200 * h, h, _batch_inputs([per_run[b][200] for b in (0, 2)]))
     expected = alone.advance(200 * h, h, per_run[0][200])
     assert out[0].tolist() == [float(expected[p.name]) for p in component_class.outputs]
+
+
+@pytest.mark.parametrize("component_class", [Kf, Ukf])
+def test_a_batch_stepped_between_imu_samples_holds_each_run_s_outputs(component_class):
+    """The filters stepped at twice the IMU's rate (every input step seen twice): at the
+    steps without a new interval each run steps by its own code, which leaves its solution
+    as it was; the batch gives it the solution of the batch's latest interval first (what
+    the run alone wrote then), also after the fixes whose solution the batch wrote."""
+    per_run = _recorded_inputs(2)
+    parameters = _filter_parameters()
+    alone = [component_class(**parameters) for _ in per_run]
+    batch = component_class.batch_class(component_class, len(per_run))
+    batch.set_parameters([parameters] * len(per_run))
+    batch.start(0.0)
+    for component in alone:
+        component.start(0.0)
+    columns = [p.name for p in component_class.outputs]
+    h = 0.005
+    for k in range(2 * 300):
+        steps = [steps[k // 2] for steps in per_run]
+        outs = batch.advance(k * h, h, _batch_inputs(steps))
+        for b, component in enumerate(alone):
+            out = component.advance(k * h, h, steps[b])
+            assert outs[b].tolist() == [float(out[n]) for n in columns], (k, b)
+    assert batch.take_failures() == {}

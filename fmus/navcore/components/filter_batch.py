@@ -81,6 +81,7 @@ class InsGnssFilterBatch(ComponentBatch):
         # the solution outputs are consecutive columns (signals.FILTER_OUTPUTS)
         assert [c[n] for n in names] == list(range(first_col, first_col + len(names)))
         self._solution_col = first_col
+        self._solution_names = names
         for b in alive:
             self._adopt(b)
         return self.out.copy()
@@ -172,6 +173,11 @@ class InsGnssFilterBatch(ComponentBatch):
                                member.late_fixes)
         self.seen[b] = self.first_entry + len(self.log)
         self._sync(b)
+        # the solution the batch wrote last (a step of the run's own code that integrates
+        # nothing nor updates leaves it as it is)
+        names, c = self._solution_names, self._solution_col
+        member.out.update(zip(names, self.out[b, c:c + len(names)].tolist()))
+        member.out["nav_time"] = self.out[b, self.columns["nav_time"]].item()
 
     def _record_last(self, b: int) -> None:
         """The interval :meth:`_lend` held back, into run b's history now."""
@@ -214,21 +220,36 @@ class InsGnssFilterBatch(ComponentBatch):
             return self.out
         imu_time, dt = interval
         self._propagate(imu, imu_time, dt)
+        epochs = np.flatnonzero(inputs["gnss_epoch"] != self.last_epoch).tolist()
+        taken = self._take_epochs(epochs, inputs) if epochs else ()
         self._write_solutions()
-        for b in np.flatnonzero(inputs["gnss_epoch"] != self.last_epoch).tolist():
+        updated = self.columns["updated"]
+        for b in taken:            # the solution rows' updated = 0 is not theirs
+            self.out[b, updated] = self.members[b].out["updated"]
+        self._trim_log()
+        return self.out
+
+    def _take_epochs(self, epochs: List[int], inputs) -> List[int]:
+        """The runs ``epochs`` take their new GNSS epoch by their own code (the part of
+        :meth:`InsGnssFilter.step` after the integration but the solution, which
+        :meth:`_write_solutions` writes next for every run by the same functions); the runs
+        that did, without error."""
+        taken = []
+        for b in epochs:
             if b not in self._failures:
                 values = self._inputs_of(b, inputs)
                 self._by_itself(b, lambda m: self._epoch(m, values),
                                 fix_time=values["gnss_time"] if values["gnss_valid"] else None)
-        self._trim_log()
-        return self.out
+                if b not in self._failures:
+                    taken.append(b)
+        return taken
 
     @staticmethod
     def _epoch(member, inputs) -> None:
-        """The part of :meth:`InsGnssFilter.step` after the integration, for a new epoch."""
+        """:meth:`InsGnssFilter.step` after the integration, for a new epoch, but the
+        solution outputs."""
         member.out["updated"] = False
         member._take_epoch(inputs)
-        member._write_solution()
 
     def _common_interval(self, imu: np.ndarray):
         """(imu_time, imu_dt) when every run integrates that same new interval now; None
