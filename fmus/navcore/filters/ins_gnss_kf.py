@@ -96,9 +96,10 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
 def compensated_rows(dtheta, dvel, gyro_bias, accel_bias, dt):
     """(dtheta_c, dvel_c, body rate, specific force) of every run (B, 3 each):
     :func:`compensate_rows` into new arrays."""
-    out = tuple(np.empty((len(dtheta), 3)) for _ in range(4))
-    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), *out)
-    return out
+    out = np.empty((4, len(dtheta), 3))      # one allocation: four C-contiguous blocks
+    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), out[0], out[1], out[2],
+                    out[3])
+    return out[0], out[1], out[2], out[3]
 
 
 @kernel
