@@ -33,7 +33,7 @@ from ..core import signals
 from ..core.batch import ComponentBatch, open_bounds, row_accepted
 from ..core.kernels import kernel
 from ..core.timing import same_time, time_tolerance
-from ..filters.ins_gnss_kf import KfEngine, propagate_rows
+from ..filters.ins_gnss_kf import KfEngine, kalman_rows, predicted_rows, propagate_rows
 from ..filters.latency import checkpoint_due, checkpoint_spacing
 from ..ins.error_model import transition_template
 from ..ins.rotations import pitch_from_elements, roll_yaw_from_elements
@@ -55,6 +55,7 @@ class InsGnssFilterBatch(ComponentBatch):
         first = self.members[alive[0]] if alive else None
         # an engine that propagates otherwise (a subclass's own law) runs its own code
         self._native = first is not None and self._propagates_like_kf(first)
+        self._together = self._native and self._updates_like_kf(first)
         self._taus = len({(m.engine.config.gyro_bias_tau, m.engine.config.accel_bias_tau)
                           for b, m in enumerate(self.members) if b in alive}) == 1
         self.rows = np.zeros((runs, 24))
@@ -110,6 +111,17 @@ class InsGnssFilterBatch(ComponentBatch):
                 and type(member.engine.nav).update is Strapdown.update
                 and all(getattr(type(member), name) is getattr(self.shell, name)
                         for name in self.SHELL_METHODS))
+
+    def _updates_like_kf(self, member) -> bool:
+        """Whether the batch may compute the run's updates with the other runs' (one call
+        of :func:`~navcore.filters.ins_gnss_kf.predicted_rows` and
+        :func:`~navcore.filters.ins_gnss_kf.kalman_rows`): where its shell applies a fix
+        as :meth:`InsGnssFilter._apply` (measure, update, take the result) and its engine
+        updates as :meth:`KfEngine.update` (those two functions, then its ``updated``)."""
+        engine = type(member.engine)
+        return (type(member)._apply is self.shell._apply
+                and all(getattr(engine, name) is getattr(KfEngine, name)
+                        for name in ("update", "predicted_parts", "kalman_update")))
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -232,17 +244,74 @@ class InsGnssFilterBatch(ComponentBatch):
     def _take_epochs(self, epochs: List[int], inputs) -> List[int]:
         """The runs ``epochs`` take their new GNSS epoch by their own code (the part of
         :meth:`InsGnssFilter.step` after the integration but the solution, which
-        :meth:`_write_solutions` writes next for every run by the same functions); the runs
-        that did, without error."""
-        taken = []
+        :meth:`_write_solutions` writes next for every run by the same functions); the
+        fixes they apply at once update together where the runs update as a Kf
+        (:meth:`_update_together`).  Returns the runs that took their epoch without error."""
+        taken, measured = [], []
         for b in epochs:
+            if b in self._failures:
+                continue
+            values = self._inputs_of(b, inputs)
+            fix_time = values["gnss_time"] if values["gnss_valid"] else None
+            if not self._together:
+                self._by_itself(b, lambda m: self._epoch(m, values), fix_time=fix_time)
+            else:
+                self._lend(b, fix_time=fix_time)
+                member = self.members[b]
+                try:
+                    member.out["updated"] = False
+                    fix = member._epoch_fix(values)
+                    z = None if fix is None else member._measure(fix)
+                except Exception as exc:          # the run's own error
+                    self.fail(b, exc)
+                    continue
+                if z is not None:
+                    measured.append((b, z))
+                    continue
+                self._adopt(b)
             if b not in self._failures:
-                values = self._inputs_of(b, inputs)
-                self._by_itself(b, lambda m: self._epoch(m, values),
-                                fix_time=values["gnss_time"] if values["gnss_valid"] else None)
-                if b not in self._failures:
-                    taken.append(b)
+                taken.append(b)
+        if measured:
+            self._update_together(measured)
+            taken += [b for b, _ in measured if b not in self._failures]
         return taken
+
+    def _update_together(self, measured: List[tuple]) -> None:
+        """The updates of the runs ``measured`` ((run, z): lent, their own code run up to
+        :meth:`KfEngine.update`): its arithmetic for all of them in one call of
+        :func:`~navcore.filters.ins_gnss_kf.predicted_rows` and
+        :func:`~navcore.filters.ins_gnss_kf.kalman_rows` on the batch's stacks (the values
+        each engine was lent), then each run's own code after it
+        (:meth:`KfEngine.updated`, :meth:`InsGnssFilter._applied`), and the run taken back.
+        When the runs measure different quantities or a run's solve fails (a singular or
+        non-finite innovation covariance fails the whole call), every run updates by its
+        own :meth:`KfEngine.update`, which fails that run alone."""
+        rows = [b for b, _ in measured]
+        members = [self.members[b] for b in rows]
+        together = None
+        if len({len(z) for _, z in measured}) == 1:
+            stack = self.stack
+            try:
+                P_pred = (predicted_rows(stack["P"][rows], stack["phi_acc"][rows])
+                          + stack["q_acc"][rows])
+                together = kalman_rows(P_pred, np.array([z for _, z in measured]),
+                                       np.array([m.engine.R0 for m in members]),
+                                       members[0].engine.H)
+            except np.linalg.LinAlgError:
+                together = None
+        for i, (b, z) in enumerate(measured):
+            member = members[i]
+            try:
+                if together is None:
+                    result = member.engine.update(z)
+                else:
+                    dx, P, v, S, _ = (part[i] for part in together)
+                    result = member.engine.updated(dx, P, v, S)
+                member._applied(z, result)
+            except Exception as exc:              # the run's own error
+                self.fail(b, exc)
+                continue
+            self._adopt(b)
 
     @staticmethod
     def _epoch(member, inputs) -> None:

@@ -93,6 +93,30 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     return phi_acc, q_acc, rate_ib
 
 
+def predicted_rows(P, phi_acc):
+    """``Phi_acc P Phi_acc'`` of every run (B, 15, 15): :meth:`KfEngine.predicted_parts`'
+    propagated part.  numpy's stacked products give each run the floats of its own 2-D
+    product (``tests/test_kf_batch.py``)."""
+    return phi_acc @ P @ phi_acc.transpose(0, 2, 1)
+
+
+def kalman_rows(P_pred, z, R, H):
+    """The standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form) of every run:
+    :meth:`KfEngine.kalman_update` with a leading run axis on the prediction ``P_pred``
+    (B, 15, 15), the measurement ``z`` (B, m) and ``R`` ((B, m, m), or one (m, m) for all);
+    ``H`` (m, 15) selects the first m states.  Returns (dx, P, v, S, K), each with the run
+    axis.  numpy solves and multiplies every run's slices as their 2-D calls do (one LAPACK
+    solve and one BLAS product per slice)."""
+    m = H.shape[0]
+    v = z  # the predicted error state is zero in closed loop: v = z - H x_pred = z
+    PHt = P_pred[:, :, :m]
+    S = PHt[:, :m, :] + R
+    K = np.linalg.solve(S, PHt.transpose(0, 2, 1)).transpose(0, 2, 1)
+    IKH = np.eye(N_STATES) - K @ H
+    P = IKH @ P_pred @ IKH.transpose(0, 2, 1) + K @ R @ K.transpose(0, 2, 1)
+    return (K @ v[:, :, None])[:, :, 0], 0.5 * (P + P.transpose(0, 2, 1)), v, S, K
+
+
 def compensated_rows(dtheta, dvel, gyro_bias, accel_bias, dt):
     """(dtheta_c, dvel_c, body rate, specific force) of every run (B, 3 each):
     :func:`compensate_rows` into new arrays."""
@@ -176,8 +200,9 @@ class KfEngine:
         same order and in one call."""
 
     def predicted_parts(self):
-        """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}."""
-        return self.phi_acc @ self.P @ self.phi_acc.T, self.q_acc
+        """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}
+        (:func:`predicted_rows` of this run)."""
+        return predicted_rows(self.P[None], self.phi_acc[None])[0], self.q_acc
 
     def close_prediction(self, P_pred):
         """Adopt ``P_pred`` as the covariance and restart the accumulators."""
@@ -224,22 +249,21 @@ class KfEngine:
         return z
 
     def kalman_update(self, P_pred, z, R):
-        """Standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form). Returns (dx, P, v, S, K)."""
-        H = self.H
-        m = self.m
-        v = z  # the predicted error state is zero in closed loop: v = z - H x_pred = z
-        PHt = P_pred[:, :m]
-        S = PHt[:m, :] + R
-        K = np.linalg.solve(S, PHt.T).T
-        IKH = np.eye(N_STATES) - K @ H
-        P = IKH @ P_pred @ IKH.T + K @ R @ K.T
-        return K @ v, 0.5 * (P + P.T), v, S, K
+        """Standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form): :func:`kalman_rows` of
+        this run.  Returns (dx, P, v, S, K)."""
+        dx, P, v, S, K = kalman_rows(P_pred[None], np.asarray(z)[None], R, self.H)
+        return dx[0], P[0], v[0], S[0], K[0]
 
     def update(self, z):
         """Baseline update with the fixed R; returns an :class:`UpdateResult`."""
         p_prop, q_acc = self.predicted_parts()
         P_pred = p_prop + q_acc
         dx, P, v, S, _ = self.kalman_update(P_pred, z, self.R0)
+        return self.updated(dx, P, v, S)
+
+    def updated(self, dx, P, v, S):
+        """:meth:`update` after its arithmetic (the correction ``dx`` and covariance ``P``
+        of the innovation ``v`` with covariance ``S``): the feedback, and the result."""
         self.apply(dx, P)
         return UpdateResult(v, S, nis(v, S))
 
