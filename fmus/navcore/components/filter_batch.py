@@ -248,10 +248,9 @@ class InsGnssFilterBatch(ComponentBatch):
         fixes they apply at once update together where the runs update as a Kf
         (:meth:`_update_together`).  Returns the runs that took their epoch without error."""
         taken, measured = [], []
-        for b in epochs:
+        for b, values in zip(epochs, self._inputs_of_runs(epochs, inputs)):
             if b in self._failures:
                 continue
-            values = self._inputs_of(b, inputs)
             fix_time = values["gnss_time"] if values["gnss_valid"] else None
             if not self._together:
                 self._by_itself(b, lambda m: self._epoch(m, values), fix_time=fix_time)
