@@ -185,11 +185,14 @@ class InsGnssFilterBatch(ComponentBatch):
                                member.late_fixes)
         self.seen[b] = self.first_entry + len(self.log)
         self._sync(b)
-        # the solution the batch wrote last (a step of the run's own code that integrates
-        # nothing nor updates leaves it as it is)
+
+    def _lend_solution(self, b: int) -> None:
+        """Give run b's outputs the solution the batch wrote last, before a step of its
+        own code (one that integrates nothing nor updates leaves them as they are)."""
+        out = self.members[b].out
         names, c = self._solution_names, self._solution_col
-        member.out.update(zip(names, self.out[b, c:c + len(names)].tolist()))
-        member.out["nav_time"] = self.out[b, self.columns["nav_time"]].item()
+        out.update(zip(names, self.out[b, c:c + len(names)].tolist()))
+        out["nav_time"] = self.out[b, self.columns["nav_time"]].item()
 
     def _record_last(self, b: int) -> None:
         """The interval :meth:`_lend` held back, into run b's history now."""
@@ -227,6 +230,7 @@ class InsGnssFilterBatch(ComponentBatch):
         if interval is None:
             for b in range(self.runs):
                 if b not in self._failures:
+                    self._lend_solution(b)
                     self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
             self.nav_time = self.members[0].nav_time
             return self.out
