@@ -236,8 +236,9 @@ class InsGnssFilterBatch(ComponentBatch):
             return self.out
         imu_time, dt = interval
         self._propagate(imu, imu_time, dt)
-        epochs = np.flatnonzero(inputs["gnss_epoch"] != self.last_epoch).tolist()
-        taken = self._take_epochs(epochs, inputs) if epochs else ()
+        epoch = inputs["gnss_epoch"]
+        taken = (self._take_epochs(np.flatnonzero(epoch != self.last_epoch).tolist(), inputs)
+                 if _any_new_epoch(epoch, self.last_epoch) else ())
         self._write_solutions()
         updated = self.columns["updated"]
         for b in taken:            # the solution rows' updated = 0 is not theirs
@@ -410,6 +411,15 @@ def _one_accepted_interval(imu, low, high, own) -> bool:
         if not row_accepted(imu[b], low, high):
             return False
     return True
+
+
+@kernel
+def _any_new_epoch(epoch, last_epoch) -> bool:
+    """Whether any run's ``gnss_epoch`` input differs from the last epoch it took."""
+    for b in range(epoch.shape[0]):
+        if epoch[b] != last_epoch[b]:
+            return True
+    return False
 
 
 @kernel
