@@ -12,12 +12,19 @@ share their trajectory, so their time tags agree):
   runs' state stacked here (the strapdown rows are the engines' own: each engine's
   ``nav.rows`` is a view of its row);
 * the solution outputs (position, velocity, attitude from the rows, biases, the sigmas of
-  the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`.
+  the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`,
+  after the runs' new GNSS epochs;
+* the arithmetic of the Kf updates of the runs that apply a fix at the same step
+  (:func:`~navcore.filters.ins_gnss_kf.predicted_rows` and :func:`~navcore.filters.
+  ins_gnss_kf.kalman_rows`, which each engine's own ``update`` calls with one run), each
+  run's own code running before it (the epoch, the measurement) and after it (the feedback,
+  the latency history's restart, the outputs and the NIS monitor).
 
 Everything else is the run's own component, called for that run only: a new GNSS epoch
-(its fix applied, held or rolled back), a checkpoint of its latency history falling due, a
-run not started yet (initial state from the data), a fix waiting in the future, an input it
-refuses, an IMU interval that is not the runs' common one.  Before such a call the run's
+(its fix held or rolled back; applied, for an engine that updates otherwise), a checkpoint
+of its latency history falling due, a run not started yet (initial state from the data), a
+fix waiting in the future, an input it refuses, an IMU interval that is not the runs'
+common one.  Before such a call the run's
 engine is given the batch's values (:meth:`_lend`: its propagated parts, the IMU intervals
 its history and its clocks have not seen yet, in order) and after it the batch takes the
 engine's (:meth:`_adopt`), so the run computes exactly what it computes alone.
@@ -404,6 +411,8 @@ def _one_accepted_interval(imu, low, high, own) -> bool:
     """Whether every run's IMU inputs (rows of ``imu``, columns :data:`_IMU`) have the first
     run's ``imu_time`` and ``imu_dt`` and lie in their ranges (:func:`~navcore.core.batch.
     row_accepted`), and no run is ``own``."""
+    if imu.shape[0] == 0:
+        return False
     imu_time, dt = imu[0, 0], imu[0, 1]
     for b in range(imu.shape[0]):
         if own[b] or imu[b, 0] != imu_time or imu[b, 1] != dt:

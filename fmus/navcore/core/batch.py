@@ -204,7 +204,7 @@ def open_bounds(batch: ComponentBatch, names: Tuple[str, ...]) -> Tuple[np.ndarr
 @jitable
 def row_accepted(row, low, high) -> bool:
     """Whether every value of ``row`` lies inside its open bounds ``(low, high)``
-    (:meth:`ComponentBatch.open_bounds`; NaN lies inside none)."""
+    (:func:`open_bounds`; NaN lies inside none)."""
     for j in range(row.shape[0]):
         x = row[j]
         if not (x > low[j] and x < high[j]):
