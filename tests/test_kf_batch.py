@@ -16,7 +16,7 @@ from navcore.components.kf_components import Iakf, Kf, NewtonRobustKf
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.core.batch import BatchInputs
 from navcore.filters.ins_gnss_kf import (KfConfig, KfEngine, add_noise_rows, compensate_rows,
-                                         propagate_rows)
+                                         kalman_rows, predicted_rows, propagate_rows)
 from navcore.ins.error_model import transition_template
 from navcore.ins.strapdown import Strapdown
 from orchestrator.cosim.master import Simulation
@@ -231,3 +231,122 @@ def test_a_run_that_diverges_inside_a_batch_fails_alone(component_class, poison,
     out = batch.advance(200 * h, h, _batch_inputs([per_run[b][200] for b in (0, 2)]))
     expected = alone.advance(200 * h, h, per_run[0][200])
     assert out[0].tolist() == [float(expected[p.name]) for p in component_class.outputs]
+
+
+@pytest.mark.parametrize("component_class", [Kf, Ukf])
+def test_a_batch_stepped_between_imu_samples_holds_each_run_s_outputs(component_class):
+    """The filters stepped at twice the IMU's rate (every input step seen twice): at the
+    steps without a new interval each run steps by its own code, which leaves its solution
+    as it was; the batch gives it the solution of the batch's latest interval first (what
+    the run alone wrote then), also after the fixes whose solution the batch wrote."""
+    per_run = _recorded_inputs(2)
+    parameters = _filter_parameters()
+    alone = [component_class(**parameters) for _ in per_run]
+    batch = component_class.batch_class(component_class, len(per_run))
+    batch.set_parameters([parameters] * len(per_run))
+    batch.start(0.0)
+    for component in alone:
+        component.start(0.0)
+    columns = [p.name for p in component_class.outputs]
+    h = 0.005
+    for k in range(2 * 300):
+        steps = [steps[k // 2] for steps in per_run]
+        outs = batch.advance(k * h, h, _batch_inputs(steps))
+        for b, component in enumerate(alone):
+            out = component.advance(k * h, h, steps[b])
+            assert outs[b].tolist() == [float(out[n]) for n in columns], (k, b)
+    assert batch.take_failures() == {}
+
+
+def test_the_kf_runs_fixes_at_one_step_update_in_one_call(monkeypatch):
+    """The Kf runs that apply a fix at the same step update in one kalman_rows call (the
+    function each engine's own kalman_update calls with one run); a run whose covariance
+    turned non-finite makes that call fail, and then every run updates by its own code:
+    that run fails alone with its own error, the others go on as alone."""
+    import navcore.components.filter_batch as filter_batch
+    calls = []
+    stacked = filter_batch.kalman_rows
+
+    def counted(P_pred, *args):
+        calls.append(len(P_pred))
+        return stacked(P_pred, *args)
+
+    monkeypatch.setattr(filter_batch, "kalman_rows", counted)
+    per_run = _recorded_inputs(3)
+    parameters = _filter_parameters()
+    alone = [Kf(**parameters) for _ in per_run]
+    batch = Kf.batch_class(Kf, len(per_run))
+    batch.set_parameters([parameters] * len(per_run))
+    batch.start(0.0)
+    for component in alone:
+        component.start(0.0)
+    columns = [p.name for p in Kf.outputs]
+    epochs = [step["gnss_epoch"] for step in per_run[0]]
+    fixes = [k for k in range(1, len(epochs)) if epochs[k] != epochs[k - 1]]
+    poisoned = fixes[3] - 1                   # run 1's P, the step before a fix
+    h = 0.01
+    for k in range(fixes[4] + 5):
+        if k == poisoned + 1:
+            with pytest.raises(Exception) as failure:
+                alone[1].advance(k * h, h, per_run[1][k])
+        steps = [steps[k] for steps in per_run]
+        outs = batch.advance(k * h, h, _batch_inputs(steps))
+        for b, component in enumerate(alone):
+            if b == 1 and k > poisoned:
+                continue
+            out = component.advance(k * h, h, steps[b])
+            assert outs[b].tolist() == [float(out[n]) for n in columns], (k, b)
+        if k == poisoned:
+            batch.stack["P"][1, 2, 2] = np.nan
+            alone[1].engine.P[2, 2] = np.nan
+        if k == poisoned + 1:
+            failures = batch.take_failures()
+            assert list(failures) == [1]
+            assert type(failures[1]) is type(failure.value)
+            assert str(failures[1]) == str(failure.value)
+            batch.keep([0, 2])
+            per_run = [per_run[0], per_run[2]]
+            alone = [alone[0], alone[2]]
+    assert calls == [3, 3, 3, 3, 2]          # the fourth: failed, then each run alone
+    assert batch.take_failures() == {}
+
+
+def _kalman_update_2d(P, phi_acc, q_acc, z, R, m):
+    """KfEngine's update arithmetic as 2-D products of one run (its code at 91ec9a2)."""
+    P_pred = phi_acc @ P @ phi_acc.T + q_acc
+    H = np.zeros((m, 15))
+    H[:, :m] = np.eye(m)
+    PHt = P_pred[:, :m]
+    S = PHt[:m, :] + R
+    K = np.linalg.solve(S, PHt.T).T
+    IKH = np.eye(15) - K @ H
+    P_new = IKH @ P_pred @ IKH.T + K @ R @ K.T
+    return K @ z, 0.5 * (P_new + P_new.T), S, K
+
+
+@pytest.mark.parametrize("m", [3, 6])
+def test_the_stacked_update_gives_each_run_the_floats_of_its_2d_products(m):
+    """predicted_rows and kalman_rows over 1 to 24 runs (random covariances, transitions,
+    noise, measurements, each run its own R or one R for all) against each run's 2-D
+    products, bit for bit."""
+    rng = np.random.default_rng(5)
+    for _ in range(60):
+        runs = int(rng.integers(1, 25))
+        A = rng.normal(size=(runs, 15, 15))
+        P = A @ A.transpose(0, 2, 1) * rng.uniform(1e-6, 10.0)
+        P = 0.5 * (P + P.transpose(0, 2, 1))
+        phi = np.eye(15) + rng.normal(size=(runs, 15, 15)) * 1e-2
+        noise = rng.normal(size=(runs, 15, 15)) * 1e-3
+        q = noise @ noise.transpose(0, 2, 1)
+        z = rng.normal(size=(runs, m))
+        R = np.diag(rng.uniform(0.1, 10.0, m))
+        Rs = R if rng.random() < 0.5 else R * rng.uniform(0.5, 2.0, (runs, 1, 1))
+        H = np.zeros((m, 15))
+        H[:, :m] = np.eye(m)
+        dx, P_new, v, S, K = kalman_rows(predicted_rows(P, phi) + q, z, Rs, H)
+        for b in range(runs):
+            expected = _kalman_update_2d(P[b], phi[b], q[b], z[b], Rs if Rs.ndim == 2
+                                         else Rs[b], m)
+            for got, want in zip((dx[b], P_new[b], S[b], K[b]), expected):
+                assert np.array_equal(_bits(got), _bits(want))
+            assert np.array_equal(v[b], z[b])

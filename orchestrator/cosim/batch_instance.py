@@ -211,16 +211,19 @@ class NativeBatchInstance(BatchInstance):
         if self._outputs is not None:
             self._outputs = self._outputs[rows]
 
-    def _error(self, what: str, exc: Exception, time, at: bool = True):
-        return simulation_error(self.name, self.model_name, what, exc, time, at)
+    def _error(self, what, exc: Exception, time, at: bool = True):
+        """The run's error; ``what`` (the call that failed) a string or a function that
+        gives it (formatted only when a run fails)."""
+        return simulation_error(self.name, self.model_name, what if isinstance(what, str)
+                                else what(), exc, time, at)
 
-    def _collect(self, what: str, time, at: bool = True) -> None:
+    def _collect(self, what, time, at: bool = True) -> None:
         """Move the batch's per-run errors of the latest call into the shared failures."""
         for b, exc in self.batch.take_failures().items():
             if b not in self.failures:
                 self.failures[b] = self._error(what, exc, time, at)
 
-    def _call(self, what: str, time, call, at: bool = True):
+    def _call(self, what, time, call, at: bool = True):
         try:
             result = call()
         except NavcoreError as exc:       # one error for every run (none told which)
@@ -291,7 +294,7 @@ class NativeBatchInstance(BatchInstance):
         return self.real_out, self.int_out, self.bool_out
 
     def do_step(self, t: float, h: float) -> None:
-        outputs = self._call(f"step from t = {t:.9g} s to t = {t + h:.9g} s", t,
+        outputs = self._call(lambda: f"step from t = {t:.9g} s to t = {t + h:.9g} s", t,
                              lambda: self.batch.advance(t, h, self._inputs()), at=False)
         self.time = t + h
         if outputs is not None:

@@ -150,6 +150,21 @@ def _row_recorder(vectors, rec_index, recordings):
     return record
 
 
+def _column_blocks(sources):
+    """``sources[j]`` = (type, column) of output column j as blocks ``(j, type, column,
+    width)`` of consecutive columns of one type on both sides (one slice copy each instead
+    of one per column)."""
+    blocks = []
+    for j, (t, c) in enumerate(sources):
+        if blocks:
+            start, bt, bc, width = blocks[-1]
+            if bt == t and bc + width == c:
+                blocks[-1] = (start, bt, bc, width + 1)
+                continue
+        blocks.append((j, t, c, 1))
+    return blocks
+
+
 # ----------------------------------------------------------------------------------------
 # Simulation
 # ----------------------------------------------------------------------------------------
@@ -441,9 +456,9 @@ class Simulation:
             n = d.spec.name
             names = self.recorded[n]
             arr = np.empty((n_rows, len(names)), dtype=np.float64)
-            for j, v in enumerate(names):
-                t, g = position[(n, v)]
-                arr[:, j] = recordings[t][:n_rows, rec_col[t][g]]
+            sources = [position[(n, v)] for v in names]
+            for j, t, c, width in _column_blocks([(t, rec_col[t][g]) for t, g in sources]):
+                arr[:, j:j + width] = recordings[t][:n_rows, c:c + width]
             data[n] = arr
             columns[n] = list(names)
             units[n] = [d.variables[v].unit or d.spec.units.get(v, "") for v in names]

@@ -12,12 +12,19 @@ share their trajectory, so their time tags agree):
   runs' state stacked here (the strapdown rows are the engines' own: each engine's
   ``nav.rows`` is a view of its row);
 * the solution outputs (position, velocity, attitude from the rows, biases, the sigmas of
-  the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`.
+  the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`,
+  after the runs' new GNSS epochs;
+* the arithmetic of the Kf updates of the runs that apply a fix at the same step
+  (:func:`~navcore.filters.ins_gnss_kf.predicted_rows` and :func:`~navcore.filters.
+  ins_gnss_kf.kalman_rows`, which each engine's own ``update`` calls with one run), each
+  run's own code running before it (the epoch, the measurement) and after it (the feedback,
+  the latency history's restart, the outputs and the NIS monitor).
 
 Everything else is the run's own component, called for that run only: a new GNSS epoch
-(its fix applied, held or rolled back), a checkpoint of its latency history falling due, a
-run not started yet (initial state from the data), a fix waiting in the future, an input it
-refuses, an IMU interval that is not the runs' common one.  Before such a call the run's
+(its fix held or rolled back; applied, for an engine that updates otherwise), a checkpoint
+of its latency history falling due, a run not started yet (initial state from the data), a
+fix waiting in the future, an input it refuses, an IMU interval that is not the runs'
+common one.  Before such a call the run's
 engine is given the batch's values (:meth:`_lend`: its propagated parts, the IMU intervals
 its history and its clocks have not seen yet, in order) and after it the batch takes the
 engine's (:meth:`_adopt`), so the run computes exactly what it computes alone.
@@ -33,7 +40,7 @@ from ..core import signals
 from ..core.batch import ComponentBatch, open_bounds, row_accepted
 from ..core.kernels import kernel
 from ..core.timing import same_time, time_tolerance
-from ..filters.ins_gnss_kf import KfEngine, propagate_rows
+from ..filters.ins_gnss_kf import KfEngine, kalman_rows, predicted_rows, propagate_rows
 from ..filters.latency import checkpoint_due, checkpoint_spacing
 from ..ins.error_model import transition_template
 from ..ins.rotations import pitch_from_elements, roll_yaw_from_elements
@@ -55,6 +62,7 @@ class InsGnssFilterBatch(ComponentBatch):
         first = self.members[alive[0]] if alive else None
         # an engine that propagates otherwise (a subclass's own law) runs its own code
         self._native = first is not None and self._propagates_like_kf(first)
+        self._together = self._native and self._updates_like_kf(first)
         self._taus = len({(m.engine.config.gyro_bias_tau, m.engine.config.accel_bias_tau)
                           for b, m in enumerate(self.members) if b in alive}) == 1
         self.rows = np.zeros((runs, 24))
@@ -81,6 +89,7 @@ class InsGnssFilterBatch(ComponentBatch):
         # the solution outputs are consecutive columns (signals.FILTER_OUTPUTS)
         assert [c[n] for n in names] == list(range(first_col, first_col + len(names)))
         self._solution_col = first_col
+        self._solution_names = names
         for b in alive:
             self._adopt(b)
         return self.out.copy()
@@ -109,6 +118,17 @@ class InsGnssFilterBatch(ComponentBatch):
                 and type(member.engine.nav).update is Strapdown.update
                 and all(getattr(type(member), name) is getattr(self.shell, name)
                         for name in self.SHELL_METHODS))
+
+    def _updates_like_kf(self, member) -> bool:
+        """Whether the batch may compute the run's updates with the other runs' (one call
+        of :func:`~navcore.filters.ins_gnss_kf.predicted_rows` and
+        :func:`~navcore.filters.ins_gnss_kf.kalman_rows`): where its shell applies a fix
+        as :meth:`InsGnssFilter._apply` (measure, update, take the result) and its engine
+        updates as :meth:`KfEngine.update` (those two functions, then its ``updated``)."""
+        engine = type(member.engine)
+        return (type(member)._apply is self.shell._apply
+                and all(getattr(engine, name) is getattr(KfEngine, name)
+                        for name in ("update", "predicted_parts", "kalman_update")))
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -173,6 +193,14 @@ class InsGnssFilterBatch(ComponentBatch):
         self.seen[b] = self.first_entry + len(self.log)
         self._sync(b)
 
+    def _lend_solution(self, b: int) -> None:
+        """Give run b's outputs the solution the batch wrote last, before a step of its
+        own code (one that integrates nothing nor updates leaves them as they are)."""
+        out = self.members[b].out
+        names, c = self._solution_names, self._solution_col
+        out.update(zip(names, self.out[b, c:c + len(names)].tolist()))
+        out["nav_time"] = self.out[b, self.columns["nav_time"]].item()
+
     def _record_last(self, b: int) -> None:
         """The interval :meth:`_lend` held back, into run b's history now."""
         member, increment = self.members[b], self._held
@@ -209,26 +237,99 @@ class InsGnssFilterBatch(ComponentBatch):
         if interval is None:
             for b in range(self.runs):
                 if b not in self._failures:
+                    self._lend_solution(b)
                     self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
             self.nav_time = self.members[0].nav_time
             return self.out
         imu_time, dt = interval
         self._propagate(imu, imu_time, dt)
+        epoch = inputs["gnss_epoch"]
+        taken = (self._take_epochs(np.flatnonzero(epoch != self.last_epoch).tolist(), inputs)
+                 if _any_new_epoch(epoch, self.last_epoch) else ())
         self._write_solutions()
-        for b in np.flatnonzero(inputs["gnss_epoch"] != self.last_epoch).tolist():
-            if b not in self._failures:
-                values = self._inputs_of(b, inputs)
-                self._by_itself(b, lambda m: self._epoch(m, values),
-                                fix_time=values["gnss_time"] if values["gnss_valid"] else None)
+        updated = self.columns["updated"]
+        for b in taken:            # the solution rows' updated = 0 is not theirs
+            self.out[b, updated] = self.members[b].out["updated"]
         self._trim_log()
         return self.out
 
+    def _take_epochs(self, epochs: List[int], inputs) -> List[int]:
+        """The runs ``epochs`` take their new GNSS epoch by their own code (the part of
+        :meth:`InsGnssFilter.step` after the integration but the solution, which
+        :meth:`_write_solutions` writes next for every run by the same functions); the
+        fixes they apply at once update together where the runs update as a Kf
+        (:meth:`_update_together`).  Returns the runs that took their epoch without error."""
+        taken, measured = [], []
+        for b, values in zip(epochs, self._inputs_of_runs(epochs, inputs)):
+            if b in self._failures:
+                continue
+            fix_time = values["gnss_time"] if values["gnss_valid"] else None
+            if not self._together:
+                self._by_itself(b, lambda m: self._epoch(m, values), fix_time=fix_time)
+            else:
+                self._lend(b, fix_time=fix_time)
+                member = self.members[b]
+                try:
+                    member.out["updated"] = False
+                    fix = member._epoch_fix(values)
+                    z = None if fix is None else member._measure(fix)
+                except Exception as exc:          # the run's own error
+                    self.fail(b, exc)
+                    continue
+                if z is not None:
+                    measured.append((b, z))
+                    continue
+                self._adopt(b)
+            if b not in self._failures:
+                taken.append(b)
+        if measured:
+            self._update_together(measured)
+            taken += [b for b, _ in measured if b not in self._failures]
+        return taken
+
+    def _update_together(self, measured: List[tuple]) -> None:
+        """The updates of the runs ``measured`` ((run, z): lent, their own code run up to
+        :meth:`KfEngine.update`): its arithmetic for all of them in one call of
+        :func:`~navcore.filters.ins_gnss_kf.predicted_rows` and
+        :func:`~navcore.filters.ins_gnss_kf.kalman_rows` on the batch's stacks (the values
+        each engine was lent), then each run's own code after it
+        (:meth:`KfEngine.updated`, :meth:`InsGnssFilter._applied`), and the run taken back.
+        When the runs measure different quantities or a run's solve fails (a singular or
+        non-finite innovation covariance fails the whole call), every run updates by its
+        own :meth:`KfEngine.update`, which fails that run alone."""
+        rows = [b for b, _ in measured]
+        members = [self.members[b] for b in rows]
+        together = None
+        if len({len(z) for _, z in measured}) == 1:
+            stack = self.stack
+            try:
+                P_pred = (predicted_rows(stack["P"][rows], stack["phi_acc"][rows])
+                          + stack["q_acc"][rows])
+                together = kalman_rows(P_pred, np.array([z for _, z in measured]),
+                                       np.array([m.engine.R0 for m in members]),
+                                       members[0].engine.H)
+            except np.linalg.LinAlgError:
+                together = None
+        for i, (b, z) in enumerate(measured):
+            member = members[i]
+            try:
+                if together is None:
+                    result = member.engine.update(z)
+                else:
+                    dx, P, v, S, _ = (part[i] for part in together)
+                    result = member.engine.updated(dx, P, v, S)
+                member._applied(z, result)
+            except Exception as exc:              # the run's own error
+                self.fail(b, exc)
+                continue
+            self._adopt(b)
+
     @staticmethod
     def _epoch(member, inputs) -> None:
-        """The part of :meth:`InsGnssFilter.step` after the integration, for a new epoch."""
+        """:meth:`InsGnssFilter.step` after the integration, for a new epoch, but the
+        solution outputs."""
         member.out["updated"] = False
         member._take_epoch(inputs)
-        member._write_solution()
 
     def _common_interval(self, imu: np.ndarray):
         """(imu_time, imu_dt) when every run integrates that same new interval now; None
@@ -310,6 +411,8 @@ def _one_accepted_interval(imu, low, high, own) -> bool:
     """Whether every run's IMU inputs (rows of ``imu``, columns :data:`_IMU`) have the first
     run's ``imu_time`` and ``imu_dt`` and lie in their ranges (:func:`~navcore.core.batch.
     row_accepted`), and no run is ``own``."""
+    if imu.shape[0] == 0:
+        return False
     imu_time, dt = imu[0, 0], imu[0, 1]
     for b in range(imu.shape[0]):
         if own[b] or imu[b, 0] != imu_time or imu[b, 1] != dt:
@@ -317,6 +420,15 @@ def _one_accepted_interval(imu, low, high, own) -> bool:
         if not row_accepted(imu[b], low, high):
             return False
     return True
+
+
+@kernel
+def _any_new_epoch(epoch, last_epoch) -> bool:
+    """Whether any run's ``gnss_epoch`` input differs from the last epoch it took."""
+    for b in range(epoch.shape[0]):
+        if epoch[b] != last_epoch[b]:
+            return True
+    return False
 
 
 @kernel

@@ -221,13 +221,21 @@ class InsGnssFilter(Component):
 
     def _take_epoch(self, inputs):
         """A new GNSS epoch (``gnss_epoch`` changed): its fix, when valid, is received."""
+        fix = self._epoch_fix(inputs)
+        if fix is not None:
+            self._apply(fix)
+
+    def _epoch_fix(self, inputs):
+        """:meth:`_take_epoch` but the update: the fix to apply at the current IMU epoch,
+        or None (no new epoch, an invalid fix, or one :meth:`_fix_to_apply` dealt with)."""
         epoch = inputs["gnss_epoch"]
         if epoch != self.last_epoch:
             self.last_epoch = epoch
             if inputs["gnss_valid"]:
                 if not self.initializer.checked:
                     self._check_given_state(inputs)
-                self._receive_fix(inputs)
+                return self._fix_to_apply(inputs)
+        return None
 
     def _new_interval(self, inputs):
         """The increment (imu_time, dtheta, dvel, imu_dt) of a new IMU interval, one that
@@ -332,9 +340,10 @@ class InsGnssFilter(Component):
         """A fix within this of an IMU epoch is applied at that epoch."""
         return 0.5 * self.imu_dt + time_tolerance(self.imu_dt, self.nav_time)
 
-    def _receive_fix(self, inputs):
-        """A new valid fix: apply it now, later (from the future) or in the past (rollback),
-        or count it as stale when it is outside the latency bound."""
+    def _fix_to_apply(self, inputs):
+        """A new valid fix: returned to be applied now; or held for later (from the future),
+        applied in the past (rollback) or counted as stale when it is outside the latency
+        bound, and None returned."""
         self.check_inputs(inputs, _GNSS_VALUE_NAMES)
         fix = _fix_of(inputs)
         age = self.nav_time - fix[0]
@@ -348,15 +357,16 @@ class InsGnssFilter(Component):
         elif fix[0] > self.nav_time + half:
             self.pending.append(fix)
         elif fix[0] >= self.nav_time - half:
-            self._apply(fix)
+            return fix
         else:
             self._apply_in_the_past(fix, half)
+        return None
 
     def _beyond_latency_bound(self, age):
         return abs(age) > self.max_fix_age + time_tolerance(self.imu_dt, self.nav_time)
 
     def applies_at_once(self, gnss_time):
-        """Whether :meth:`_receive_fix` applies a fix taken at ``gnss_time`` at the current
+        """Whether :meth:`_fix_to_apply` applies a fix taken at ``gnss_time`` at the current
         IMU epoch, the history then restarting there (not stale, not held for later, no
         rollback: a fix within half an interval is never before the oldest checkpoint,
         which is at or before ``nav_time``)."""
@@ -394,6 +404,11 @@ class InsGnssFilter(Component):
     def _apply(self, fix):
         """Measurement update with ``fix`` at the current IMU epoch (its gnss_time within
         half an interval); the history restarts here."""
+        z = self._measure(fix)
+        self._applied(z, self.engine.update(z))
+
+    def _measure(self, fix):
+        """The measurement ``z`` of ``fix`` (:meth:`_apply` before the engine's update)."""
         gnss_time, lat, lon, h, v, std = fix
         engine = self.engine
         if self.params["r_from_receiver"]:
@@ -401,8 +416,12 @@ class InsGnssFilter(Component):
         z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
         if self.out["nis_dof"] == 0:   # the first fix applied
             self._check_first_fix(gnss_time, float(np.linalg.norm(z[:3])))
-        result = engine.update(z)
-        self.history.restart(self.nav_time, engine)
+        return z
+
+    def _applied(self, z, result):
+        """:meth:`_apply` after the engine's update with ``z``, which gave ``result``: the
+        history restarts, the outputs and the NIS monitor take the result."""
+        self.history.restart(self.nav_time, self.engine)
         out = self.out
         out["updated"] = True
         out["nis"] = result.nis

@@ -72,9 +72,10 @@ class GnssReceiverBatch(ComponentBatch):
         own |= ~self.accepted_rows(truth, CHECKED_INPUTS)
         if own.any():
             failures = self._failures
-            for b in np.flatnonzero(own).tolist():
+            runs = np.flatnonzero(own).tolist()
+            for b, values in zip(runs, self._inputs_of_runs(runs, inputs)):
                 if b not in failures:
-                    self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
+                    self._by_itself(b, lambda m, values=values: m.step(t, h, values))
         return self.out
 
 

@@ -167,6 +167,7 @@ class InsOnly(InsGnssFilter):
     engine_class = InsOnlyEngine
     applies_fixes = False
 
-    def _receive_fix(self, inputs):
+    def _fix_to_apply(self, inputs):
         """No measurement update: the GNSS fix is ignored."""
+        return None
 

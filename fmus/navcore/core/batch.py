@@ -149,6 +149,13 @@ class ComponentBatch(ABC):
         """Run b's inputs of a batch step, as its own component takes them."""
         return {name: values[b].item() for name, values in inputs.items()}
 
+    @staticmethod
+    def _inputs_of_runs(runs: Sequence[int], inputs) -> List[Dict[str, float]]:
+        """:meth:`_inputs_of` of each of the runs ``runs`` (every input's column converted
+        once)."""
+        columns = [(name, values.tolist()) for name, values in inputs.items()]
+        return [{name: column[b] for name, column in columns} for b in runs]
+
     def _lend(self, b: int) -> None:
         """Hook of :meth:`_by_itself`: give run b's own objects the batch's values."""
 
@@ -197,7 +204,7 @@ def open_bounds(batch: ComponentBatch, names: Tuple[str, ...]) -> Tuple[np.ndarr
 @jitable
 def row_accepted(row, low, high) -> bool:
     """Whether every value of ``row`` lies inside its open bounds ``(low, high)``
-    (:meth:`ComponentBatch.open_bounds`; NaN lies inside none)."""
+    (:func:`open_bounds`; NaN lies inside none)."""
     for j in range(row.shape[0]):
         x = row[j]
         if not (x > low[j] and x < high[j]):

@@ -33,6 +33,10 @@ from .innovation_stats import nis
 from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
 from ..ins.strapdown import Strapdown, update_rows
 
+#: the identity of the error state (read only)
+_IDENTITY = np.eye(N_STATES)
+_IDENTITY.flags.writeable = False
+
 #: measurement modes and their dimension
 MEASUREMENTS = {"position": 3, "position_velocity": 6}
 
@@ -93,12 +97,37 @@ def propagate_rows(nav_rows, gyro_bias, accel_bias, phi_acc, q_acc, q_density, d
     return phi_acc, q_acc, rate_ib
 
 
+def predicted_rows(P, phi_acc):
+    """``Phi_acc P Phi_acc'``, the propagated part of :meth:`KfEngine.predicted_parts`, of
+    every run: (B, 15, 15) arrays, or one run's (15, 15).  numpy's stacked products give
+    each run the floats of its own 2-D product (``tests/test_kf_batch.py``)."""
+    return phi_acc @ P @ phi_acc.swapaxes(-1, -2)
+
+
+def kalman_rows(P_pred, z, R, H):
+    """The standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form) of every run: the
+    prediction ``P_pred`` (B, 15, 15), the measurement ``z`` (B, m) and ``R`` ((B, m, m),
+    or one (m, m) for all), or one run's arrays without the run axis; ``H`` (m, 15)
+    selects the first m states.  Returns (dx, P, v, S, K), with the run axis where the
+    arguments have it.  numpy solves and multiplies every run's slices as one run's 2-D
+    call does (one LAPACK solve and one BLAS product per slice)."""
+    m = H.shape[0]
+    v = z  # the predicted error state is zero in closed loop: v = z - H x_pred = z
+    PHt = P_pred[..., :m]
+    S = PHt[..., :m, :] + R
+    K = np.linalg.solve(S, PHt.swapaxes(-1, -2)).swapaxes(-1, -2)
+    IKH = _IDENTITY - K @ H
+    P = IKH @ P_pred @ IKH.swapaxes(-1, -2) + K @ R @ K.swapaxes(-1, -2)
+    return (K @ v[..., None])[..., 0], 0.5 * (P + P.swapaxes(-1, -2)), v, S, K
+
+
 def compensated_rows(dtheta, dvel, gyro_bias, accel_bias, dt):
     """(dtheta_c, dvel_c, body rate, specific force) of every run (B, 3 each):
     :func:`compensate_rows` into new arrays."""
-    out = tuple(np.empty((len(dtheta), 3)) for _ in range(4))
-    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), *out)
-    return out
+    out = np.empty((4, len(dtheta), 3))      # one allocation: four C-contiguous blocks
+    compensate_rows(dtheta, dvel, gyro_bias, accel_bias, float(dt), out[0], out[1], out[2],
+                    out[3])
+    return out[0], out[1], out[2], out[3]
 
 
 @kernel
@@ -175,13 +204,14 @@ class KfEngine:
         same order and in one call."""
 
     def predicted_parts(self):
-        """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}."""
-        return self.phi_acc @ self.P @ self.phi_acc.T, self.q_acc
+        """(Phi_acc P_{k-1} Phi_acc', Q_acc): the two parts of P_{k,k-1}
+        (:func:`predicted_rows` of this run)."""
+        return predicted_rows(self.P, self.phi_acc), self.q_acc
 
     def close_prediction(self, P_pred):
         """Adopt ``P_pred`` as the covariance and restart the accumulators."""
         self.P = 0.5 * (P_pred + P_pred.T)
-        self.phi_acc = np.eye(N_STATES)
+        self.phi_acc = _IDENTITY.copy()
         self.q_acc = np.zeros((N_STATES, N_STATES))
 
     def covariance_diagonal(self):
@@ -223,22 +253,20 @@ class KfEngine:
         return z
 
     def kalman_update(self, P_pred, z, R):
-        """Standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form). Returns (dx, P, v, S, K)."""
-        H = self.H
-        m = self.m
-        v = z  # the predicted error state is zero in closed loop: v = z - H x_pred = z
-        PHt = P_pred[:, :m]
-        S = PHt[:m, :] + R
-        K = np.linalg.solve(S, PHt.T).T
-        IKH = np.eye(N_STATES) - K @ H
-        P = IKH @ P_pred @ IKH.T + K @ R @ K.T
-        return K @ v, 0.5 * (P + P.T), v, S, K
+        """Standard update (paper 001 eqs. 4, 5, 7, 8; Joseph form): :func:`kalman_rows` of
+        this run.  Returns (dx, P, v, S, K)."""
+        return kalman_rows(P_pred, np.asarray(z), R, self.H)
 
     def update(self, z):
         """Baseline update with the fixed R; returns an :class:`UpdateResult`."""
         p_prop, q_acc = self.predicted_parts()
         P_pred = p_prop + q_acc
         dx, P, v, S, _ = self.kalman_update(P_pred, z, self.R0)
+        return self.updated(dx, P, v, S)
+
+    def updated(self, dx, P, v, S):
+        """:meth:`update` after its arithmetic (the correction ``dx`` and covariance ``P``
+        of the innovation ``v`` with covariance ``S``): the feedback, and the result."""
         self.apply(dx, P)
         return UpdateResult(v, S, nis(v, S))
 
