@@ -155,14 +155,25 @@ def imm_update_probabilities(c_bar: np.ndarray, likelihoods: np.ndarray, *, log:
 def imm_combine(mu: np.ndarray, xs: Sequence[np.ndarray],
                 Ps: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
     """Combined estimate ``(x, P)`` of the bank (module docstring, step 4)."""
-    mu = np.asarray(mu, dtype=float)
-    X = np.asarray(xs, dtype=float)
-    Parr = np.asarray(Ps, dtype=float)
-    r, n = X.shape
-    x = mu @ X
-    d = X - x
-    P = (mu @ Parr.reshape(r, n * n)).reshape(n, n) + (d.T * mu) @ d
-    return x, 0.5 * (P + P.T)
+    x, P = imm_combine_rows(np.asarray(mu, dtype=float)[None],
+                            np.asarray(xs, dtype=float)[None], np.asarray(Ps, dtype=float)[None])
+    return x[0], P[0]
+
+
+def imm_combine_rows(mu: np.ndarray, X: np.ndarray,
+                     P: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """:func:`imm_combine` of B banks at once: probabilities ``mu`` (B, r), states ``X``
+    (B, r, n) and covariances ``P`` (B, r, n, n), C-contiguous; returns ``x`` (B, n) and
+    ``P`` (B, n, n).  numpy's stacked products give every bank the floats of its own 2-D
+    products (the row vector ``mu`` by gemv, the spread by gemm), so one bank alone is a
+    batch of one."""
+    runs, r, n = X.shape
+    weights = mu[:, None, :]
+    x = (weights @ X)[:, 0]
+    d = X - x[:, None, :]
+    P = ((weights @ P.reshape(runs, r, n * n)).reshape(runs, n, n)
+         + (d.transpose(0, 2, 1) * weights) @ d)
+    return x, 0.5 * (P + P.transpose(0, 2, 1))
 
 
 class ImmBank:

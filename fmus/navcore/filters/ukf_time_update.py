@@ -336,7 +336,8 @@ def predict_filter_groups(filters, P, nom, Q, q_scales, tau_g, tau_a, models):
     covariances are ``P`` (F, n, n), with process noises ``Q`` (F, n, n) times
     ``q_scales`` (F,): ``models`` consecutive filters per run of ``nom``.  Every filter
     counts its square-root fallbacks; the filters of a run take their prediction when all
-    of them are finite.  Returns, per run, whether they were."""
+    of them are finite.  Returns, per run, whether they were, and the predicted means
+    (F, n) and covariances (F, n, n) of all filters (the filters' own are views of them)."""
     first = filters[0]
     x, P, fallback, finite = predict_rows(
         np.stack([flt.x for flt in filters]), P, nom, Q, q_scales, first.Wm, first.Wc,
@@ -346,7 +347,7 @@ def predict_filter_groups(filters, P, nom, Q, q_scales, tau_g, tau_a, models):
         flt.sqrt_fallbacks += int(fallback[j])
         if finite_runs[j // models]:
             flt.x, flt.P = x[j], P[j]
-    return finite_runs
+    return finite_runs, x, P
 
 
 def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
@@ -357,5 +358,5 @@ def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
     P = np.stack([flt.checked_covariance() for flt in filters])
     Q = np.broadcast_to(Q, (len(filters),) + np.shape(Q))
     if not predict_filter_groups(filters, P, nom, Q, np.asarray(q_scales, dtype=float),
-                                 tau_g, tau_a, len(filters))[0]:
+                                 tau_g, tau_a, len(filters))[0][0]:
         raise predicted_state_error()
