@@ -26,7 +26,7 @@ from typing import List
 
 import numpy as np
 
-from ..filters.imm import ImmBank, imm_combine_rows
+from ..filters.imm import ImmBank, imm_combine_rows, mix_banks
 from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
                                        interval_means, predict_filter_groups, predict_rows,
@@ -154,21 +154,17 @@ class UkfFilterBatch(InsGnssFilterBatch):
             self.fail(int(rows[i]), predicted_state_error())
 
     def _predict_banks(self, rows: np.ndarray) -> None:
-        """:meth:`UkfEngine._predict` of the IMM runs ``rows``: each bank mixes if its cycle
-        starts (its own :meth:`ImmBank.mix`), the models of all banks are checked
+        """:meth:`UkfEngine._predict` of the IMM runs ``rows``: the banks whose cycle starts
+        mix in one :func:`mix_banks` call, the models of all banks are checked
         (:func:`checked_covariances`) and predict in one :func:`predict_rows` call (every
         run's nominal interval spread over its banks' points), and the banks combine their
         models in one :func:`imm_combine_rows` call."""
-        banks = {}
-        for b in rows.tolist():
-            bank = self.members[b].engine.bank
-            try:
-                if bank.needs_mixing:
-                    bank.mix()
-            except Exception as exc:        # the run's own error (InputError)
-                self.fail(b, exc)
-                continue
-            banks[b] = bank
+        banks = {b: self.members[b].engine.bank for b in rows.tolist()}
+        cycle_starts = [b for b, bank in banks.items() if bank.needs_mixing]
+        for b, error in zip(cycle_starts, mix_banks([banks[b] for b in cycle_starts])):
+            if error is not None:           # the run's own error
+                self.fail(b, error)
+                del banks[b]
         if not banks:
             return
         models = len(next(iter(banks.values())).filters)
@@ -212,12 +208,17 @@ class UkfFilterBatch(InsGnssFilterBatch):
 
     def _process_noise(self, rows: np.ndarray, T: np.ndarray) -> np.ndarray:
         """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (all runs' for
-        each T, kept: the runs' intervals are nearly always one)."""
-        for interval in set(T.tolist()) - self._q_cache.keys():
+        each T, kept: the runs' intervals are nearly always one, and then all runs' are the
+        kept array itself, which predict_rows only reads)."""
+        intervals = T.tolist()
+        for interval in set(intervals) - self._q_cache.keys():
             self._q_cache[interval] = np.stack([discrete_process_noise(q, interval)
                                                 for q in self.q_density])
+        first = intervals[0]
+        if len(intervals) == len(self.q_density) and intervals.count(first) == len(intervals):
+            return self._q_cache[first]              # rows are then every run, in order
         return np.stack([self._q_cache[interval][b]
-                         for b, interval in zip(rows.tolist(), T.tolist())])
+                         for b, interval in zip(rows.tolist(), intervals)])
 
     def _predict_alone(self, b: int) -> None:
         """Run b's prediction by its own engine."""
