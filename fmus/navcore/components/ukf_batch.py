@@ -13,8 +13,10 @@ code, lent the batch's values first) with the UKF engines' time update
 * the runs whose prediction interval is complete predict together: one
   :func:`~navcore.filters.ukf_time_update.predict_rows` call, the function each engine calls
   with one run (with the models of its bank for the IMM: the models of all runs' banks in
-  one call, after each bank's own mixing where its cycle starts, and each bank's own
-  combination after).  An engine that predicts otherwise (a subclass), or whose filter is
+  one call, after the mixing of the banks whose cycle starts, in one
+  :func:`~navcore.filters.imm.mix_banks` call, and their combination after, in one
+  :func:`~navcore.filters.imm.imm_combine_rows` call: the functions each bank calls with
+  one bank).  An engine that predicts otherwise (a subclass), or whose filter is
   not in the state the call expects (a covariance not finite or not symmetric, other
   unscented-transform parameters or another number of IMM models than the batch's first
   run), predicts by its own code, before the interval enters its latency history, as it

@@ -7,10 +7,10 @@ Every function takes a leading run axis, and an engine alone calls it with one r
 alone and a run inside a batch (:mod:`navcore.components.ukf_batch`) compute the same floats:
 :func:`accumulate_rows` adds an IMU interval to every run's interval sums (a kernel),
 :func:`interval_means` turns them into each run's :class:`NominalInterval`,
-:func:`error_dynamics` and :func:`propagate_points` map the points of B runs, each with its
-run's nominal (one nominal may serve the points of several filters: an IMM bank), and
-:func:`predict_rows` predicts B filters (one square root per covariance, one process-model call
-for all their points, their moments in stacked products).
+:func:`error_dynamics` and :func:`propagate_points` (kernels over the points) map the points
+of B runs, each with its run's nominal (one nominal may serve the points of several filters:
+an IMM bank), and :func:`predict_rows` predicts B filters (one square root per covariance,
+one process-model call for all their points, their moments in stacked products).
 
 Large-misalignment error model (rotation-vector form)
 -----------------------------------------------------
