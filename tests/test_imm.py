@@ -7,8 +7,8 @@ from scipy.stats import multivariate_normal
 from linear_kalman import LinearKalmanFilter as TextbookKalmanFilter
 
 from navcore.core.component import InputError, ParameterError
-from navcore.filters.imm import (ImmBank, imm_combine, imm_mix,
-                         imm_update_probabilities, log_likelihood)
+from navcore.filters.imm import (ImmBank, imm_combine, imm_combine_rows, imm_mix,
+                                 imm_update_probabilities, log_likelihood, mix_banks)
 from navcore.filters.unscented import UnscentedKalmanFilter
 
 
@@ -228,3 +228,53 @@ def test_the_bank_reports_the_spread_of_its_models():
     spread = sum(m * np.outer(x - bank.x, x - bank.x) for m, x in zip(bank.mu, xs))
     np.testing.assert_allclose(bank.P - mean_P, spread, rtol=1e-10, atol=1e-12)
     assert np.all(np.linalg.eigvalsh(spread) >= -1e-12) and np.trace(spread) > 1e-3
+
+
+def _random_banks(rng, count, r, n=15):
+    banks = []
+    for _ in range(count):
+        filters = []
+        for _ in range(r):
+            A = rng.normal(0, 1, (n, n)) * np.logspace(-4, 0, n)
+            filters.append(UnscentedKalmanFilter(n, x0=rng.normal(0, 1e-2, n),
+                                                 P0=0.5 * (A @ A.T + (A @ A.T).T)))
+        Pi = rng.dirichlet(np.ones(r), r)
+        bank = ImmBank(filters, Pi, mu0=rng.dirichlet(np.ones(r)))
+        banks.append(bank)
+    return banks
+
+
+def _bits(a):
+    return np.ascontiguousarray(a).view(np.uint64)
+
+
+@pytest.mark.parametrize("r", [2, 3])
+def test_banks_mix_and_combine_together_as_each_bank_alone(r):
+    """mix_banks and imm_combine_rows of several banks against each bank's own mix and
+    imm_combine, bit for bit; a bank whose probabilities are not a distribution keeps its
+    state and gets its own error, the others mix."""
+    banks = _random_banks(np.random.default_rng(40 + r), 5, r)
+    alone = copy.deepcopy(banks)
+    banks[2].mu = banks[2].mu * 2.0
+    errors = mix_banks(banks)
+    with pytest.raises(InputError) as own:
+        copy.deepcopy(banks[2]).mix()
+    assert str(errors[2]) == str(own.value) and banks[2].needs_mixing
+    assert all(e is None for k, e in enumerate(errors) if k != 2)
+    for k, (bank, own_bank) in enumerate(zip(banks, alone)):
+        if k == 2:
+            continue
+        own_bank.mix()
+        assert np.array_equal(_bits(bank.mu), _bits(own_bank.mu)) and not bank.needs_mixing
+        for flt, own_flt in zip(bank.filters, own_bank.filters):
+            assert np.array_equal(_bits(flt.x), _bits(own_flt.x))
+            assert np.array_equal(_bits(flt.P), _bits(own_flt.P))
+    mixed = [bank for k, bank in enumerate(banks) if k != 2]
+    x, P = imm_combine_rows(np.stack([bank.mu for bank in mixed]),
+                            np.stack([[f.x for f in bank.filters] for bank in mixed]),
+                            np.stack([[f.P for f in bank.filters] for bank in mixed]))
+    for k, bank in enumerate(mixed):
+        own_x, own_P = imm_combine(bank.mu, [f.x for f in bank.filters],
+                                   [f.P for f in bank.filters])
+        assert np.array_equal(_bits(x[k]), _bits(own_x))
+        assert np.array_equal(_bits(P[k]), _bits(own_P))

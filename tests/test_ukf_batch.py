@@ -16,7 +16,7 @@ from test_ukf_process_model import TAU_A, TAU_G, reference_derivative
 
 from navcore.components import ukf_batch
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
-from navcore.filters import ukf_filters
+from navcore.filters import ukf_filters, ukf_time_update
 from navcore.filters.ukf_time_update import (N_SUMS, NominalInterval, accumulate_rows,
                                              error_dynamics, interval_means,
                                              predict_filter_groups, predict_rows,
@@ -75,6 +75,19 @@ def test_error_dynamics_of_many_runs_is_each_run_alone_and_the_pointwise_referen
         np.testing.assert_allclose(together[rows, 9:15], ref[:, 9:15], rtol=1e-9, atol=1e-15)
         for got, want in zip(together[rows][3:, 6:9], ref[3:, 6:9]):
             assert np.linalg.norm(got - want) <= 1e-8 * np.linalg.norm(want)
+
+
+def test_the_process_model_compiled_is_its_interpreted_source(monkeypatch):
+    """The process model's kernels against their Python source (math's sin, cos, sqrt on
+    the same operations), bit for bit, series branches included."""
+    rng = np.random.default_rng(35)
+    nom, X = _nominals(4, rng), _points(4, rng)
+    compiled = propagate_points(X, nom, TAU_G, TAU_A), error_dynamics(X, nom, 0.0, TAU_A)
+    for name in ("_derivative_rows", "_step_rows"):
+        monkeypatch.setattr(ukf_time_update, name, getattr(ukf_time_update, name).py_func)
+    interpreted = propagate_points(X, nom, TAU_G, TAU_A), error_dynamics(X, nom, 0.0, TAU_A)
+    for got, want in zip(compiled, interpreted):
+        assert np.array_equal(_bits(got), _bits(want))
 
 
 def test_one_nominal_serves_the_points_of_several_filters():

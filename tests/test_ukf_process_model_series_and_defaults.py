@@ -7,40 +7,33 @@ to one more term; the centre point after feedback is exactly zero and must not w
 """
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 import pytest
 from test_ukf_process_model import TAU_A, TAU_G, points, reference_derivative  # noqa: F401
 
-from navcore.filters.ukf_time_update import (_NEXT, _PREV, _inverse_jacobian_apply,
-                                             _rodrigues_coefficients, error_dynamics,
-                                             propagate_points)
+from navcore.filters.ukf_time_update import (_inverse_jacobian_apply, _rodrigues_coefficients,
+                                             error_dynamics, propagate_points)
 
 
 def test_rodrigues_coefficients_by_their_series():
-    theta2 = np.array([0.0, 9e-13])
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")                      # 0 / 0 must not be evaluated
-        a, b = _rodrigues_coefficients(theta2)
-    assert a[0] == 1.0 and b[0] == 0.5
-    assert a[1] == pytest.approx(1.0 - 9e-13 / 6.0 + 81e-26 / 120.0, rel=2e-16, abs=0)
-    assert b[1] == pytest.approx(0.5 - 9e-13 / 24.0 + 81e-26 / 720.0, rel=4e-16, abs=0)
+    assert _rodrigues_coefficients(0.0) == (1.0, 0.5)       # 0 / 0 is not evaluated
+    a, b = _rodrigues_coefficients(9e-13)
+    assert a == pytest.approx(1.0 - 9e-13 / 6.0 + 81e-26 / 120.0, rel=2e-16, abs=0)
+    assert b == pytest.approx(0.5 - 9e-13 / 24.0 + 81e-26 / 720.0, rel=4e-16, abs=0)
 
 
 def test_inverse_jacobian_by_its_series():
     # w perpendicular to phi: phi x (phi x w) = -|phi|^2 w, so J^-1 w = w - phi x w / 2 - c t^2 w
-    phi = np.array([[6e-5], [-3e-5], [6e-5]])               # |phi|^2 = 8.1e-9
-    w = np.array([[1.0], [4.0], [1.0]])
+    phi = np.array([6e-5, -3e-5, 6e-5])                     # |phi|^2 = 8.1e-9
+    w = np.array([1.0, 4.0, 1.0])
     t2 = float(np.sum(phi ** 2))
     c = 1.0 / 12.0 + t2 / 720.0 + t2 ** 2 / 30240.0
-    expected = w - 0.5 * np.cross(phi.ravel(), w.ravel())[:, None] - c * t2 * w
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        got = _inverse_jacobian_apply(phi[_NEXT], phi[_PREV], w, np.array([t2]))
-        at_zero = _inverse_jacobian_apply(phi[_NEXT] * 0.0, phi[_PREV] * 0.0, w, np.zeros(1))
+    expected = w - 0.5 * np.cross(phi, w) - c * t2 * w
+    got = _inverse_jacobian_apply(*phi, *w, t2)
+    at_zero = _inverse_jacobian_apply(0.0, 0.0, 0.0, *w, 0.0)   # 0 / 0 is not evaluated
     np.testing.assert_allclose(got, expected, rtol=2e-16, atol=0)
-    assert np.array_equal(at_zero, w)
+    assert at_zero == tuple(w)
 
 
 def test_bias_errors_are_random_constants_by_default(points):

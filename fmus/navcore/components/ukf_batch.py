@@ -13,8 +13,10 @@ code, lent the batch's values first) with the UKF engines' time update
 * the runs whose prediction interval is complete predict together: one
   :func:`~navcore.filters.ukf_time_update.predict_rows` call, the function each engine calls
   with one run (with the models of its bank for the IMM: the models of all runs' banks in
-  one call, after each bank's own mixing where its cycle starts, and each bank's own
-  combination after).  An engine that predicts otherwise (a subclass), or whose filter is
+  one call, after the mixing of the banks whose cycle starts, in one
+  :func:`~navcore.filters.imm.mix_banks` call, and their combination after, in one
+  :func:`~navcore.filters.imm.imm_combine_rows` call: the functions each bank calls with
+  one bank).  An engine that predicts otherwise (a subclass), or whose filter is
   not in the state the call expects (a covariance not finite or not symmetric, other
   unscented-transform parameters or another number of IMM models than the batch's first
   run), predicts by its own code, before the interval enters its latency history, as it
@@ -26,12 +28,13 @@ from typing import List
 
 import numpy as np
 
-from ..filters.imm import ImmBank, imm_combine
+from ..filters.imm import ImmBank, imm_combine_rows, mix_banks
 from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
                                        interval_means, predict_filter_groups, predict_rows,
                                        prediction_due)
-from ..filters.unscented import predicted_state_error
+from ..filters.unscented import checked_covariances, predicted_state_error
+from ..ins.error_model import N_STATES
 from .filter_batch import InsGnssFilterBatch
 
 #: the unscented filter's attributes stacked for a natively predicted engine
@@ -153,49 +156,71 @@ class UkfFilterBatch(InsGnssFilterBatch):
             self.fail(int(rows[i]), predicted_state_error())
 
     def _predict_banks(self, rows: np.ndarray) -> None:
-        """:meth:`UkfEngine._predict` of the IMM runs ``rows``: each bank mixes if its cycle
-        starts (its own :meth:`ImmBank.mix`), the models of all banks predict in one
-        :func:`predict_rows` call (every run's nominal interval spread over its banks'
-        points), each bank combines its models (:func:`imm_combine`)."""
-        banks = {}
-        for b in rows.tolist():
-            bank = self.members[b].engine.bank
-            try:
-                if bank.needs_mixing:
-                    bank.mix()
-                banks[b] = (bank, [flt.checked_covariance() for flt in bank.filters])
-            except Exception as exc:        # the run's own error (InputError)
-                self.fail(b, exc)
+        """:meth:`UkfEngine._predict` of the IMM runs ``rows``: the banks whose cycle starts
+        mix in one :func:`mix_banks` call, the models of all banks are checked
+        (:func:`checked_covariances`) and predict in one :func:`predict_rows` call (every
+        run's nominal interval spread over its banks' points), and the banks combine their
+        models in one :func:`imm_combine_rows` call."""
+        banks = {b: self.members[b].engine.bank for b in rows.tolist()}
+        cycle_starts = [b for b, bank in banks.items() if bank.needs_mixing]
+        for b, error in zip(cycle_starts, mix_banks([banks[b] for b in cycle_starts])):
+            if error is not None:           # the run's own error
+                self.fail(b, error)
+                del banks[b]
         if not banks:
             return
+        models = len(next(iter(banks.values())).filters)
+        P, errors = checked_covariances([flt for bank in banks.values() for flt in bank.filters])
+        checked = []
+        for i, b in enumerate(banks):       # a run fails with its first model's error
+            error = next((e for e in errors[i * models:(i + 1) * models] if e is not None), None)
+            if error is not None:
+                self.fail(b, error)
+            checked.append(error is None)
+        if not all(checked):
+            banks = {b: bank for (b, bank), ok in zip(banks.items(), checked) if ok}
+            P = P.reshape(-1, models, N_STATES, N_STATES)[checked].reshape(-1, N_STATES, N_STATES)
+        if banks:
+            self._predict_checked_banks(banks, P, models)
+
+    def _predict_checked_banks(self, banks, P, models: int) -> None:
+        """The prediction and combination of :meth:`_predict_banks` for the banks ``banks``
+        (run: bank) whose models' checked covariances are ``P``."""
         rows = np.array(list(banks))
-        models = len(next(iter(banks.values()))[0].filters)
-        filters = [flt for bank, _ in banks.values() for flt in bank.filters]
+        filters = [flt for bank in banks.values() for flt in bank.filters]
         sums = self.stack["sums"][:, 0]
         cfg = self.members[rows[0]].engine.config
-        finite = predict_filter_groups(
-            filters, np.stack([P for _, Ps in banks.values() for P in Ps]),
-            interval_means(sums[rows]),
+        finite, x, P = predict_filter_groups(
+            filters, P, interval_means(sums[rows]),
             np.repeat(self._process_noise(rows, sums[rows, 0]), models, axis=0),
             np.concatenate([self.members[b].engine.q_scales for b in rows.tolist()]),
             cfg.gyro_bias_tau, cfg.accel_bias_tau, models)
         sums[rows] = 0.0
-        for (b, (bank, _)), ok in zip(banks.items(), finite.tolist()):
-            if not ok:
-                self.fail(b, predicted_state_error())
-                continue
-            bank.x, bank.P = imm_combine(bank.mu, [flt.x for flt in bank.filters],
-                                         [flt.P for flt in bank.filters])
-            self._diagonal[b] = np.diagonal(bank.P)
+        for b in rows[~finite].tolist():
+            self.fail(b, predicted_state_error())
+        if not finite.any():
+            return
+        combined = rows[finite].tolist()
+        x, P = imm_combine_rows(np.stack([banks[b].mu for b in combined]),
+                                x.reshape(-1, models, N_STATES)[finite],
+                                P.reshape(-1, models, N_STATES, N_STATES)[finite])
+        for i, b in enumerate(combined):
+            banks[b].x, banks[b].P = x[i], P[i]
+        self._diagonal[combined] = np.diagonal(P, axis1=1, axis2=2)
 
     def _process_noise(self, rows: np.ndarray, T: np.ndarray) -> np.ndarray:
         """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (all runs' for
-        each T, kept: the runs' intervals are nearly always one)."""
-        for interval in set(T.tolist()) - self._q_cache.keys():
+        each T, kept: the runs' intervals are nearly always one, and then all runs' are the
+        kept array itself, which predict_rows only reads)."""
+        intervals = T.tolist()
+        for interval in set(intervals) - self._q_cache.keys():
             self._q_cache[interval] = np.stack([discrete_process_noise(q, interval)
                                                 for q in self.q_density])
+        first = intervals[0]
+        if len(intervals) == len(self.q_density) and intervals.count(first) == len(intervals):
+            return self._q_cache[first]              # rows are then every run, in order
         return np.stack([self._q_cache[interval][b]
-                         for b, interval in zip(rows.tolist(), T.tolist())])
+                         for b, interval in zip(rows.tolist(), intervals)])
 
     def _predict_alone(self, b: int) -> None:
         """Run b's prediction by its own engine."""

@@ -7,10 +7,10 @@ Every function takes a leading run axis, and an engine alone calls it with one r
 alone and a run inside a batch (:mod:`navcore.components.ukf_batch`) compute the same floats:
 :func:`accumulate_rows` adds an IMU interval to every run's interval sums (a kernel),
 :func:`interval_means` turns them into each run's :class:`NominalInterval`,
-:func:`error_dynamics` and :func:`propagate_points` map the points of B runs, each with its
-run's nominal (one nominal may serve the points of several filters: an IMM bank), and
-:func:`predict_rows` predicts B filters (one square root per covariance, one process-model call
-for all their points, their moments in stacked products).
+:func:`error_dynamics` and :func:`propagate_points` (kernels over the points) map the points
+of B runs, each with its run's nominal (one nominal may serve the points of several filters:
+an IMM bank), and :func:`predict_rows` predicts B filters (one square root per covariance,
+one process-model call for all their points, their moments in stacked products).
 
 Large-misalignment error model (rotation-vector form)
 -----------------------------------------------------
@@ -66,9 +66,11 @@ docstring on additive versus augmented noise).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..core.kernels import kernel
+from ..core.kernels import jitable, kernel
 from ..ins import earth
 from ..ins.error_model import N_STATES, POS, VEL
 from ..ins.strapdown import _gravity, _radii, update_rows
@@ -80,55 +82,50 @@ from .unscented import (points_from_sqrt_rows, predicted_moments_rows, predicted
 _TIME_EPS = 1e-9
 
 
-# The process model works on component arrays of shape (3, N) (one row per axis, one column per
-# sigma point), so a cross product is two gathers and three array operations whatever N.
-_NEXT = np.array([1, 2, 0])
-_PREV = np.array([2, 0, 1])
+# The process model is a kernel over the sigma points; its formulas are these scalar helpers
+# (compiled into it), written as the numpy expressions they replaced: the same operations in
+# the same order, so every point gets the floats of the array code.
+@jitable
+def _cross(a0, a1, a2, b0, b1, b2):
+    """The cross product a x b of two vectors given by their components."""
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-def _cross(a_next, a_prev, b):
-    """Cross products a x b, b of shape (..., 3, N), for a given by its gathered components
-    a_next = a[_NEXT] and a_prev = a[_PREV] (shape (3, N) or (3, 1))."""
-    return a_next * b[..., _PREV, :] - a_prev * b[..., _NEXT, :]
-
-
+@jitable
 def _rodrigues_coefficients(theta2):
     """sin(t)/t and (1 - cos t)/t^2 of |phi|^2 = theta2, with their series near 0."""
-    theta = np.sqrt(theta2)
-    small = theta2 < 1e-12
-    if not small.any():                  # the usual case: the same values without the series
-        return np.sin(theta) / theta, (1.0 - np.cos(theta)) / (theta * theta)
-    safe = np.where(small, 1.0, theta)
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(safe)) / (safe * safe))
-    return a, b
+    if theta2 < 1e-12:
+        return 1.0 - theta2 / 6.0, 0.5 - theta2 / 24.0
+    theta = math.sqrt(theta2)
+    return math.sin(theta) / theta, (1.0 - math.cos(theta)) / (theta * theta)
 
 
-def _rotate_by_rotvec(phi_next, phi_prev, V, a, b):
-    """exp([phi x]) V (Rodrigues) for V of shape (..., 3, N); a, b of _rodrigues_coefficients."""
-    pxv = _cross(phi_next, phi_prev, V)
-    return V + a * pxv + b * _cross(phi_next, phi_prev, pxv)
+@jitable
+def _rotate_by_rotvec(p0, p1, p2, v0, v1, v2, a, b):
+    """exp([phi x]) v (Rodrigues); a, b of _rodrigues_coefficients."""
+    c0, c1, c2 = _cross(p0, p1, p2, v0, v1, v2)
+    d0, d1, d2 = _cross(p0, p1, p2, c0, c1, c2)
+    return v0 + a * c0 + b * d0, v1 + a * c1 + b * d1, v2 + a * c2 + b * d2
 
 
-def _inverse_jacobian_apply(phi_next, phi_prev, w, theta2):
+@jitable
+def _inverse_jacobian_apply(p0, p1, p2, w0, w1, w2, theta2):
     """J^-1(phi) w = w - 1/2 phi x w + c(|phi|) phi x (phi x w) (rotation-vector kinematics)."""
-    small = theta2 < 1e-8
-    if small.any():
-        theta = np.sqrt(np.where(small, 1.0, theta2))
+    if theta2 < 1e-8:
+        c = 1.0 / 12.0 + theta2 / 720.0
+    else:
+        theta = math.sqrt(theta2)
         half = 0.5 * theta
-        c = np.where(small, 1.0 / 12.0 + theta2 / 720.0,
-                     (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta))
-    else:                                # the same values without the series
-        theta = np.sqrt(theta2)
-        half = 0.5 * theta
-        c = (1.0 - half * np.cos(half) / np.sin(half)) / (theta * theta)
-    pxw = _cross(phi_next, phi_prev, w)
-    return w - 0.5 * pxw + c * _cross(phi_next, phi_prev, pxw)
+        c = (1.0 - half * math.cos(half) / math.sin(half)) / (theta * theta)
+    c0, c1, c2 = _cross(p0, p1, p2, w0, w1, w2)
+    d0, d1, d2 = _cross(p0, p1, p2, c0, c1, c2)
+    return w0 - 0.5 * c0 + c * d0, w1 - 0.5 * c1 + c * d1, w2 - 0.5 * c2 + c * d2
 
 
+@jitable
 def _nav_rates(lat, h, vn, ve, rn, re):
-    """(w_ie + w_en, 2 w_ie + w_en) in NED; arrays or floats; radii given."""
-    sl, cl = np.sin(lat), np.cos(lat)
+    """(w_ie + w_en, 2 w_ie + w_en) in NED; radii given."""
+    sl, cl = math.sin(lat), math.cos(lat)
     w = earth.OMEGA_IE
     reh = re + h
     rnh = rn + h
@@ -205,25 +202,21 @@ def prediction_due(T, predict_interval):
 
 
 class _RunValues:
-    """The nominal values of one interval of B runs for :func:`error_dynamics`: ``lat``,
-    ``h`` (B,), ``v``, ``f`` (3, B), ``C`` (B, 3, 3), ``T`` (B,), and :meth:`spread`, which
-    takes per-run arrays (..., B) to the runs' points (..., N), every run's points
-    consecutive (one run: a broadcast, no copy)."""
+    """The nominal values of one interval of B runs for the process model, contiguous with
+    a leading run axis: ``lat``, ``h``, ``T`` (B,), ``v``, ``f`` (B, 3), ``C`` (B, 3, 3);
+    ``per_run`` points of each run, one run after the other."""
 
-    __slots__ = ("lat", "h", "v", "f", "C", "T", "runs", "per_run")
+    __slots__ = ("lat", "h", "v", "f", "C", "T", "per_run")
 
     def __init__(self, nom, points):
         self.lat = np.asarray(nom.lat, dtype=float).reshape(-1)
-        self.runs = runs = self.lat.shape[0]
+        runs = self.lat.shape[0]
         self.h = np.asarray(nom.h, dtype=float).reshape(-1)
         self.T = np.asarray(nom.T, dtype=float).reshape(-1)
-        self.v = np.asarray(nom.v, dtype=float).reshape(runs, 3).T
-        self.f = np.asarray(nom.f, dtype=float).reshape(runs, 3).T
+        self.v = np.ascontiguousarray(np.asarray(nom.v, dtype=float).reshape(runs, 3))
+        self.f = np.ascontiguousarray(np.asarray(nom.f, dtype=float).reshape(runs, 3))
         self.C = np.asarray(nom.C, dtype=float).reshape(runs, 3, 3)
         self.per_run = points // runs
-
-    def spread(self, a):
-        return a if self.runs == 1 else np.repeat(a, self.per_run, axis=-1)
 
 
 def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
@@ -235,59 +228,69 @@ def error_dynamics(X, nom, tau_g=0.0, tau_a=0.0):
 
 
 def _error_dynamics(X, run, tau_g, tau_a):
-    Xt = X.T                                   # (15, N): one row per state
-    dr, dv, phi = Xt[0:3], Xt[3:6], Xt[6:9]
-    spread, runs = run.spread, run.runs
-    lats, hs = run.lat.tolist(), run.h.tolist()
-    radii = np.array([_radii(x) for x in lats]).T          # math: a float per run
-    gravity = np.array([_gravity(x, y) for x, y in zip(lats, hs)])
-    # the computed (primed) state of each run, then the true state of each point (computed
-    # minus error), in one array (rows lat, h, v (3), R_N, R_E): the rates of both in one pass
-    points = X.shape[0]
-    state = np.empty((7, runs + points))
-    state[0, :runs], state[1, :runs], state[2:5, :runs] = run.lat, run.h, run.v
-    state[5:7, :runs] = radii
-    state[5:7, runs:] = spread(radii)
-    rn = state[5, runs:]
-    np.subtract(spread(run.lat), dr[0] / (rn + spread(run.h)), out=state[0, runs:])
-    np.add(spread(run.h), dr[2], out=state[1, runs:])
-    np.subtract(spread(run.v), dv, out=state[2:5, runs:])
-    v = state[2:5]
-    w_in, w_cor = _nav_rates(state[0], state[1], v[0], v[1], state[5], state[6])
-    w_in, w_cor = np.array(w_in), np.array(w_cor)
-    coriolis = _cross(w_cor[_NEXT], w_cor[_PREV], v)      # w_cor' x v' and w_cor x v
-    v_t = v[:, runs:]
-
-    phi_rows = X[:, 6:9]
-    theta2 = np.einsum("ij,ij->i", phi_rows, phi_rows)
-    a, b = _rodrigues_coefficients(theta2)
-    phi_next, phi_prev = phi[_NEXT], phi[_PREV]
-    # exp([phi x]) of the three vectors it rotates, at once: w_in' - C' dbg, f^{n'}, C' dba
-    # (every run's points by its own C': stacked products, each the floats of its 2-D one)
+    """The derivative kernel's call; the reductions stay numpy's (|phi|^2 by einsum, the bias
+    errors in the nav frame by stacked products: a compiled loop would sum otherwise)."""
+    phi = X[:, 6:9]
+    theta2 = np.einsum("ij,ij->i", phi, phi)
+    # every run's points by its own C': stacked products, each the floats of its 2-D one
+    runs = len(run.lat)
     C_t = run.C.transpose(0, 2, 1)
     by_run = X.reshape(runs, -1, N_STATES)
-    V = np.empty((3, 3, points))
-    np.subtract(spread(w_in[:, :runs]), (by_run[:, :, 9:12] @ C_t).reshape(-1, 3).T, out=V[0])
-    V[1] = spread(run.f)
-    V[2] = (by_run[:, :, 12:15] @ C_t).reshape(-1, 3).T
-    RV = _rotate_by_rotvec(phi_next, phi_prev, V, a, b)
-
-    # attitude: d(phi)/dt = J^-1(phi) [exp([phi x]) (w_in' - C' dbg) - w_in]
-    w_s = RV[0] - w_in[:, runs:]
-    dphi = _inverse_jacobian_apply(phi_next, phi_prev, w_s, theta2)
-
-    # velocity
-    ddv = spread(run.f) - RV[1] + RV[2]
-    ddv -= spread(coriolis[:, :runs]) - coriolis[:, runs:]
-    ddv[2] += spread(2.0 * gravity / np.sqrt(radii[0] * radii[1])) * dr[2]
-    Xdot = np.empty_like(X)
-    Xdot_t = Xdot.T
-    Xdot_t[0:3] = dv
-    Xdot_t[3:6] = ddv
-    Xdot_t[6:9] = dphi
-    Xdot_t[9:12] = 0.0 if tau_g <= 0 else -Xt[9:12] / tau_g
-    Xdot_t[12:15] = 0.0 if tau_a <= 0 else -Xt[12:15] / tau_a
+    gyro_n = (by_run[:, :, 9:12] @ C_t).reshape(-1, 3)
+    accel_n = (by_run[:, :, 12:15] @ C_t).reshape(-1, 3)
+    Xdot = np.empty((X.shape[0], N_STATES))
+    _derivative_rows(X, theta2, gyro_n, accel_n, run.per_run, run.lat, run.h, run.v, run.f,
+                     float(tau_g), float(tau_a), Xdot)
     return Xdot
+
+
+@kernel
+def _derivative_rows(X, theta2, gyro_n, accel_n, per_run, lat, h, v, f, tau_g, tau_a, Xdot):
+    """The error dynamics (module docstring) of the ``per_run`` points of every run, into
+    ``Xdot``: ``gyro_n``/``accel_n`` are each point's bias errors times C' (N, 3)."""
+    for k in range(lat.shape[0]):
+        rn, re = _radii(lat[k])
+        (wi0, wi1, wi2), (wc0, wc1, wc2) = _nav_rates(lat[k], h[k], v[k, 0], v[k, 1], rn, re)
+        k0, k1, k2 = _cross(wc0, wc1, wc2, v[k, 0], v[k, 1], v[k, 2])   # w_cor' x v'
+        vertical = 2.0 * _gravity(lat[k], h[k]) / math.sqrt(rn * re)
+        f0, f1, f2 = f[k, 0], f[k, 1], f[k, 2]
+        for p in range(k * per_run, (k + 1) * per_run):
+            x = X[p]
+            # the true state of the point: the computed one minus its error
+            vt0, vt1, vt2 = v[k, 0] - x[3], v[k, 1] - x[4], v[k, 2] - x[5]
+            (ti0, ti1, ti2), (tc0, tc1, tc2) = _nav_rates(
+                lat[k] - x[0] / (rn + h[k]), h[k] + x[2], vt0, vt1, rn, re)
+            c0, c1, c2 = _cross(tc0, tc1, tc2, vt0, vt1, vt2)              # w_cor x v
+            a, b = _rodrigues_coefficients(theta2[p])
+            p0, p1, p2 = x[6], x[7], x[8]
+            # attitude: d(phi)/dt = J^-1(phi) [exp([phi x]) (w_in' - C' dbg) - w_in]
+            s0, s1, s2 = _rotate_by_rotvec(p0, p1, p2, wi0 - gyro_n[p, 0], wi1 - gyro_n[p, 1],
+                                           wi2 - gyro_n[p, 2], a, b)
+            Xdot[p, 6], Xdot[p, 7], Xdot[p, 8] = _inverse_jacobian_apply(
+                p0, p1, p2, s0 - ti0, s1 - ti1, s2 - ti2, theta2[p])
+            # velocity: (I - exp([phi x])) f' + exp([phi x]) C' dba - coriolis difference
+            r0, r1, r2 = _rotate_by_rotvec(p0, p1, p2, f0, f1, f2, a, b)
+            e0, e1, e2 = _rotate_by_rotvec(p0, p1, p2, accel_n[p, 0], accel_n[p, 1],
+                                           accel_n[p, 2], a, b)
+            Xdot[p, 3] = f0 - r0 + e0 - (k0 - c0)
+            Xdot[p, 4] = f1 - r1 + e1 - (k1 - c1)
+            Xdot[p, 5] = f2 - r2 + e2 - (k2 - c2) + vertical * x[2]
+            Xdot[p, 0], Xdot[p, 1], Xdot[p, 2] = x[3], x[4], x[5]
+            for i in range(9, 12):
+                Xdot[p, i] = 0.0 if tau_g <= 0 else -x[i] / tau_g
+            for i in range(12, 15):
+                Xdot[p, i] = 0.0 if tau_a <= 0 else -x[i] / tau_a
+
+
+@kernel
+def _step_rows(X, Xdot, T, per_run, Y):
+    """One step of every point, ``Y = X + T Xdot`` with second-order position, T its run's."""
+    for p in range(X.shape[0]):
+        t = T[p // per_run]
+        for i in range(N_STATES):
+            Y[p, i] = X[p, i] + t * Xdot[p, i]
+        for i in range(3):
+            Y[p, i] += 0.5 * t * t * Xdot[p, 3 + i]
 
 
 def propagate_points(X, nom, tau_g=0.0, tau_a=0.0):
@@ -295,9 +298,8 @@ def propagate_points(X, nom, tau_g=0.0, tau_a=0.0):
     second-order position."""
     run = _RunValues(nom, X.shape[0])
     Xdot = _error_dynamics(X, run, tau_g, tau_a)
-    T = run.spread(run.T)[:, None]
-    Y = X + T * Xdot
-    Y[:, 0:3] += 0.5 * T * T * Xdot[:, 3:6]
+    Y = np.empty((X.shape[0], N_STATES))
+    _step_rows(X, Xdot, run.T, run.per_run, Y)
     return Y
 
 
@@ -334,7 +336,8 @@ def predict_filter_groups(filters, P, nom, Q, q_scales, tau_g, tau_a, models):
     covariances are ``P`` (F, n, n), with process noises ``Q`` (F, n, n) times
     ``q_scales`` (F,): ``models`` consecutive filters per run of ``nom``.  Every filter
     counts its square-root fallbacks; the filters of a run take their prediction when all
-    of them are finite.  Returns, per run, whether they were."""
+    of them are finite.  Returns, per run, whether they were, and the predicted means
+    (F, n) and covariances (F, n, n) of all filters (the filters' own are views of them)."""
     first = filters[0]
     x, P, fallback, finite = predict_rows(
         np.stack([flt.x for flt in filters]), P, nom, Q, q_scales, first.Wm, first.Wc,
@@ -344,7 +347,7 @@ def predict_filter_groups(filters, P, nom, Q, q_scales, tau_g, tau_a, models):
         flt.sqrt_fallbacks += int(fallback[j])
         if finite_runs[j // models]:
             flt.x, flt.P = x[j], P[j]
-    return finite_runs
+    return finite_runs, x, P
 
 
 def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
@@ -355,5 +358,5 @@ def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
     P = np.stack([flt.checked_covariance() for flt in filters])
     Q = np.broadcast_to(Q, (len(filters),) + np.shape(Q))
     if not predict_filter_groups(filters, P, nom, Q, np.asarray(q_scales, dtype=float),
-                                 tau_g, tau_a, len(filters))[0]:
+                                 tau_g, tau_a, len(filters))[0][0]:
         raise predicted_state_error()

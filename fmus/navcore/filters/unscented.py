@@ -65,7 +65,7 @@ the innovation (for IMM).
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Dict, NamedTuple, Optional, Tuple
+from typing import Any, Callable, Dict, List, NamedTuple, Optional, Tuple
 
 import numpy as np
 from scipy.linalg import lapack
@@ -270,6 +270,30 @@ def predicted_moments_rows(Y: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, Q: np.
     # a NaN/inf anywhere in f's output or Q propagates into P, so one check covers all
     finite = np.isfinite(P).all(axis=(1, 2))
     return x, 0.5 * (P + P.transpose(0, 2, 1)), finite
+
+
+def checked_covariances(filters) -> Tuple[np.ndarray, List[Optional[Exception]]]:
+    """:meth:`UnscentedKalmanFilter.checked_covariance` of every filter of ``filters`` (one
+    state dimension): the covariances (F, n, n) and, per filter, the error its own check
+    raised (None if none; its row is then not meaningful).  The finite, symmetric
+    covariances of every filter are checked by stacked comparisons; a filter that fails them
+    runs its own check, which symmetrizes or raises."""
+    n = filters[0].n
+    if all(f.x.shape == (n,) and f.P.shape == (n, n) for f in filters):
+        P = np.stack([f.P for f in filters])
+        x = np.stack([f.x for f in filters])
+        passed = (np.isfinite(P).all(axis=(1, 2)) & np.isfinite(x).all(axis=1)
+                  & (P == P.transpose(0, 2, 1)).all(axis=(1, 2)))
+    else:
+        P = np.empty((len(filters), n, n))
+        passed = np.zeros(len(filters), dtype=bool)
+    errors: List[Optional[Exception]] = [None] * len(filters)
+    for j in np.flatnonzero(~passed).tolist():
+        try:
+            P[j] = filters[j].checked_covariance()
+        except Exception as exc:       # the filter's own error (InputError)
+            errors[j] = exc
+    return P, errors
 
 
 def state_error(x: np.ndarray, P: np.ndarray) -> Optional[InputError]:
