@@ -233,6 +233,19 @@ def test_a_run_that_diverges_inside_a_batch_fails_alone(component_class, poison,
     assert out[0].tolist() == [float(expected[p.name]) for p in component_class.outputs]
 
 
+def _started_batch_and_alone(component_class, runs):
+    """A started batch of ``runs`` filters of ``component_class`` with the test's
+    parameters, the same filters started alone, and the output names."""
+    parameters = _filter_parameters()
+    alone = [component_class(**parameters) for _ in range(runs)]
+    batch = component_class.batch_class(component_class, runs)
+    batch.set_parameters([parameters] * runs)
+    batch.start(0.0)
+    for component in alone:
+        component.start(0.0)
+    return batch, alone, [p.name for p in component_class.outputs]
+
+
 @pytest.mark.parametrize("component_class", [Kf, Ukf])
 def test_a_batch_stepped_between_imu_samples_holds_each_run_s_outputs(component_class):
     """The filters stepped at twice the IMU's rate (every input step seen twice): at the
@@ -240,14 +253,7 @@ def test_a_batch_stepped_between_imu_samples_holds_each_run_s_outputs(component_
     as it was; the batch gives it the solution of the batch's latest interval first (what
     the run alone wrote then), also after the fixes whose solution the batch wrote."""
     per_run = _recorded_inputs(2)
-    parameters = _filter_parameters()
-    alone = [component_class(**parameters) for _ in per_run]
-    batch = component_class.batch_class(component_class, len(per_run))
-    batch.set_parameters([parameters] * len(per_run))
-    batch.start(0.0)
-    for component in alone:
-        component.start(0.0)
-    columns = [p.name for p in component_class.outputs]
+    batch, alone, columns = _started_batch_and_alone(component_class, len(per_run))
     h = 0.005
     for k in range(2 * 300):
         steps = [steps[k // 2] for steps in per_run]
@@ -273,14 +279,7 @@ def test_the_kf_runs_fixes_at_one_step_update_in_one_call(monkeypatch):
 
     monkeypatch.setattr(filter_batch, "kalman_rows", counted)
     per_run = _recorded_inputs(3)
-    parameters = _filter_parameters()
-    alone = [Kf(**parameters) for _ in per_run]
-    batch = Kf.batch_class(Kf, len(per_run))
-    batch.set_parameters([parameters] * len(per_run))
-    batch.start(0.0)
-    for component in alone:
-        component.start(0.0)
-    columns = [p.name for p in Kf.outputs]
+    batch, alone, columns = _started_batch_and_alone(Kf, len(per_run))
     epochs = [step["gnss_epoch"] for step in per_run[0]]
     fixes = [k for k in range(1, len(epochs)) if epochs[k] != epochs[k - 1]]
     poisoned = fixes[3] - 1                   # run 1's P, the step before a fix

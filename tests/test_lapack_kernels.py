@@ -1,5 +1,5 @@
 """LAPACK inside kernels (navcore.core.lapack_kernels) and the row functions of the unscented
-filters that call it (sqrt_rows, correct_rows), against scipy's Python wrappers of the same
+filters that call it (sigma_points_rows, correct_rows), against scipy's Python wrappers of the same
 routines (scipy.linalg.lapack), bit for bit: the wrappers are the path every single filter
 took before, so equal bits mean the batch's factorizations changed no number.
 """
@@ -17,7 +17,7 @@ from scipy.linalg import lapack
 
 from navcore.core.kernels import kernel
 from navcore.core.lapack_kernels import potrf_lower, potrs_lower, trtrs_lower
-from navcore.filters.unscented import correct_rows, sqrt_rows
+from navcore.filters.unscented import correct_rows, points_from_sqrt_rows, sigma_points_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -79,20 +79,24 @@ def test_a_matrix_in_c_order_is_refused():
 
 
 @pytest.mark.parametrize("n", [6, 15])
-def test_sqrt_rows_are_each_matrix_s_wrapper_factor(n):
+def test_sigma_points_rows_spread_each_matrix_s_wrapper_factor(n):
     """The eigenvalue fallback included (a singular matrix)."""
     rng = np.random.default_rng(10 + n)
     P = _spd(rng, 60, n)
     P[3] = 0.0
     P[3, 0, 0] = 1.0
-    L, fallback = sqrt_rows(P)
+    x = rng.normal(size=(60, n))
+    X, fallback = sigma_points_rows(x, P, 1.5)
     assert fallback.tolist() == [b == 3 for b in range(60)]
     for b in range(60):
         if b == 3:
-            np.testing.assert_allclose(L[b] @ L[b].T, P[b], atol=1e-15)
+            dev = (X[b, 1:n + 1] - x[b]) / 1.5               # the root's columns
+            np.testing.assert_allclose(dev.T @ dev, P[b], atol=1e-15)
             continue
         expected, info = lapack.dpotrf(P[b], lower=1, clean=1)
-        assert info == 0 and np.array_equal(_bits(L[b]), _bits(expected))
+        assert info == 0
+        spread = points_from_sqrt_rows(x[b:b + 1], expected[None] * 1.5)[0]
+        assert np.array_equal(_bits(X[b]), _bits(spread))
 
 
 def test_correct_rows_is_each_filter_s_wrapper_path():
@@ -130,10 +134,11 @@ def test_a_kernel_read_from_the_cache_calls_this_process_s_routine(tmp_path):
     factors."""
     script = textwrap.dedent("""
         import numpy as np
-        from navcore.filters.unscented import sqrt_rows
+        from navcore.filters.unscented import sigma_points_rows
         rng = np.random.default_rng(0)
         A = rng.normal(size=(5, 6, 6))
-        print(sqrt_rows(A @ A.transpose(0, 2, 1) + np.eye(6))[0].sum().hex())
+        P = A @ A.transpose(0, 2, 1) + np.eye(6)
+        print(sigma_points_rows(np.zeros((5, 6)), P, 1.0)[0].sum().hex())
     """)
     env = {**os.environ, "NAVFMU_KERNEL_CACHE": str(tmp_path),
            "PYTHONPATH": os.pathsep.join([str(ROOT / "fmus"), str(ROOT)])}

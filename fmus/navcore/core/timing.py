@@ -52,12 +52,6 @@ def same_instant(a, b, period):
     return abs(a - b) <= TIME_TOLERANCE * abs(period) + _ULPS * np.spacing(max(abs(a), abs(b)))
 
 
-def same_time_rows(a, b, period):
-    """:func:`same_time` of arrays, element by element."""
-    a, b, period = np.asarray(a), np.asarray(b), np.asarray(period)
-    return np.abs(a - b) <= time_tolerance_rows(period, np.maximum(np.abs(a), np.abs(b)))
-
-
 def samples_reached(start: float, period: float, t_end: float) -> int:
     """Number n of the last grid epoch ``start + n period`` reached at ``t_end`` (0 before
     the first one)."""

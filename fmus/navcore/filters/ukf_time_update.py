@@ -75,8 +75,7 @@ from ..ins import earth
 from ..ins.error_model import N_STATES, POS, VEL
 from ..ins.strapdown import _gravity, _radii, update_rows
 from .ins_gnss_kf import compensated_rows
-from .unscented import (points_from_sqrt_rows, predicted_moments_rows, predicted_state_error,
-                        sqrt_rows)
+from .unscented import predicted_moments_rows, predicted_state_error, sigma_points_rows
 
 #: tolerance on accumulated time when deciding that a prediction interval is complete [s]
 _TIME_EPS = 1e-9
@@ -311,8 +310,7 @@ def predict_rows(x, P, nom, Q, q_scale, Wm, Wc, spread, tau_g, tau_a):
     One process-model call for every point of every filter (it works row by row).  Returns
     (x, P, square-root fallbacks (B,), finite (B,)) as :meth:`UnscentedKalmanFilter.predict`
     computes them for each filter."""
-    L, fallback = sqrt_rows(P)
-    X = points_from_sqrt_rows(x, L * spread)
+    X, fallback = sigma_points_rows(x, P, spread)
     Y = propagate_points(X.reshape(-1, N_STATES), nom, tau_g, tau_a).reshape(X.shape)
     x, P, finite = predicted_moments_rows(Y, Wm, Wc, Q, q_scale)
     return x, P, fallback, finite

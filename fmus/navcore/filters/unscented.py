@@ -125,8 +125,8 @@ def matrix_sqrt(A: np.ndarray) -> Tuple[np.ndarray, bool]:
 
 def _sqrt_symmetric(A: np.ndarray) -> Tuple[np.ndarray, bool]:
     # LAPACK dpotrf reads only the lower triangle of an already symmetric A; called directly
-    # it costs ~2.5 us for n = 15 against ~6.5 us for numpy.linalg.cholesky (sqrt_rows calls
-    # the same routine from a kernel for many matrices)
+    # it costs ~2.5 us for n = 15 against ~6.5 us for numpy.linalg.cholesky (sigma_points_rows
+    # calls the same routine from a kernel for many matrices)
     L, info = lapack.dpotrf(A, lower=1, clean=1)
     if info == 0:
         return L, False
@@ -178,30 +178,15 @@ def points_from_sqrt_rows(x: np.ndarray, L: np.ndarray) -> np.ndarray:
     return X
 
 
-def sqrt_rows(P: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-    """:func:`matrix_sqrt` of B symmetric matrices ``P`` (B, n, n) already symmetric: the
-    roots (B, n, n) and whether each needed the eigenvalue fallback (B,).  One LAPACK
-    ``dpotrf`` per matrix, called from a kernel (:mod:`navcore.core.lapack_kernels`) on the
-    Fortran copy scipy's wrapper would make, so each factor is the wrapper's: numpy's
-    stacked Cholesky rounds otherwise."""
-    P = np.ascontiguousarray(P, dtype=float)
-    n = P.shape[-1]
-    L = np.empty_like(P)
-    info = np.empty(len(P), dtype=np.int64)
-    _cholesky_rows(P, np.empty((n, n), order="F"), L, info)
-    fallback = info != 0
-    if fallback.any():
-        for b in np.flatnonzero(fallback).tolist():
-            L[b] = _eigen_sqrt(P[b])
-    return L, fallback
-
-
 def sigma_points_rows(x: np.ndarray, P: np.ndarray,
                       spread: float) -> Tuple[np.ndarray, np.ndarray]:
     """The sigma points (B, 2n + 1, n) of B filters from their states ``x`` (B, n) and
     covariances ``P`` (B, n, n), each as its :meth:`UnscentedKalmanFilter.sigma_points` draws
-    them (``P`` symmetrized where it is not symmetric, its root as :func:`sqrt_rows` takes
-    it, scaled by ``spread``), and which filters needed the eigenvalue fallback (B,)."""
+    them (``P`` symmetrized where it is not symmetric, its lower Cholesky factor by one LAPACK
+    ``dpotrf`` per matrix, called from a kernel (:mod:`navcore.core.lapack_kernels`) on the
+    Fortran copy scipy's wrapper would make, so each root is the one a filter alone gets:
+    numpy's stacked Cholesky rounds otherwise; scaled by ``spread``), and which filters needed
+    the eigenvalue fallback (B,)."""
     x = np.ascontiguousarray(x, dtype=float)
     P = np.ascontiguousarray(P, dtype=float)
     runs, n = x.shape
@@ -240,21 +225,6 @@ def _points_rows(x, P, spread, factor, X, info):
                 root = (factor[k, i] if i <= k else 0.0) * spread
                 X[b, 1 + i, k] = x[b, k] + root
                 X[b, 1 + n + i, k] = x[b, k] - root
-
-
-@kernel
-def _cholesky_rows(P, factor, L, info):
-    """The lower Cholesky factor of every ``P[b]`` into ``L[b]`` (upper triangle 0), LAPACK's
-    info into ``info[b]``; ``factor`` a Fortran-ordered (n, n) work matrix."""
-    n = P.shape[1]
-    for b in range(P.shape[0]):
-        for i in range(n):
-            for j in range(n):
-                factor[i, j] = P[b, i, j]
-        info[b] = potrf_lower(factor)
-        for i in range(n):
-            for j in range(n):
-                L[b, i, j] = factor[i, j] if j <= i else 0.0
 
 
 def predicted_moments_rows(Y: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, Q: np.ndarray,
