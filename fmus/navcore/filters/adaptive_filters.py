@@ -33,9 +33,11 @@ import numpy as np
 from . import adaptive_laws as laws
 from . import robust_laws
 from ..ins.error_model import N_STATES
-from .innovation_stats import chi2_gate, chi_square_per_observation, nis
-from .ins_gnss_kf import KfEngine, UpdateResult
-from .recovery import GuardedEngine, bounded_r, inflate_navigation
+from ..errors import InputError
+from .innovation_stats import (chi2_gate, chi_square_per_observation, dot_rows, nis, nis_rows,
+    trace_rows)
+from .ins_gnss_kf import KfEngine, UpdateResult, kalman_rows, predicted_rows
+from .recovery import GuardedEngine, bounded_r_rows, inflate_navigation
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
@@ -58,8 +60,61 @@ def masked_update(P_pred, z, R, keep):
     return K @ z[idx], 0.5 * (P + P.T)
 
 
+def _require_finite(*named):
+    """Raise the checked laws' InputError for the first (name, stacked array) with a NaN or
+    inf (an innovation's message shows the values, as :func:`array_checks.vector`'s)."""
+    for name, rows in named:
+        if not np.isfinite(rows).all():
+            if name == "innovation":
+                bad = rows[~np.isfinite(rows).all(axis=1)][0]
+                raise InputError(f"{name}: contains NaN or inf: {bad}")
+            raise InputError(f"{name}: contains NaN or inf")
+
+
+class RowUpdates:
+    """Mixin of an engine whose update is arithmetic over a leading run axis: the engines
+    of one class in a batch update in one call of :meth:`updates`, a single engine as a
+    batch of one (:meth:`update`), so both run the same code on the same floats.  A class
+    writes ``_update_rows(engines, z, p_prop, q_acc)`` (the arithmetic of every run from the
+    measurements and the two parts of the prediction; it changes no engine and raises the
+    error of a run that has one) and ``_take_update(outcome, b)`` (run b's own bookkeeping
+    with its row of the outcome: feedback, counters, diagnostics; its UpdateResult).  List
+    it before the engine's base class."""
+
+    def update(self, z):
+        """One update with the measurement ``z`` (:meth:`updates` of this engine alone)."""
+        result, = self.updates([self], np.asarray(z, dtype=float)[None], self.P[None],
+                               self.phi_acc[None], self.q_acc[None])
+        if isinstance(result, Exception):
+            raise result
+        return result
+
+    @classmethod
+    def updates(cls, engines, z, P, phi_acc, q_acc):
+        """The updates of ``engines`` (of this class, one measurement dimension) with the
+        measurements ``z`` (B, m) and their P, Phi_acc and Q_acc stacked (B, 15, 15).
+        Returns per engine its UpdateResult, or the exception its own update raised (an
+        engine whose arithmetic fails is left unchanged).  When any run's arithmetic
+        fails, every run updates alone, so each meets its own error."""
+        try:
+            outcome = cls._update_rows(engines, z, predicted_rows(P, phi_acc), q_acc)
+        except Exception as exc:
+            if len(engines) == 1:
+                return [exc]
+            return [type(engine).updates([engine], z[b:b + 1], P[b:b + 1], phi_acc[b:b + 1],
+                                         q_acc[b:b + 1])[0]
+                    for b, engine in enumerate(engines)]
+        results = []
+        for b, engine in enumerate(engines):
+            try:
+                results.append(engine._take_update(outcome, b))
+            except Exception as exc:          # the run's own error
+                results.append(exc)
+        return results
+
+
 # ------------------------------------------------------------------------------------------
-class SageHusaFadingEngine(GuardedEngine, KfEngine):
+class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
     """Simplified Sage-Husa R estimation + fading memory (paper 001, secs. 1.1-1.2).
 
     One update (``v = z``, closed loop; equations of paper 001)::
@@ -122,46 +177,63 @@ class SageHusaFadingEngine(GuardedEngine, KfEngine):
         self.R = self.R0.copy()
         self.sage_husa_index = 0
 
-    # -- pieces shared with IakfEngine ---------------------------------------------------------
-    def faded_prediction(self, v, p_prop, q_acc):
-        """(lambda, P_pred): the divergence test, fading factor and faded prediction of
-        paper 001 (eqs. 11, 12, 10)."""
-        m = self.m
-        lam = laws.fading_factor(v, q_acc[:m, :m], self.R, p_prop[:m, :m], self.reserve_gamma,
-                                 self.max_fading_factor)
-        P_pred = laws.fading_predict(p_prop, q_acc, lam)
-        return lam, P_pred
+    # -- the arithmetic of the runs' updates (RowUpdates), pieces shared with IakfEngine -------
+    @classmethod
+    def _update_rows(cls, engines, z, p_prop, q_acc):
+        """Paper 001 eqs. 9-12 of every run (the innovation is ``z``: closed loop)."""
+        return cls._adapted_rows(engines, z, p_prop, q_acc)
 
-    def update_and_estimate_r(self, P_pred, v):
-        """Kalman update with R_hat (paper 001 eqs. 4, 7, 8), then R_hat by paper 001 eq. 9;
-        applies feedback.
+    @staticmethod
+    def _adapted_rows(engines, v, p_prop, q_acc):
+        """The divergence test, fading factor and faded prediction (paper 001 eqs. 11, 12,
+        10), the Kalman update with R_hat (eqs. 4, 7, 8) and the next R_hat (eq. 9, its
+        guard and bound) of every run with the innovations ``v`` (B, m) -- compressed in
+        the IAKF, so the same v drives the state and the R estimate (paper 001, text under
+        eq. 14).  Changes no engine; raises the error of the first run that has one, as
+        the checked laws do."""
+        m = v.shape[1]
+        H = engines[0].H
+        R = np.array([engine.R for engine in engines])
+        _require_finite(("innovation", v), ("HQH", q_acc[:, :m, :m]), ("R", R),
+                        ("HPpredH_no_Q", p_prop[:, :m, :m]))
+        lam, refused = laws.fading_factor_rows(
+            dot_rows(v, v), q_acc[:, :m, :m], R, p_prop[:, :m, :m],
+            np.array([engine.reserve_gamma for engine in engines]),
+            np.array([math.inf if engine.max_fading_factor is None else engine.max_fading_factor
+                      for engine in engines]))
+        if refused.any():
+            laws.raise_no_fading_factor(trace_rows(p_prop[:, :m, :m])[refused][0])
+        if not np.isfinite(lam).all():
+            raise InputError(f"lam (fading factor) must be finite and > 0, got "
+                             f"{lam[~np.isfinite(lam)][0]}")
+        _require_finite(("P_propagated", p_prop), ("GQG", q_acc))
+        dx, P, _, S, K = kalman_rows(laws.fading_predict_rows(p_prop, q_acc, lam), v, R, H)
+        _require_finite(("K", K), ("P_post", P))
+        weights = np.array([laws.sage_husa_weight(engine.sage_husa_index + 1,
+                                                  engine.forgetting_factor)
+                            for engine in engines])
+        R_new = laws.sage_husa_r_rows(R, v, H, K, P, weights)
+        _require_finite(("R", R_new))
+        R_new = laws.guard_positive_definite_rows(
+            R_new, np.array([engine.r_min for engine in engines]))
+        bounded = [b for b, engine in enumerate(engines) if engine.r_max is not None]
+        if bounded:                     # recovery guard: bounded adaptive scale
+            R_new[bounded] = bounded_r_rows(
+                R_new[bounded], np.array([engines[b].r_max for b in bounded]))
+        return dict(v=v, lam=lam, dx=dx, P=P, S=S, R_used=R, R=R_new, nis=nis_rows(v, S))
 
-        Returns (S, R_used).  ``v`` is the innovation to use -- compressed in the IAKF, so
-        the same v drives the state and the R estimate (paper 001, text under eq. 14).
-        """
-        R_used = self.R
-        dx, P, _, S, K = self.kalman_update(P_pred, v, R_used)
+    def _take_update(self, outcome, b):
+        """Run b's Sage-Husa index, R_hat and feedback from ``outcome``, and its result."""
         self.sage_husa_index += 1
-        self.R = laws.sage_husa_r_update(R_used, v, self.H, K, P, self.sage_husa_index,
-                                         self.forgetting_factor, self.r_min)
-        if self.r_max is not None:      # recovery guard: bounded adaptive scale
-            self.R = bounded_r(self.R, self.r_max)
-        self.apply(dx, P)
-        return S, R_used
+        self.R = outcome["R"][b]
+        self.apply(outcome["dx"][b], outcome["P"][b])
+        return UpdateResult(outcome["v"][b], outcome["S"][b], float(outcome["nis"][b]),
+                            r_scale=float(np.trace(outcome["R_used"][b]) / np.trace(self.R0)),
+                            fading_factor=float(outcome["lam"][b]))
 
     def r_sigma_estimate(self):
         """Current R_hat as 1-sigma per measurement axis (pos n/e/d [m], vel n/e/d [m/s])."""
         return np.sqrt(np.diag(self.R))
-
-    def update(self, z):
-        """Sage-Husa + fading update (paper 001 eqs. 9-12); see the class docstring."""
-        v = np.asarray(z, dtype=float)
-        p_prop, q_acc = self.predicted_parts()
-        lam, P_pred = self.faded_prediction(v, p_prop, q_acc)
-        S, R_used = self.update_and_estimate_r(P_pred, v)
-        return UpdateResult(v, S, nis(v, S), r_scale=float(np.trace(R_used) / np.trace(self.R0)),
-                            fading_factor=lam)
-
 
 # ------------------------------------------------------------------------------------------
 class IakfEngine(SageHusaFadingEngine):
@@ -211,30 +283,48 @@ class IakfEngine(SageHusaFadingEngine):
         self.compression = 1.0
         self.tau = 0.0
 
-    def update(self, z):
-        """IAKF update (paper 001 eqs. 9-14); see the class docstring for the order."""
-        v = np.asarray(z, dtype=float)
-        m = self.m
-        p_prop, q_acc = self.predicted_parts()
+    @classmethod
+    def _update_rows(cls, engines, z, p_prop, q_acc):
+        """IAKF update (paper 001 eqs. 9-14) of every run; see the class docstring for the
+        order."""
+        v = z
+        m = v.shape[1]
         P_std = p_prop + q_acc                                   # paper 001 eq. 6
-        G = P_std[:m, :m] + self.R
-        K_std = np.linalg.solve(G, P_std[:, :m].T).T             # paper 001 eq. 7, for eq. 14
-        Y, tau, _ = laws.compression_factor(v, G, K_std, self.outlier_alpha)
-        self.guard.open_epoch()
-        if self.guard.due(np.full(m, Y < 1.0)).any():   # recovery guard: taken uncompressed,
-            self.guard.n_reacquired += 1                   # the fading factor inflates P
-            Y = 1.0
-        v_used = v if Y == 1.0 else Y * v                        # paper 001 eq. 13
-        lam, P_pred = self.faded_prediction(v_used, p_prop, q_acc)
-        S, R_used = self.update_and_estimate_r(P_pred, v_used)
-        self.guard.close_epoch(Y == 1.0)
-        self.compression = Y
-        self.tau = tau
-        # NIS of the raw innovation against the unfaded prediction: the statistic the
-        # outlier test used (what a user compares with the chi2(m) gate)
-        return UpdateResult(v, G, tau, r_scale=float(np.trace(R_used) / np.trace(self.R0)),
-                            fading_factor=lam, outlier=Y < 1.0)
+        G = P_std[:, :m, :m] + np.array([engine.R for engine in engines])
+        # paper 001 eq. 7, the gain eq. 14's threshold D would need: only checked here, as
+        # compression_factor checks it
+        K_std = np.linalg.solve(G, P_std[:, :, :m].swapaxes(-1, -2))
+        _require_finite(("innovation", v), ("G", G), ("K", K_std))
+        try:
+            tau = laws.compression_statistic_rows(v, G)
+        except np.linalg.LinAlgError:
+            raise InputError("G: innovation covariance 'S' is not positive definite") from None
+        Y = laws.compression_rows(tau, np.array([chi2_gate(engine.outlier_alpha, m)
+                                                 for engine in engines]))
+        # recovery guard: taken uncompressed, the fading factor inflates P
+        reacquired = np.array([engine.guard.due_at_opening(np.full(m, y < 1.0)).any()
+                               for engine, y in zip(engines, Y.tolist())])
+        Y = np.where(reacquired, 1.0, Y)
+        outcome = cls._adapted_rows(engines, Y[:, None] * v, p_prop, q_acc)  # eq. 13
+        outcome.update(innovation=v, G=G, tau=tau, Y=Y, reacquired=reacquired)
+        return outcome
 
+    def _take_update(self, outcome, b):
+        """Run b's guard, Sage-Husa update and feedback from ``outcome``, and its result:
+        the NIS of the raw innovation against the unfaded prediction, the statistic the
+        outlier test used (what a user compares with the chi2(m) gate)."""
+        guard = self.guard
+        guard.open_epoch()
+        if outcome["reacquired"][b]:
+            guard.n_reacquired += 1
+        adapted = super()._take_update(outcome, b)
+        Y = float(outcome["Y"][b])
+        guard.close_epoch(Y == 1.0)
+        self.compression = Y
+        self.tau = float(outcome["tau"][b])
+        return UpdateResult(outcome["innovation"][b], outcome["G"][b], self.tau,
+                            r_scale=adapted.r_scale, fading_factor=adapted.fading_factor,
+                            outlier=Y < 1.0)
 
 # ------------------------------------------------------------------------------------------
 #: NewtonRobustKfEngine: a replacement whose error variance reaches this multiple of R_ii (1000
