@@ -60,12 +60,13 @@ def masked_update(P_pred, z, R, keep):
     return K @ z[idx], 0.5 * (P + P.T)
 
 
-def _require_finite(*named):
+def _require_finite(*named, show_values=True):
     """Raise the checked laws' InputError for the first (name, stacked array) with a NaN or
-    inf (an innovation's message shows the values, as :func:`array_checks.vector`'s)."""
+    inf (an innovation's message shows the values, as :func:`array_checks.vector`'s, unless
+    not ``show_values``)."""
     for name, rows in named:
         if not np.isfinite(rows).all():
-            if name == "innovation":
+            if name == "innovation" and show_values:
                 bad = rows[~np.isfinite(rows).all(axis=1)][0]
                 raise InputError(f"{name}: contains NaN or inf: {bad}")
             raise InputError(f"{name}: contains NaN or inf")
@@ -335,7 +336,7 @@ UNUSABLE_VARIANCE_FACTOR = 1e6
 REPLACEMENT_VARIANCES = ("propagated", "nominal")
 
 
-class NewtonRobustKfEngine(GuardedEngine, KfEngine):
+class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
     """Paper 004: per-observation chi-square test + Newton extrapolation of failed observations.
 
     Each update:
@@ -419,17 +420,25 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
         self.time = time
 
     def _next_epoch(self):
-        if self.last_update_time is None:
-            epoch = 0
-        else:
-            gap = self.time - self.last_update_time
-            if self.update_interval is None:
-                self.update_interval = gap
-            steps = round(gap / self.update_interval) if self.update_interval > 0 else 1
-            epoch = self.history_epoch + max(1, steps)
+        epoch, self.update_interval = self._epoch_now()
         self.last_update_time = self.time
         self.history_epoch = epoch
         return epoch
+
+    def _epoch_now(self):
+        """(epoch, update interval) of an update now, as :meth:`_next_epoch` sets them."""
+        if self.last_update_time is None:
+            return 0, self.update_interval
+        gap = self.time - self.last_update_time
+        interval = gap if self.update_interval is None else self.update_interval
+        steps = round(gap / interval) if interval > 0 else 1
+        return self.history_epoch + max(1, steps), interval
+
+    def _history_now(self):
+        """Whether the history holds samples an update now extrapolates (the epoch now
+        follows its last one: a missed fix leaves the samples unequally spaced)."""
+        last = self.history.last_epoch
+        return len(self.history) > 0 and (last is None or self._epoch_now()[0] == last + 1)
 
     def _extrapolated_variance(self):
         """Error variance of the Newton extrapolation, per component (m,).
@@ -447,55 +456,103 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
         newest_first = variances[::-1][:p + 1]
         return (weights ** 2) @ newest_first
 
-    def update(self, z):
-        """Chi-square test + Newton replacement (paper 004 secs. 2.1-2.2)."""
-        z = np.asarray(z, dtype=float)
-        P_pred, S = self.predicted_innovation()
-        chi2 = chi_square_per_observation(z, S)
-        faults = chi2 > self.chi2_threshold
-        self.guard.open_epoch()
-        due = self.guard.due(faults)
+    @classmethod
+    def _update_rows(cls, engines, z, p_prop, q_acc):
+        """Chi-square test + Newton replacement (paper 004 secs. 2.1-2.2) of every run: the
+        test of all runs at once, the replacement of each run with a failed observation by
+        its own history (:meth:`_replaced`), the Kalman updates of all runs but those that
+        leave a component out (:func:`masked_update`, each alone) in one call."""
+        m = z.shape[1]
+        P_pred = p_prop + q_acc
+        R = np.array([engine.R0 for engine in engines])
+        S = P_pred[:, :m, :m] + R
+        _require_finite(("innovation", z), ("S", S), show_values=False)
+        s = np.diagonal(S, axis1=1, axis2=2)
+        if np.any(s <= 0.0):
+            raise InputError(f"S: diagonal must be > 0, got {s[(s <= 0.0).any(axis=1)][0]}")
+        chi2 = z * z / s                        # chi_square_per_observation of every run
+        faults = chi2 > np.array([engine.chi2_threshold for engine in engines])[:, None]
+        outcome = dict(z=z, P_pred=P_pred, S=S, chi2=chi2, faults=faults, R=R, z_used=z,
+                       variance_used=np.diagonal(R, axis1=1, axis2=2).copy(),
+                       drop=np.zeros_like(faults), reacquired=np.zeros(len(engines), bool))
+        faulty = np.flatnonzero(faults.any(axis=1)).tolist()
+        if faulty:
+            outcome["z_used"] = z.copy()
+            for b in faulty:
+                engines[b]._replaced(outcome, b)
+        P_pred, z_used, R, drop = (outcome[name] for name in ("P_pred", "z_used", "R", "drop"))
+        dx = np.empty((len(engines), N_STATES))
+        P = np.empty_like(P_pred)
+        whole = ~drop.any(axis=1)
+        if whole.all():
+            dx, P, _, _, _ = kalman_rows(P_pred, z_used, R, engines[0].H)
+        else:
+            if whole.any():
+                dx[whole], P[whole], _, _, _ = kalman_rows(P_pred[whole], z_used[whole],
+                                                           R[whole], engines[0].H)
+            for b in np.flatnonzero(~whole).tolist():
+                dx[b], P[b] = masked_update(P_pred[b], z_used[b], R[b], ~drop[b])
+        outcome.update(dx=dx, P=P, nis=nis_rows(z, outcome["S"]),
+                       shift=(engines[0].H @ dx[:, :, None])[:, :, 0])
+        return outcome
+
+    def _replaced(self, outcome, b):
+        """Run b's law where an observation failed the test, in its rows of ``outcome``:
+        the recovery guard's re-acquisition (an inflated prediction, the test again), then
+        the replacement of each failed observation by the Newton extrapolation of the
+        history, or its omission."""
+        m = self.m
+        z, faults = outcome["z"][b], outcome["faults"][b]
+        due = self.guard.due_at_opening(faults)
         if due.any():                 # recovery guard: re-acquire with an inflated prediction
-            lam = self.guard.reacquisition(z, P_pred, self.R0, due)
-            P_pred = inflate_navigation(P_pred, lam)
-            S = P_pred[:self.m, :self.m] + self.R0
+            P_pred = inflate_navigation(outcome["P_pred"][b], self.guard.reacquisition_factor(
+                z, outcome["P_pred"][b], self.R0, due))
+            S = P_pred[:m, :m] + self.R0
             chi2 = chi_square_per_observation(z, S)
             faults = (chi2 > self.chi2_threshold) & ~due
+            outcome["P_pred"][b], outcome["S"][b], outcome["chi2"][b] = P_pred, S, chi2
+            outcome["faults"][b], outcome["reacquired"][b] = faults, True
+        if not faults.any():
+            return
+        r0 = np.diag(self.R0)
+        cap = UNUSABLE_VARIANCE_FACTOR * r0
+        if self._history_now():
+            outcome["z_used"][b] = np.where(faults, self.history.predict_next(self.newton_order),
+                                            z)
+            variance_used = np.where(faults, np.minimum(self._extrapolated_variance(), cap), r0)
+        else:
+            variance_used = np.where(faults, cap, r0)  # nothing to extrapolate from
+        outcome["variance_used"][b] = variance_used
+        outcome["drop"][b] = faults & (variance_used >= cap)
+        if self.replacement_variance == "propagated":
+            outcome["R"][b] = np.diag(variance_used)
+
+    def _take_update(self, outcome, b):
+        """Run b's guard, history, feedback and diagnostics from ``outcome``, and its
+        result."""
+        guard = self.guard
+        guard.open_epoch()
+        if outcome["reacquired"][b]:
+            guard.n_reacquired += 1
         epoch = self._next_epoch()
         if self.history.last_epoch is not None and epoch != self.history.last_epoch + 1:
             self.history.clear()  # a missed fix: the samples are no longer equally spaced
             self.sample_variances.clear()
-        r0 = np.diag(self.R0)
-        cap = UNUSABLE_VARIANCE_FACTOR * r0
-        z_used = z
-        variance_used = r0.copy()
-        if faults.any():
-            if len(self.history):
-                z_used = np.where(faults, self.history.predict_next(self.newton_order), z)
-                variance_used = np.where(faults, np.minimum(self._extrapolated_variance(), cap),
-                                         r0)
-            else:
-                variance_used = np.where(faults, cap, r0)  # nothing to extrapolate from
-        drop = faults & (variance_used >= cap)
-        R = self.R0
-        if self.replacement_variance == "propagated" and faults.any():
-            R = np.diag(variance_used)
-        if drop.any():
-            dx, P = masked_update(P_pred, z_used, R, ~drop)
-        else:
-            dx, P, _, _, _ = self.kalman_update(P_pred, z_used, R)
-        self.history.append(z_used, epoch)
-        self.sample_variances.append(variance_used)
+        faults = outcome["faults"][b]
+        self.history.append(outcome["z_used"][b], epoch)
+        self.sample_variances.append(outcome["variance_used"][b])
         while len(self.sample_variances) > len(self.history):
             self.sample_variances.popleft()
-        self.apply(dx, P)
-        self.guard.close_epoch(~faults)
-        self.history.apply_correction(self.H @ dx)
+        self.apply(outcome["dx"][b], outcome["P"][b])
+        guard.close_epoch(~faults)
+        self.history.apply_correction(outcome["shift"][b])
+        chi2 = outcome["chi2"][b]
         self.chi2_values = chi2
         self.chi2_max = float(chi2.max())
         self.rejected = faults
         self.n_rejected = int(faults.sum())
-        return UpdateResult(z, S, nis(z, S), outlier=bool(faults.any()))
+        return UpdateResult(outcome["z"][b], outcome["S"][b], float(outcome["nis"][b]),
+                            outlier=bool(faults.any()))
 
 
 # ------------------------------------------------------------------------------------------

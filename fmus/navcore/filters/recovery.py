@@ -209,8 +209,13 @@ class RecoveryGuard:
 
     def reacquisition(self, v, HPH, R, due):
         """The inflation factor for the components ``due`` (counted as a re-acquisition)."""
-        idx = np.flatnonzero(due)
         self.n_reacquired += 1
+        return self.reacquisition_factor(v, HPH, R, due)
+
+    @staticmethod
+    def reacquisition_factor(v, HPH, R, due):
+        """:meth:`reacquisition`'s factor, not counted."""
+        idx = np.flatnonzero(due)
         return inflation_factor(v[idx], HPH[np.ix_(idx, idx)], R[np.ix_(idx, idx)], idx.size)
 
 
