@@ -302,9 +302,10 @@ class IakfEngine(SageHusaFadingEngine):
             raise InputError("G: innovation covariance 'S' is not positive definite") from None
         Y = laws.compression_rows(tau, np.array([chi2_gate(engine.outlier_alpha, m)
                                                  for engine in engines]))
-        # recovery guard: taken uncompressed, the fading factor inflates P
-        reacquired = np.array([engine.guard.due_at_opening(np.full(m, y < 1.0)).any()
-                               for engine, y in zip(engines, Y.tolist())])
+        # recovery guard: taken uncompressed, the fading factor inflates P (a run whose
+        # innovation is not compressed flags nothing)
+        reacquired = np.array([y < 1.0 and engine.guard.due_at_opening(np.full(m, True)).any()
+                               for engine, y in zip(engines, Y.tolist())], dtype=bool)
         Y = np.where(reacquired, 1.0, Y)
         outcome = cls._adapted_rows(engines, Y[:, None] * v, p_prop, q_acc)  # eq. 13
         outcome.update(innovation=v, G=G, tau=tau, Y=Y, reacquired=reacquired)
