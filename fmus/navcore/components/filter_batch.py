@@ -14,11 +14,13 @@ share their trajectory, so their time tags agree):
 * the solution outputs (position, velocity, attitude from the rows, biases, the sigmas of
   the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`,
   after the runs' new GNSS epochs;
-* the arithmetic of the Kf updates of the runs that apply a fix at the same step
-  (:func:`~navcore.filters.ins_gnss_kf.predicted_rows` and :func:`~navcore.filters.
-  ins_gnss_kf.kalman_rows`, which each engine's own ``update`` calls with one run), each
-  run's own code running before it (the epoch, the measurement) and after it (the feedback,
-  the latency history's restart, the outputs and the NIS monitor).
+* the arithmetic of the updates of the runs that apply a fix at the same step: a Kf's by
+  :func:`~navcore.filters.ins_gnss_kf.predicted_rows` and :func:`~navcore.filters.
+  ins_gnss_kf.kalman_rows`, an adaptive or robust law's by its engines'
+  :meth:`~navcore.filters.adaptive_filters.RowUpdates.updates` (the functions each engine's
+  own ``update`` calls with one run), each run's own code running before it (the epoch,
+  the measurement) and after it (the feedback, the law's counters and history, the latency
+  history's restart, the outputs and the NIS monitor).
 
 Everything else is the run's own component, called for that run only: a new GNSS epoch
 (its fix held or rolled back; applied, for an engine that updates otherwise), a checkpoint

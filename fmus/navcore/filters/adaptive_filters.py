@@ -18,6 +18,10 @@ the statistics those of :mod:`navcore.filters.innovation_stats`:
   "equivalent weight" method paper 004 lists in its section 1.2; not a paper's own filter).
 * :class:`InsOnlyEngine` -- no measurement feedback at all (paper 004's "INS only" curves).
 
+The adaptive and robust engines update through :class:`RowUpdates`: the arithmetic of their
+law over a leading run axis, so the runs of a batch (:mod:`navcore.components.filter_batch`)
+update in one call and a single engine is a batch of one.
+
 In closed loop the predicted error state is zero, so the innovation is ``v = z`` (paper 001
 eq. 5 with x_{k,k-1} = 0).  All engines return an :class:`UpdateResult` (NIS, r_scale,
 fading factor, outlier flag) and keep their own extra diagnostics as attributes, read by the
@@ -236,6 +240,7 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
         """Current R_hat as 1-sigma per measurement axis (pos n/e/d [m], vel n/e/d [m/s])."""
         return np.sqrt(np.diag(self.R))
 
+
 # ------------------------------------------------------------------------------------------
 class IakfEngine(SageHusaFadingEngine):
     """Paper 001's improved adaptive Kalman filter: Sage-Husa + fading + outlier compression.
@@ -327,6 +332,7 @@ class IakfEngine(SageHusaFadingEngine):
         return UpdateResult(outcome["innovation"][b], outcome["G"][b], self.tau,
                             r_scale=adapted.r_scale, fading_factor=adapted.fading_factor,
                             outlier=Y < 1.0)
+
 
 # ------------------------------------------------------------------------------------------
 #: NewtonRobustKfEngine: a replacement whose error variance reaches this multiple of R_ii (1000
