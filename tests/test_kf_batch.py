@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from navcore.components.kf_components import Iakf, Kf, NewtonRobustKf
+from navcore.components.kf_components import Iakf, Kf, NewtonRobustKf, SageHusaFading
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.core.batch import BatchInputs
 from navcore.filters.ins_gnss_kf import (KfConfig, KfEngine, add_noise_rows, compensate_rows,
@@ -161,8 +161,8 @@ class _OwnMechanizationKf(Kf):
         return super().make_engine(config, nav)
 
 
-@pytest.mark.parametrize("component_class", [Kf, Iakf, NewtonRobustKf, _OwnMechanizationKf,
-                                             Ukf, CtfaUkf, ImmUkf])
+@pytest.mark.parametrize("component_class", [Kf, SageHusaFading, Iakf, NewtonRobustKf,
+                                             _OwnMechanizationKf, Ukf, CtfaUkf, ImmUkf])
 def test_a_batch_of_filters_steps_each_run_as_it_steps_alone(component_class):
     per_run = _recorded_inputs(3)
     _disturb(per_run)

@@ -14,11 +14,13 @@ share their trajectory, so their time tags agree):
 * the solution outputs (position, velocity, attitude from the rows, biases, the sigmas of
   the covariance diagonal), by the same functions as :meth:`InsGnssFilter._write_solution`,
   after the runs' new GNSS epochs;
-* the arithmetic of the Kf updates of the runs that apply a fix at the same step
-  (:func:`~navcore.filters.ins_gnss_kf.predicted_rows` and :func:`~navcore.filters.
-  ins_gnss_kf.kalman_rows`, which each engine's own ``update`` calls with one run), each
-  run's own code running before it (the epoch, the measurement) and after it (the feedback,
-  the latency history's restart, the outputs and the NIS monitor).
+* the arithmetic of the updates of the runs that apply a fix at the same step: a Kf's by
+  :func:`~navcore.filters.ins_gnss_kf.predicted_rows` and :func:`~navcore.filters.
+  ins_gnss_kf.kalman_rows`, an adaptive or robust law's by its engines'
+  :meth:`~navcore.filters.adaptive_filters.RowUpdates.updates` (the functions each engine's
+  own ``update`` calls with one run), each run's own code running before it (the epoch,
+  the measurement) and after it (the feedback, the law's counters and history, the latency
+  history's restart, the outputs and the NIS monitor).
 
 Everything else is the run's own component, called for that run only: a new GNSS epoch
 (its fix held or rolled back; applied, for an engine that updates otherwise), a checkpoint
@@ -40,6 +42,7 @@ from ..core import signals
 from ..core.batch import ComponentBatch, open_bounds, row_accepted
 from ..core.kernels import kernel
 from ..core.timing import same_time, time_tolerance
+from ..filters.adaptive_filters import RowUpdates
 from ..filters.ins_gnss_kf import KfEngine, kalman_rows, predicted_rows, propagate_rows
 from ..filters.latency import checkpoint_due, checkpoint_spacing
 from ..ins.error_model import transition_template
@@ -62,7 +65,8 @@ class InsGnssFilterBatch(ComponentBatch):
         first = self.members[alive[0]] if alive else None
         # an engine that propagates otherwise (a subclass's own law) runs its own code
         self._native = first is not None and self._propagates_like_kf(first)
-        self._together = self._native and self._updates_like_kf(first)
+        self._together = self._native and (self._updates_like_kf(first)
+                                           or self._updates_in_rows(first))
         self._taus = len({(m.engine.config.gyro_bias_tau, m.engine.config.accel_bias_tau)
                           for b, m in enumerate(self.members) if b in alive}) == 1
         self.rows = np.zeros((runs, 24))
@@ -129,6 +133,15 @@ class InsGnssFilterBatch(ComponentBatch):
         return (type(member)._apply is self.shell._apply
                 and all(getattr(engine, name) is getattr(KfEngine, name)
                         for name in ("update", "predicted_parts", "kalman_update")))
+
+    def _updates_in_rows(self, member) -> bool:
+        """Whether the batch may compute the run's updates with the other runs' by one call
+        of its engine's :meth:`~navcore.filters.adaptive_filters.RowUpdates.updates`: where
+        its shell applies a fix as :meth:`InsGnssFilter._apply` and its engine updates as
+        :meth:`RowUpdates.update` (the adaptive and robust laws)."""
+        engine = type(member.engine)
+        return (type(member)._apply is self.shell._apply and issubclass(engine, RowUpdates)
+                and engine.update is RowUpdates.update)
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -300,6 +313,9 @@ class InsGnssFilterBatch(ComponentBatch):
         rows = [b for b, _ in measured]
         members = [self.members[b] for b in rows]
         together = None
+        if len({len(z) for _, z in measured}) == 1 and isinstance(members[0].engine, RowUpdates):
+            self._update_in_rows(measured, members)
+            return
         if len({len(z) for _, z in measured}) == 1:
             stack = self.stack
             try:
@@ -318,6 +334,26 @@ class InsGnssFilterBatch(ComponentBatch):
                 else:
                     dx, P, v, S, _ = (part[i] for part in together)
                     result = member.engine.updated(dx, P, v, S)
+                member._applied(z, result)
+            except Exception as exc:              # the run's own error
+                self.fail(b, exc)
+                continue
+            self._adopt(b)
+
+    def _update_in_rows(self, measured: List[tuple], members: list) -> None:
+        """:meth:`_update_together` of runs whose engines update by their laws' rows: one
+        call of the engines' :meth:`~navcore.filters.adaptive_filters.RowUpdates.updates`
+        on the batch's stacks, which returns each run's result or its own error, then each
+        run's own :meth:`InsGnssFilter._applied`."""
+        rows = [b for b, _ in measured]
+        stack = self.stack
+        results = type(members[0].engine).updates(
+            [member.engine for member in members], np.array([z for _, z in measured]),
+            stack["P"][rows], stack["phi_acc"][rows], stack["q_acc"][rows])
+        for (b, z), member, result in zip(measured, members, results):
+            try:
+                if isinstance(result, Exception):
+                    raise result
                 member._applied(z, result)
             except Exception as exc:              # the run's own error
                 self.fail(b, exc)

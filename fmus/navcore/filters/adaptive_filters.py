@@ -18,6 +18,10 @@ the statistics those of :mod:`navcore.filters.innovation_stats`:
   "equivalent weight" method paper 004 lists in its section 1.2; not a paper's own filter).
 * :class:`InsOnlyEngine` -- no measurement feedback at all (paper 004's "INS only" curves).
 
+The adaptive and robust engines update through :class:`RowUpdates`: the arithmetic of their
+law over a leading run axis, so the runs of a batch (:mod:`navcore.components.filter_batch`)
+update in one call and a single engine is a batch of one.
+
 In closed loop the predicted error state is zero, so the innovation is ``v = z`` (paper 001
 eq. 5 with x_{k,k-1} = 0).  All engines return an :class:`UpdateResult` (NIS, r_scale,
 fading factor, outlier flag) and keep their own extra diagnostics as attributes, read by the
@@ -33,9 +37,11 @@ import numpy as np
 from . import adaptive_laws as laws
 from . import robust_laws
 from ..ins.error_model import N_STATES
-from .innovation_stats import chi2_gate, chi_square_per_observation, nis
-from .ins_gnss_kf import KfEngine, UpdateResult
-from .recovery import GuardedEngine, bounded_r, inflate_navigation
+from ..errors import InputError
+from .innovation_stats import (chi2_gate, chi_square_per_observation, dot_rows, nis, nis_rows,
+    trace_rows)
+from .ins_gnss_kf import KfEngine, UpdateResult, kalman_rows, predicted_rows
+from .recovery import GuardedEngine, bounded_r_rows, inflate_navigation
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
@@ -58,8 +64,62 @@ def masked_update(P_pred, z, R, keep):
     return K @ z[idx], 0.5 * (P + P.T)
 
 
+def _require_finite(*named, show_values=True):
+    """Raise the checked laws' InputError for the first (name, stacked array) with a NaN or
+    inf (an innovation's message shows the values, as :func:`array_checks.vector`'s, unless
+    not ``show_values``)."""
+    for name, rows in named:
+        if not np.isfinite(rows).all():
+            if name == "innovation" and show_values:
+                bad = rows[~np.isfinite(rows).all(axis=1)][0]
+                raise InputError(f"{name}: contains NaN or inf: {bad}")
+            raise InputError(f"{name}: contains NaN or inf")
+
+
+class RowUpdates:
+    """Mixin of an engine whose update is arithmetic over a leading run axis: the engines
+    of one class in a batch update in one call of :meth:`updates`, a single engine as a
+    batch of one (:meth:`update`), so both run the same code on the same floats.  A class
+    writes ``_update_rows(engines, z, p_prop, q_acc)`` (the arithmetic of every run from the
+    measurements and the two parts of the prediction; it changes no engine and raises the
+    error of a run that has one) and ``_take_update(outcome, b)`` (run b's own bookkeeping
+    with its row of the outcome: feedback, counters, diagnostics; its UpdateResult).  List
+    it before the engine's base class."""
+
+    def update(self, z):
+        """One update with the measurement ``z`` (:meth:`updates` of this engine alone)."""
+        result, = self.updates([self], np.asarray(z, dtype=float)[None], self.P[None],
+                               self.phi_acc[None], self.q_acc[None])
+        if isinstance(result, Exception):
+            raise result
+        return result
+
+    @classmethod
+    def updates(cls, engines, z, P, phi_acc, q_acc):
+        """The updates of ``engines`` (of this class, one measurement dimension) with the
+        measurements ``z`` (B, m) and their P, Phi_acc and Q_acc stacked (B, 15, 15).
+        Returns per engine its UpdateResult, or the exception its own update raised (an
+        engine whose arithmetic fails is left unchanged).  When any run's arithmetic
+        fails, every run updates alone, so each meets its own error."""
+        try:
+            outcome = cls._update_rows(engines, z, predicted_rows(P, phi_acc), q_acc)
+        except Exception as exc:
+            if len(engines) == 1:
+                return [exc]
+            return [type(engine).updates([engine], z[b:b + 1], P[b:b + 1], phi_acc[b:b + 1],
+                                         q_acc[b:b + 1])[0]
+                    for b, engine in enumerate(engines)]
+        results = []
+        for b, engine in enumerate(engines):
+            try:
+                results.append(engine._take_update(outcome, b))
+            except Exception as exc:          # the run's own error
+                results.append(exc)
+        return results
+
+
 # ------------------------------------------------------------------------------------------
-class SageHusaFadingEngine(GuardedEngine, KfEngine):
+class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
     """Simplified Sage-Husa R estimation + fading memory (paper 001, secs. 1.1-1.2).
 
     One update (``v = z``, closed loop; equations of paper 001)::
@@ -122,45 +182,63 @@ class SageHusaFadingEngine(GuardedEngine, KfEngine):
         self.R = self.R0.copy()
         self.sage_husa_index = 0
 
-    # -- pieces shared with IakfEngine ---------------------------------------------------------
-    def faded_prediction(self, v, p_prop, q_acc):
-        """(lambda, P_pred): the divergence test, fading factor and faded prediction of
-        paper 001 (eqs. 11, 12, 10)."""
-        m = self.m
-        lam = laws.fading_factor(v, q_acc[:m, :m], self.R, p_prop[:m, :m], self.reserve_gamma,
-                                 self.max_fading_factor)
-        P_pred = laws.fading_predict(p_prop, q_acc, lam)
-        return lam, P_pred
+    # -- the arithmetic of the runs' updates (RowUpdates), pieces shared with IakfEngine -------
+    @classmethod
+    def _update_rows(cls, engines, z, p_prop, q_acc):
+        """Paper 001 eqs. 9-12 of every run (the innovation is ``z``: closed loop)."""
+        return cls._adapted_rows(engines, z, p_prop, q_acc)
 
-    def update_and_estimate_r(self, P_pred, v):
-        """Kalman update with R_hat (paper 001 eqs. 4, 7, 8), then R_hat by paper 001 eq. 9;
-        applies feedback.
+    @staticmethod
+    def _adapted_rows(engines, v, p_prop, q_acc):
+        """The divergence test, fading factor and faded prediction (paper 001 eqs. 11, 12,
+        10), the Kalman update with R_hat (eqs. 4, 7, 8) and the next R_hat (eq. 9, its
+        guard and bound) of every run with the innovations ``v`` (B, m) -- compressed in
+        the IAKF, so the same v drives the state and the R estimate (paper 001, text under
+        eq. 14).  Changes no engine; raises the error of the first run that has one, as
+        the checked laws do."""
+        m = v.shape[1]
+        H = engines[0].H
+        R = np.array([engine.R for engine in engines])
+        _require_finite(("innovation", v), ("HQH", q_acc[:, :m, :m]), ("R", R),
+                        ("HPpredH_no_Q", p_prop[:, :m, :m]))
+        lam, refused = laws.fading_factor_rows(
+            dot_rows(v, v), q_acc[:, :m, :m], R, p_prop[:, :m, :m],
+            np.array([engine.reserve_gamma for engine in engines]),
+            np.array([math.inf if engine.max_fading_factor is None else engine.max_fading_factor
+                      for engine in engines]))
+        if refused.any():
+            laws.raise_no_fading_factor(trace_rows(p_prop[:, :m, :m])[refused][0])
+        if not np.isfinite(lam).all():
+            raise InputError(f"lam (fading factor) must be finite and > 0, got "
+                             f"{lam[~np.isfinite(lam)][0]}")
+        _require_finite(("P_propagated", p_prop), ("GQG", q_acc))
+        dx, P, _, S, K = kalman_rows(laws.fading_predict_rows(p_prop, q_acc, lam), v, R, H)
+        _require_finite(("K", K), ("P_post", P))
+        weights = np.array([laws.sage_husa_weight(engine.sage_husa_index + 1,
+                                                  engine.forgetting_factor)
+                            for engine in engines])
+        R_new = laws.sage_husa_r_rows(R, v, H, K, P, weights)
+        _require_finite(("R", R_new))
+        R_new = laws.guard_positive_definite_rows(
+            R_new, np.array([engine.r_min for engine in engines]))
+        bounded = [b for b, engine in enumerate(engines) if engine.r_max is not None]
+        if bounded:                     # recovery guard: bounded adaptive scale
+            R_new[bounded] = bounded_r_rows(
+                R_new[bounded], np.array([engines[b].r_max for b in bounded]))
+        return dict(v=v, lam=lam, dx=dx, P=P, S=S, R_used=R, R=R_new, nis=nis_rows(v, S))
 
-        Returns (S, R_used).  ``v`` is the innovation to use -- compressed in the IAKF, so
-        the same v drives the state and the R estimate (paper 001, text under eq. 14).
-        """
-        R_used = self.R
-        dx, P, _, S, K = self.kalman_update(P_pred, v, R_used)
+    def _take_update(self, outcome, b):
+        """Run b's Sage-Husa index, R_hat and feedback from ``outcome``, and its result."""
         self.sage_husa_index += 1
-        self.R = laws.sage_husa_r_update(R_used, v, self.H, K, P, self.sage_husa_index,
-                                         self.forgetting_factor, self.r_min)
-        if self.r_max is not None:      # recovery guard: bounded adaptive scale
-            self.R = bounded_r(self.R, self.r_max)
-        self.apply(dx, P)
-        return S, R_used
+        self.R = outcome["R"][b]
+        self.apply(outcome["dx"][b], outcome["P"][b])
+        return UpdateResult(outcome["v"][b], outcome["S"][b], float(outcome["nis"][b]),
+                            r_scale=float(np.trace(outcome["R_used"][b]) / np.trace(self.R0)),
+                            fading_factor=float(outcome["lam"][b]))
 
     def r_sigma_estimate(self):
         """Current R_hat as 1-sigma per measurement axis (pos n/e/d [m], vel n/e/d [m/s])."""
         return np.sqrt(np.diag(self.R))
-
-    def update(self, z):
-        """Sage-Husa + fading update (paper 001 eqs. 9-12); see the class docstring."""
-        v = np.asarray(z, dtype=float)
-        p_prop, q_acc = self.predicted_parts()
-        lam, P_pred = self.faded_prediction(v, p_prop, q_acc)
-        S, R_used = self.update_and_estimate_r(P_pred, v)
-        return UpdateResult(v, S, nis(v, S), r_scale=float(np.trace(R_used) / np.trace(self.R0)),
-                            fading_factor=lam)
 
 
 # ------------------------------------------------------------------------------------------
@@ -211,29 +289,49 @@ class IakfEngine(SageHusaFadingEngine):
         self.compression = 1.0
         self.tau = 0.0
 
-    def update(self, z):
-        """IAKF update (paper 001 eqs. 9-14); see the class docstring for the order."""
-        v = np.asarray(z, dtype=float)
-        m = self.m
-        p_prop, q_acc = self.predicted_parts()
+    @classmethod
+    def _update_rows(cls, engines, z, p_prop, q_acc):
+        """IAKF update (paper 001 eqs. 9-14) of every run; see the class docstring for the
+        order."""
+        v = z
+        m = v.shape[1]
         P_std = p_prop + q_acc                                   # paper 001 eq. 6
-        G = P_std[:m, :m] + self.R
-        K_std = np.linalg.solve(G, P_std[:, :m].T).T             # paper 001 eq. 7, for eq. 14
-        Y, tau, _ = laws.compression_factor(v, G, K_std, self.outlier_alpha)
-        self.guard.open_epoch()
-        if self.guard.due(np.full(m, Y < 1.0)).any():   # recovery guard: taken uncompressed,
-            self.guard.n_reacquired += 1                   # the fading factor inflates P
-            Y = 1.0
-        v_used = v if Y == 1.0 else Y * v                        # paper 001 eq. 13
-        lam, P_pred = self.faded_prediction(v_used, p_prop, q_acc)
-        S, R_used = self.update_and_estimate_r(P_pred, v_used)
-        self.guard.close_epoch(Y == 1.0)
+        G = P_std[:, :m, :m] + np.array([engine.R for engine in engines])
+        # paper 001 eq. 7, the gain eq. 14's threshold D would need: only checked here, as
+        # compression_factor checks it
+        K_std = np.linalg.solve(G, P_std[:, :, :m].swapaxes(-1, -2))
+        _require_finite(("innovation", v), ("G", G), ("K", K_std))
+        try:
+            tau = laws.compression_statistic_rows(v, G)
+        except np.linalg.LinAlgError:
+            raise InputError("G: innovation covariance 'S' is not positive definite") from None
+        Y = laws.compression_rows(tau, np.array([chi2_gate(engine.outlier_alpha, m)
+                                                 for engine in engines]))
+        # recovery guard: taken uncompressed, the fading factor inflates P (a run whose
+        # innovation is not compressed flags nothing)
+        reacquired = np.array([y < 1.0 and engine.guard.due_at_opening(np.full(m, True)).any()
+                               for engine, y in zip(engines, Y.tolist())], dtype=bool)
+        Y = np.where(reacquired, 1.0, Y)
+        outcome = cls._adapted_rows(engines, Y[:, None] * v, p_prop, q_acc)  # eq. 13
+        outcome.update(innovation=v, G=G, tau=tau, Y=Y, reacquired=reacquired)
+        return outcome
+
+    def _take_update(self, outcome, b):
+        """Run b's guard, Sage-Husa update and feedback from ``outcome``, and its result:
+        the NIS of the raw innovation against the unfaded prediction, the statistic the
+        outlier test used (what a user compares with the chi2(m) gate)."""
+        guard = self.guard
+        guard.open_epoch()
+        if outcome["reacquired"][b]:
+            guard.n_reacquired += 1
+        adapted = super()._take_update(outcome, b)
+        Y = float(outcome["Y"][b])
+        guard.close_epoch(Y == 1.0)
         self.compression = Y
-        self.tau = tau
-        # NIS of the raw innovation against the unfaded prediction: the statistic the
-        # outlier test used (what a user compares with the chi2(m) gate)
-        return UpdateResult(v, G, tau, r_scale=float(np.trace(R_used) / np.trace(self.R0)),
-                            fading_factor=lam, outlier=Y < 1.0)
+        self.tau = float(outcome["tau"][b])
+        return UpdateResult(outcome["innovation"][b], outcome["G"][b], self.tau,
+                            r_scale=adapted.r_scale, fading_factor=adapted.fading_factor,
+                            outlier=Y < 1.0)
 
 
 # ------------------------------------------------------------------------------------------
@@ -245,7 +343,7 @@ UNUSABLE_VARIANCE_FACTOR = 1e6
 REPLACEMENT_VARIANCES = ("propagated", "nominal")
 
 
-class NewtonRobustKfEngine(GuardedEngine, KfEngine):
+class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
     """Paper 004: per-observation chi-square test + Newton extrapolation of failed observations.
 
     Each update:
@@ -329,17 +427,25 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
         self.time = time
 
     def _next_epoch(self):
-        if self.last_update_time is None:
-            epoch = 0
-        else:
-            gap = self.time - self.last_update_time
-            if self.update_interval is None:
-                self.update_interval = gap
-            steps = round(gap / self.update_interval) if self.update_interval > 0 else 1
-            epoch = self.history_epoch + max(1, steps)
+        epoch, self.update_interval = self._epoch_now()
         self.last_update_time = self.time
         self.history_epoch = epoch
         return epoch
+
+    def _epoch_now(self):
+        """(epoch, update interval) of an update now, as :meth:`_next_epoch` sets them."""
+        if self.last_update_time is None:
+            return 0, self.update_interval
+        gap = self.time - self.last_update_time
+        interval = gap if self.update_interval is None else self.update_interval
+        steps = round(gap / interval) if interval > 0 else 1
+        return self.history_epoch + max(1, steps), interval
+
+    def _history_now(self):
+        """Whether the history holds samples an update now extrapolates (the epoch now
+        follows its last one: a missed fix leaves the samples unequally spaced)."""
+        last = self.history.last_epoch
+        return len(self.history) > 0 and (last is None or self._epoch_now()[0] == last + 1)
 
     def _extrapolated_variance(self):
         """Error variance of the Newton extrapolation, per component (m,).
@@ -357,55 +463,103 @@ class NewtonRobustKfEngine(GuardedEngine, KfEngine):
         newest_first = variances[::-1][:p + 1]
         return (weights ** 2) @ newest_first
 
-    def update(self, z):
-        """Chi-square test + Newton replacement (paper 004 secs. 2.1-2.2)."""
-        z = np.asarray(z, dtype=float)
-        P_pred, S = self.predicted_innovation()
-        chi2 = chi_square_per_observation(z, S)
-        faults = chi2 > self.chi2_threshold
-        self.guard.open_epoch()
-        due = self.guard.due(faults)
+    @classmethod
+    def _update_rows(cls, engines, z, p_prop, q_acc):
+        """Chi-square test + Newton replacement (paper 004 secs. 2.1-2.2) of every run: the
+        test of all runs at once, the replacement of each run with a failed observation by
+        its own history (:meth:`_replaced`), the Kalman updates of all runs but those that
+        leave a component out (:func:`masked_update`, each alone) in one call."""
+        m = z.shape[1]
+        P_pred = p_prop + q_acc
+        R = np.array([engine.R0 for engine in engines])
+        S = P_pred[:, :m, :m] + R
+        _require_finite(("innovation", z), ("S", S), show_values=False)
+        s = np.diagonal(S, axis1=1, axis2=2)
+        if np.any(s <= 0.0):
+            raise InputError(f"S: diagonal must be > 0, got {s[(s <= 0.0).any(axis=1)][0]}")
+        chi2 = z * z / s                        # chi_square_per_observation of every run
+        faults = chi2 > np.array([engine.chi2_threshold for engine in engines])[:, None]
+        outcome = dict(z=z, P_pred=P_pred, S=S, chi2=chi2, faults=faults, R=R, z_used=z,
+                       variance_used=np.diagonal(R, axis1=1, axis2=2).copy(),
+                       drop=np.zeros_like(faults), reacquired=np.zeros(len(engines), bool))
+        faulty = np.flatnonzero(faults.any(axis=1)).tolist()
+        if faulty:
+            outcome["z_used"] = z.copy()
+            for b in faulty:
+                engines[b]._replaced(outcome, b)
+        P_pred, z_used, R, drop = (outcome[name] for name in ("P_pred", "z_used", "R", "drop"))
+        dx = np.empty((len(engines), N_STATES))
+        P = np.empty_like(P_pred)
+        whole = ~drop.any(axis=1)
+        if whole.all():
+            dx, P, _, _, _ = kalman_rows(P_pred, z_used, R, engines[0].H)
+        else:
+            if whole.any():
+                dx[whole], P[whole], _, _, _ = kalman_rows(P_pred[whole], z_used[whole],
+                                                           R[whole], engines[0].H)
+            for b in np.flatnonzero(~whole).tolist():
+                dx[b], P[b] = masked_update(P_pred[b], z_used[b], R[b], ~drop[b])
+        outcome.update(dx=dx, P=P, nis=nis_rows(z, outcome["S"]),
+                       shift=(engines[0].H @ dx[:, :, None])[:, :, 0])
+        return outcome
+
+    def _replaced(self, outcome, b):
+        """Run b's law where an observation failed the test, in its rows of ``outcome``:
+        the recovery guard's re-acquisition (an inflated prediction, the test again), then
+        the replacement of each failed observation by the Newton extrapolation of the
+        history, or its omission."""
+        m = self.m
+        z, faults = outcome["z"][b], outcome["faults"][b]
+        due = self.guard.due_at_opening(faults)
         if due.any():                 # recovery guard: re-acquire with an inflated prediction
-            lam = self.guard.reacquisition(z, P_pred, self.R0, due)
-            P_pred = inflate_navigation(P_pred, lam)
-            S = P_pred[:self.m, :self.m] + self.R0
+            P_pred = inflate_navigation(outcome["P_pred"][b], self.guard.reacquisition_factor(
+                z, outcome["P_pred"][b], self.R0, due))
+            S = P_pred[:m, :m] + self.R0
             chi2 = chi_square_per_observation(z, S)
             faults = (chi2 > self.chi2_threshold) & ~due
+            outcome["P_pred"][b], outcome["S"][b], outcome["chi2"][b] = P_pred, S, chi2
+            outcome["faults"][b], outcome["reacquired"][b] = faults, True
+        if not faults.any():
+            return
+        r0 = np.diag(self.R0)
+        cap = UNUSABLE_VARIANCE_FACTOR * r0
+        if self._history_now():
+            outcome["z_used"][b] = np.where(faults, self.history.predict_next(self.newton_order),
+                                            z)
+            variance_used = np.where(faults, np.minimum(self._extrapolated_variance(), cap), r0)
+        else:
+            variance_used = np.where(faults, cap, r0)  # nothing to extrapolate from
+        outcome["variance_used"][b] = variance_used
+        outcome["drop"][b] = faults & (variance_used >= cap)
+        if self.replacement_variance == "propagated":
+            outcome["R"][b] = np.diag(variance_used)
+
+    def _take_update(self, outcome, b):
+        """Run b's guard, history, feedback and diagnostics from ``outcome``, and its
+        result."""
+        guard = self.guard
+        guard.open_epoch()
+        if outcome["reacquired"][b]:
+            guard.n_reacquired += 1
         epoch = self._next_epoch()
         if self.history.last_epoch is not None and epoch != self.history.last_epoch + 1:
             self.history.clear()  # a missed fix: the samples are no longer equally spaced
             self.sample_variances.clear()
-        r0 = np.diag(self.R0)
-        cap = UNUSABLE_VARIANCE_FACTOR * r0
-        z_used = z
-        variance_used = r0.copy()
-        if faults.any():
-            if len(self.history):
-                z_used = np.where(faults, self.history.predict_next(self.newton_order), z)
-                variance_used = np.where(faults, np.minimum(self._extrapolated_variance(), cap),
-                                         r0)
-            else:
-                variance_used = np.where(faults, cap, r0)  # nothing to extrapolate from
-        drop = faults & (variance_used >= cap)
-        R = self.R0
-        if self.replacement_variance == "propagated" and faults.any():
-            R = np.diag(variance_used)
-        if drop.any():
-            dx, P = masked_update(P_pred, z_used, R, ~drop)
-        else:
-            dx, P, _, _, _ = self.kalman_update(P_pred, z_used, R)
-        self.history.append(z_used, epoch)
-        self.sample_variances.append(variance_used)
+        faults = outcome["faults"][b]
+        self.history.append(outcome["z_used"][b], epoch)
+        self.sample_variances.append(outcome["variance_used"][b])
         while len(self.sample_variances) > len(self.history):
             self.sample_variances.popleft()
-        self.apply(dx, P)
-        self.guard.close_epoch(~faults)
-        self.history.apply_correction(self.H @ dx)
+        self.apply(outcome["dx"][b], outcome["P"][b])
+        guard.close_epoch(~faults)
+        self.history.apply_correction(outcome["shift"][b])
+        chi2 = outcome["chi2"][b]
         self.chi2_values = chi2
         self.chi2_max = float(chi2.max())
         self.rejected = faults
         self.n_rejected = int(faults.sum())
-        return UpdateResult(z, S, nis(z, S), outlier=bool(faults.any()))
+        return UpdateResult(outcome["z"][b], outcome["S"][b], float(outcome["nis"][b]),
+                            outlier=bool(faults.any()))
 
 
 # ------------------------------------------------------------------------------------------

@@ -53,7 +53,8 @@ import numpy as np
 
 from .array_checks import matrix, square, symmetrize, vector
 from ..errors import InputError, ParameterError
-from .innovation_stats import checked_cholesky, chi2_gate, nis_from_cholesky
+from .innovation_stats import (checked_cholesky, chi2_gate, cholesky_nis_rows, dot_rows,
+    nis_from_cholesky, trace_rows)
 
 ArrayLike = Union[np.ndarray, float, list]
 
@@ -117,13 +118,27 @@ def sage_husa_r_update(R_prev, innovation, H, K, P_post, k: int, b: float,
     K = matrix("K", K, rows=n, cols=m)
     P_post = square("P_post", P_post, n)
     d = sage_husa_weight(k, b)
-
-    residual = v - H @ (K @ v)                 # (I - H K) v without forming I - H K
-    sample = np.outer(residual, residual) + H @ P_post @ H.T
-    R_new = symmetrize((1.0 - d) * R_prev + d * sample)
+    R_new = sage_husa_r_rows(R_prev[None], v[None], H, K[None], P_post[None], np.array([d]))[0]
     if R_min is not None:
         R_new = guard_positive_definite(R_new, R_min)
     return R_new
+
+
+def sage_husa_r_rows(R_prev, innovation, H, K, P_post, d) -> np.ndarray:
+    """:func:`sage_husa_r_update` before its guard, for every run (no checks): ``R_prev``
+    (B, m, m), ``innovation`` (B, m), ``H`` (m, n) shared, ``K`` (B, n, m), ``P_post``
+    (B, n, n) and the weights ``d`` (B,); (B, m, m).  numpy's stacked products give each
+    run its own 2-D product's floats."""
+    v = innovation
+    residual = v - (H @ (K @ v[..., None]))[..., 0]   # (I - H K) v without forming I - H K
+    sample = residual[..., :, None] * residual[..., None, :] + H @ P_post @ H.T
+    d = d[:, None, None]
+    return symmetric_rows((1.0 - d) * R_prev + d * sample)
+
+
+def symmetric_rows(a: np.ndarray) -> np.ndarray:
+    """``(a + a') / 2`` of every run's slice of ``a`` (B, m, m)."""
+    return 0.5 * (a + a.swapaxes(-1, -2))
 
 
 def r_floor_from_initial(R0, fraction: float = DEFAULT_R_FLOOR_FRACTION) -> np.ndarray:
@@ -179,12 +194,34 @@ def guard_positive_definite(R, R_min: ArrayLike) -> np.ndarray:
         raise ParameterError(f"R_min: expected a scalar or shape ({m},), got {floor.shape}")
     if not np.all(np.isfinite(floor)) or np.any(floor <= 0.0):
         raise ParameterError(f"R_min: floors must be finite and > 0, got {floor}")
-    R = symmetrize(R)
+    return guard_positive_definite_rows(R[None], floor[None])[0]
+
+
+def guard_positive_definite_rows(R, floor) -> np.ndarray:
+    """:func:`guard_positive_definite` of every run (no checks): ``R`` (B, m, m), the
+    floors ``floor`` (B, m); (B, m, m).  One stacked Cholesky test finds whether any run
+    needs a repair; only then is each run tested and repaired alone."""
+    R = symmetric_rows(R)
+    floors = np.zeros_like(R)
+    diagonal = np.arange(R.shape[-1])
+    floors[:, diagonal, diagonal] = floor
     try:  # fast path (a few us): R - diag(R_min) positive definite, nothing to repair
-        np.linalg.cholesky(R - np.diag(floor))
+        np.linalg.cholesky(R - floors)
         return R
     except np.linalg.LinAlgError:
         pass
+    R = R.copy()
+    for b in range(len(R)):
+        try:
+            np.linalg.cholesky(R[b] - floors[b])
+        except np.linalg.LinAlgError:
+            R[b] = _eigenvalues_floored(R[b], floor[b])
+    return R
+
+
+def _eigenvalues_floored(R, floor) -> np.ndarray:
+    """One run's repair of :func:`guard_positive_definite`: the eigenvalues of R scaled by
+    the floors raised to 1."""
     scale = np.sqrt(floor)
     S = R / np.outer(scale, scale)
     w, V = np.linalg.eigh(S)
@@ -211,7 +248,13 @@ def divergence_test(innovation, HPH_prior, R, gamma: float = 1.0) -> bool:
     m = v.shape[0]
     HPH = square("HPH_prior", HPH_prior, m)
     R = square("R", R, m)
-    return bool(v @ v <= gamma * (np.trace(HPH) + np.trace(R)))
+    return bool(divergence_test_rows(dot_rows(v, v), HPH, R, gamma))
+
+
+def divergence_test_rows(vv, HPH_prior, R, gamma):
+    """:func:`divergence_test` of every run (no checks) from ``v'v`` (B,), ``HPH_prior`` and
+    ``R`` (B, m, m) and ``gamma`` (a number or (B,))."""
+    return vv <= gamma * (trace_rows(HPH_prior) + trace_rows(R))
 
 
 def fading_factor(innovation, HQH, R, HPpredH_no_Q, gamma: float = 1.0,
@@ -250,18 +293,35 @@ def fading_factor(innovation, HQH, R, HPpredH_no_Q, gamma: float = 1.0,
     HQH = square("HQH", HQH, m)
     R = square("R", R, m)
     HPH0 = square("HPpredH_no_Q", HPpredH_no_Q, m)
-    if divergence_test(v, HPH0 + HQH, R, gamma):
-        return 1.0
-    denominator = np.trace(HPH0)
-    if not denominator > 0.0:
-        raise InputError(
-            "HPpredH_no_Q: trace must be > 0 to compute a fading factor (paper 001 eq. 12), got "
-            f"{denominator}")
-    lam = (v @ v - np.trace(HQH) - np.trace(R)) / denominator
-    lam = max(1.0, float(lam))
-    if max_factor is not None:
-        lam = min(lam, float(max_factor))
-    return lam
+    if not (gamma > 0.0) or not math.isfinite(gamma):
+        raise ParameterError(f"gamma (divergence reserve coefficient) must be > 0, got {gamma}")
+    lam, refused = fading_factor_rows(dot_rows(v, v)[None], HQH[None], R[None], HPH0[None],
+                                      gamma, math.inf if max_factor is None else max_factor)
+    if refused[0]:
+        raise_no_fading_factor(np.trace(HPH0))
+    return float(lam[0])
+
+
+def fading_factor_rows(vv, HQH, R, HPH0, gamma, max_factor):
+    """:func:`fading_factor` of every run (no checks) from ``v'v`` (B,) and ``HQH``, ``R``,
+    ``HPH0`` (B, m, m), with ``gamma`` and ``max_factor`` (numbers or (B,); inf for no
+    cap).  Returns (lambda (B,), refused (B,)): ``refused`` marks the runs whose test fails
+    with tr(HPH0) <= 0, for which :func:`fading_factor` raises
+    (:func:`raise_no_fading_factor`)."""
+    holds = divergence_test_rows(vv, HPH0 + HQH, R, gamma)
+    denominator = trace_rows(HPH0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam = (vv - trace_rows(HQH) - trace_rows(R)) / denominator
+    lam = np.where(lam > 1.0, lam, 1.0)                  # Python's max(1.0, lam): NaN gives 1
+    lam = np.where(max_factor < lam, max_factor, lam)    # and min(lam, max_factor)
+    return np.where(holds, 1.0, lam), ~holds & ~(denominator > 0.0)
+
+
+def raise_no_fading_factor(denominator):
+    """The error of :func:`fading_factor` when no fading factor explains the innovation."""
+    raise InputError(
+        "HPpredH_no_Q: trace must be > 0 to compute a fading factor (paper 001 eq. 12), got "
+        f"{denominator}")
 
 
 def fading_predict(P_propagated, GQG, lam: float) -> np.ndarray:
@@ -277,7 +337,12 @@ def fading_predict(P_propagated, GQG, lam: float) -> np.ndarray:
         raise InputError(f"lam (fading factor) must be finite and > 0, got {lam}")
     P_propagated = square("P_propagated", P_propagated)
     GQG = square("GQG", GQG, P_propagated.shape[0])
-    return lam * P_propagated + GQG
+    return fading_predict_rows(P_propagated[None], GQG[None], np.array([lam]))[0]
+
+
+def fading_predict_rows(P_propagated, GQG, lam) -> np.ndarray:
+    """:func:`fading_predict` of every run (no checks): (B, n, n) each, ``lam`` (B,)."""
+    return lam[:, None, None] * P_propagated + GQG
 
 
 # ----------------------------------------------------------------------------------------
@@ -322,8 +387,7 @@ def compression_factor(innovation, G, K, alpha: float = 0.05,
     tau = nis_from_cholesky(L, v, general_solve=True)
     if D is None:
         gate = chi2_gate(alpha, m)
-        Y = 1.0 if tau <= gate else math.sqrt(gate / tau)
-        return Y, tau, gate
+        return float(compression_rows(np.array([tau]), gate)[0]), tau, gate
     if not (D > 0.0) or not math.isfinite(D):
         raise ParameterError(f"D (compression threshold) must be finite and > 0, got {D}")
     lam = float(np.linalg.eigvalsh(symmetrize(K @ G @ K.T))[-1])
@@ -332,3 +396,20 @@ def compression_factor(innovation, G, K, alpha: float = 0.05,
     gate = D * D / lam
     Y = 1.0 if tau <= gate else D / math.sqrt(tau * lam)
     return Y, tau, gate
+
+
+def compression_statistic_rows(innovation, G) -> np.ndarray:
+    """The statistic ``tau = v' G^-1 v`` of :func:`compression_factor` for every run (no
+    checks: ``innovation`` (B, m) and ``G`` (B, m, m) finite): numpy's Cholesky factor of
+    the symmetrized G and its LU solve, as there.  Raises numpy's LinAlgError when a G is
+    not positive definite."""
+    L = np.linalg.cholesky(symmetric_rows(G))
+    return cholesky_nis_rows(L, innovation)
+
+
+def compression_rows(tau, gate) -> np.ndarray:
+    """The factor Y of :func:`compression_factor` with the default threshold from the
+    statistics ``tau`` (B,) and the chi-square gates ``gate`` (a number or (B,)): 1 at and
+    below the gate, ``sqrt(gate / tau)`` above."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(tau <= gate, 1.0, np.sqrt(gate / tau))

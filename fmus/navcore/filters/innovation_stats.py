@@ -55,7 +55,24 @@ _LOG_2PI = math.log(2.0 * math.pi)
 # ----------------------------------------------------------------------------------------
 def nis(v: np.ndarray, S: np.ndarray) -> float:
     """Normalized innovation squared ``v' S^-1 v`` by one linear solve (no checks)."""
-    return float(v @ np.linalg.solve(S, v))
+    return float(nis_rows(v[None], S[None])[0])
+
+
+def nis_rows(v: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """:func:`nis` of every run: ``v`` (B, m), ``S`` (B, m, m); (B,).  numpy solves each
+    slice as one run's call (one LAPACK ``dgesv``)."""
+    return dot_rows(v, np.linalg.solve(S, v[..., None])[..., 0])
+
+
+def dot_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a_i' b_i`` of every run (B, m each): (B,), each numpy's 1-D ``a @ b`` of that run
+    (the stacked product of a 1 x m by an m x 1 slice is the same BLAS dot)."""
+    return (a[..., None, :] @ b[..., :, None])[..., 0, 0]
+
+
+def trace_rows(X: np.ndarray) -> np.ndarray:
+    """``np.trace`` of every run's (m, m) slice of ``X`` (B, m, m): (B,)."""
+    return np.trace(X, axis1=-2, axis2=-1)
 
 
 def nis_from_cholesky(L: np.ndarray, v: np.ndarray, general_solve: bool = False) -> float:
@@ -63,10 +80,17 @@ def nis_from_cholesky(L: np.ndarray, v: np.ndarray, general_solve: bool = False)
     triangular solve (LAPACK ``dtrtrs``), or with ``general_solve`` numpy's LU solve of the
     same system, the arithmetic paper 001's compression factor keeps (equal to round-off)."""
     if general_solve:
-        u = np.linalg.solve(L, v)
+        return float(cholesky_nis_rows(L[None], v[None])[0])
     else:
         u, _ = lapack.dtrtrs(L, v, lower=1)
     return float(u @ u)
+
+
+def cholesky_nis_rows(L: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``|L^-1 v|^2`` of every run by numpy's LU solve (``L`` (B, m, m), ``v`` (B, m)):
+    :func:`nis_from_cholesky` with ``general_solve``, (B,)."""
+    u = np.linalg.solve(L, v[..., None])[..., 0]
+    return dot_rows(u, u)
 
 
 def log_det_from_cholesky(L: np.ndarray) -> float:

@@ -123,12 +123,23 @@ def bounded_r(R, r_max):
     """``R`` with its variances at most ``r_max`` (m,): D^-1 R D^-1 (D = diag(sqrt(r_max)))
     with its eigenvalues capped at 1, scaled back -- the ceiling counterpart of
     :func:`navcore.filters.adaptive_laws.guard_positive_definite` (correlations kept)."""
+    rows = R[None]
+    bounded = bounded_r_rows(rows, r_max[None])
+    return R if bounded is rows else bounded[0]
+
+
+def bounded_r_rows(R, r_max):
+    """:func:`bounded_r` of every run: ``R`` (B, m, m), ``r_max`` (B, m); ``R`` itself
+    when no run's variances exceed their bound."""
     scale = np.sqrt(r_max)
-    S = R / np.outer(scale, scale)
-    w, V = np.linalg.eigh(symmetrize(S))
-    if w[-1] <= 1.0:
+    outer = scale[:, :, None] * scale[:, None, :]
+    S = R / outer
+    w, V = np.linalg.eigh(0.5 * (S + S.swapaxes(-1, -2)))
+    over = ~(w[:, -1] <= 1.0)
+    if not over.any():
         return R
-    return symmetrize((V * np.minimum(w, 1.0)) @ V.T * np.outer(scale, scale))
+    capped = (V * np.minimum(w, 1.0)[:, None, :]) @ V.swapaxes(-1, -2) * outer
+    return np.where(over[:, None, None], 0.5 * (capped + capped.swapaxes(-1, -2)), R)
 
 
 class RecoveryGuard:
@@ -161,11 +172,16 @@ class RecoveryGuard:
         self.elapsed = elapsed
 
     def open_epoch(self):
-        gap = self.elapsed
+        self.interval, self.since_accepted = self._opened()
         self.elapsed = 0.0
-        if gap > 0.0 and (self.interval == 0.0 or gap < self.interval):
-            self.interval = gap
-        self.since_accepted = self.since_accepted + gap
+
+    def _opened(self):
+        """(interval, since_accepted) as :meth:`open_epoch` leaves them."""
+        gap = self.elapsed
+        interval = self.interval
+        if gap > 0.0 and (interval == 0.0 or gap < interval):
+            interval = gap
+        return interval, self.since_accepted + gap
 
     def may_reacquire(self):
         """True when some component has gone ``recovery_epochs`` intervals without an accepted
@@ -175,19 +191,31 @@ class RecoveryGuard:
 
     def due(self, flagged):
         """The flagged components to re-acquire now (bool mask)."""
+        return self._due(flagged, self.interval, self.since_accepted)
+
+    def due_at_opening(self, flagged):
+        """What :meth:`due` returns after :meth:`open_epoch` (which this leaves undone)."""
+        return self._due(flagged, *self._opened())
+
+    def _due(self, flagged, interval, since_accepted):
         flagged = np.asarray(flagged, dtype=bool)
-        if not self.enabled or self.interval == 0.0 or not flagged.any():
+        if not self.enabled or interval == 0.0 or not flagged.any():
             return np.zeros_like(flagged)
-        limit = self.epochs * self.interval * (1.0 - _INTERVAL_TOLERANCE)
-        return flagged & (self.since_accepted >= limit)
+        limit = self.epochs * interval * (1.0 - _INTERVAL_TOLERANCE)
+        return flagged & (since_accepted >= limit)
 
     def close_epoch(self, accepted):
         self.since_accepted = np.where(accepted, 0.0, self.since_accepted)
 
     def reacquisition(self, v, HPH, R, due):
         """The inflation factor for the components ``due`` (counted as a re-acquisition)."""
-        idx = np.flatnonzero(due)
         self.n_reacquired += 1
+        return self.reacquisition_factor(v, HPH, R, due)
+
+    @staticmethod
+    def reacquisition_factor(v, HPH, R, due):
+        """:meth:`reacquisition`'s factor, not counted."""
+        idx = np.flatnonzero(due)
         return inflation_factor(v[idx], HPH[np.ix_(idx, idx)], R[np.ix_(idx, idx)], idx.size)
 
 
@@ -214,4 +242,5 @@ class GuardedEngine:
 
 
 __all__ = ["RECOVERY_PARAMETERS", "R_MAX_SCALE", "GuardedEngine", "RecoveryGuard", "bounded_r",
+           "bounded_r_rows",
            "flag_by_gate", "inflate_navigation", "inflation_factor", "recovery_options"]
