@@ -270,14 +270,12 @@ def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():
 @pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "source"])
 def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
     """accumulate_rows against _qmul and _rotvec_quat of each row (the single engine's
-    accumulate) and the shell's test of a due update, solution_rows with pitch_of_terms
-    against quat_euler of the single engine's _state_quat (its current_quat) and the
-    state's bias and scales, and the time update's kernel against its Python source, bit
-    for bit, compiled and as their Python source, on both sides of the small-angle series
+    accumulate) and the shell's test of a due update, solution_rows against quat_euler of
+    the single engine's _state_quat (its current_quat) and the state's bias and scales, and
+    the time update's kernel against its Python source, bit for bit, compiled and as their Python source, on both sides of the small-angle series
     (|v| = 1e-6), at zero and with no pending interval."""
     from navcore.filters.ahrs import (_propagate_rows, _qmul, _rotvec_quat, _state_quat,
-                                      accumulate_rows, pitch_of_terms, quat_euler,
-                                      solution_rows)
+                                      accumulate_rows, quat_euler, solution_rows)
     accumulate = accumulate_rows if compiled else accumulate_rows.py_func
     solutions = solution_rows if compiled else solution_rows.py_func
     rng = np.random.default_rng(5)
@@ -313,13 +311,11 @@ def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
     nav_time, r_scale = rng.uniform(0, 100, 800), rng.uniform(0.5, 2.0, (800, 2))
     rows = np.arange(0, 800, 2)
     out = np.zeros((800, 12))
-    terms = np.empty((3, rows.size))
-    solutions(out, rows, x, interval, dq, nav_time, r_scale, np.arange(9), terms)
-    out[rows, 9] = pitch_of_terms(*terms)
+    solutions(out, rows, x, interval, dq, nav_time, r_scale, np.arange(10))
     for b in rows.tolist():
         roll, pitch, yaw = quat_euler(_state_quat(*x[b].tolist(), interval[b].item(),
                                                   tuple(dq[b].tolist())))
-        expected = [nav_time[b], 1.0, roll, yaw, *x[b, 3:], *r_scale[b], pitch]
+        expected = [nav_time[b], 1.0, roll, pitch, yaw, *x[b, 3:], *r_scale[b]]
         assert np.array_equal(_bits(out[b, :10]), _bits(expected)), b
     assert not out[1::2].any()
     # the time update over the points of 50 filters, spread wide enough to need the shadow

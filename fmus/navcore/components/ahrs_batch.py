@@ -23,14 +23,13 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
   rotation-vector quaternions are the single engine's float formulas (``_qmul``,
   ``_rotvec_quat``) compiled into a kernel over the runs
   (:func:`~navcore.filters.ahrs.accumulate_rows`; compiled ``sin``, ``cos`` and ``atan2``
-  are libm's, as Python's), and the outputs but the sigmas and the pitch are one kernel call
+  are libm's, as Python's), and the outputs but the sigmas are one kernel call
   (:func:`~navcore.filters.ahrs.solution_rows`: the engine's ``_state_quat`` and Euler
-  terms, the formulas the single run's ``current_quat`` and ``quat_euler`` call), whose
-  pitch's ``hypot`` stays Python's ``math`` per element
-  (:func:`~navcore.filters.ahrs.pitch_of_terms`): numpy's and the compiled ``hypot`` differ
-  from Python's (which is not libm's) in the last place for about 0.6 % of arguments, as
-  numpy's ``arctan2`` does from libm's for about 8 %, so they would not give each run the
-  floats of its single run.
+  angles, the formulas the single run's ``current_quat`` and ``quat_euler`` call), whose
+  pitch's ``hypot`` is Python's compiled (:func:`navcore.core.python_math.hypot`): numpy's
+  and C's ``hypot`` differ from Python's in the last place for a fraction of a percent of
+  arguments, as numpy's ``arctan2`` does from libm's for about 8 %, so they would not give
+  each run the floats of its single run.
 
 Everything else is the run's own component, given the batch's values first (:meth:`_lend`)
 and taken back after (:meth:`_adopt`): a run not started yet (TRIAD from its first samples),
@@ -51,7 +50,7 @@ from ..core.kernels import kernel
 from ..core.timing import same_instant
 from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adapt_r_scales,
                             euler_sigma_rows, measure_points,
-                            pitch_of_terms, process_noise_diagonal, propagate_points,
+                            process_noise_diagonal, propagate_points,
                             shadow_switched, solution_rows)
 from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
@@ -133,10 +132,9 @@ class AhrsFilterBatch(ComponentBatch):
         self._native = bool(alive) and self._stands_for(alive)
         col = self.columns
         self._solution_columns = np.array(
-            [col[n] for n in ("nav_time", "aligned", "nav_roll", "nav_yaw",
+            [col[n] for n in ("nav_time", "aligned", "nav_roll", "nav_pitch", "nav_yaw",
                               *signals.NAV_BG_NAMES, "r_scale_accel", "r_scale_mag")],
             dtype=np.intp)
-        self._pitch_column = col["nav_pitch"]
         self._std_columns = np.array([col[n] for n in ("std_roll", "std_pitch", "std_yaw")],
                                      dtype=np.intp)
         self._constants(alive)
@@ -221,6 +219,11 @@ class AhrsFilterBatch(ComponentBatch):
             setattr(self, name, getattr(self, name)[rows])
 
     def _alive(self) -> np.ndarray:
+        if not self._failures:                 # the common case: one array, made once
+            everyone = self.__dict__.get("_everyone")
+            if everyone is None or len(everyone) != self.runs:
+                everyone = self._everyone = np.ones(self.runs, dtype=bool)
+            return everyone
         alive = np.ones(self.runs, dtype=bool)
         alive[list(self._failures)] = False
         return alive
@@ -363,10 +366,8 @@ class AhrsFilterBatch(ComponentBatch):
                 self._by_itself(b, lambda m: m._write_solution(sigmas=False))
             rows = rows[finite]
             updated = updated[np.isin(updated, rows)]
-        pitch_terms = np.empty((3, len(rows)))
         solution_rows(self.out, rows, self.x, self.interval, self.dq, self.nav_time,
-                      self.r_scale, self._solution_columns, pitch_terms)
-        self.out[rows, self._pitch_column] = pitch_of_terms(*pitch_terms)
+                      self.r_scale, self._solution_columns)
         if updated.size:
             self.out[updated[:, None], self._std_columns] = euler_sigma_rows(
                 self._points(updated), self.Wm, self.Wc)

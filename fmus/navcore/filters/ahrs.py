@@ -43,6 +43,7 @@ from typing import Optional
 import numpy as np
 
 from ..core.kernels import jitable, kernel
+from ..core.python_math import hypot
 from ..errors import InputError
 from .fuzzy import FuzzyRScale
 from ..ins.mrp import (dcm_to_mrp, mrp_of_quat, mrp_to_dcm_batch, mrp_to_quat, nearer_set,
@@ -138,61 +139,52 @@ def _folded_yaw(yaw):
     return math.pi if yaw <= -math.pi else yaw
 
 
+@jitable
+def _euler(w, x, y, z):
+    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z), yaw in
+    (-pi, pi] (Python's ``hypot`` in kernels too: a C one rounds otherwise)."""
+    roll, yaw, sine, a, b = _euler_terms(w, x, y, z)
+    return roll, math.atan2(sine, hypot(a, b)), _folded_yaw(yaw)
+
+
 def quat_euler(q):
     """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (a 4-sequence of
     floats), yaw in (-pi, pi]."""
-    roll, yaw, sine, a, b = _euler_terms(*q)
-    return roll, math.atan2(sine, math.hypot(a, b)), _folded_yaw(yaw)
+    return _euler(*q)
 
 
 @kernel
-def _euler_terms_rows(q, out):
-    """:func:`_euler_terms` of every column of ``q`` (4, N) into the columns of ``out``
-    (5, N)."""
+def _euler_rows(q, out):
+    """:func:`_euler` of every column of ``q`` (4, N) into the columns of ``out`` (3, N)."""
     for i in range(q.shape[1]):
-        terms = _euler_terms(q[0, i], q[1, i], q[2, i], q[3, i])
-        out[0, i], out[1, i], out[2, i], out[3, i], out[4, i] = terms
+        out[0, i], out[1, i], out[2, i] = _euler(q[0, i], q[1, i], q[2, i], q[3, i])
 
 
 def quat_euler_rows(q):
     """:func:`quat_euler` of every column of ``q`` (4, N): the (3, N) roll, pitch and yaw,
-    each the floats of :func:`quat_euler` (its terms compiled, whose ``atan2`` is libm's as
-    Python's; the pitch's ``hypot`` Python's per element: a compiled one, or numpy's, rounds
-    otherwise)."""
-    terms = np.empty((5, q.shape[1]))
-    _euler_terms_rows(np.ascontiguousarray(q, dtype=float), terms)
-    roll, yaw, sine, a, b = terms
-    return np.array((roll, pitch_of_terms(sine, a, b), np.where(yaw <= -math.pi, math.pi, yaw)))
-
-
-def pitch_of_terms(sine, a, b):
-    """The pitch of :func:`quat_euler` from the arrays of its terms: Python's ``math.atan2``
-    and ``math.hypot`` per element (numpy's and a compiled ``hypot`` round otherwise)."""
-    return list(map(math.atan2, sine.tolist(), map(math.hypot, a.tolist(), b.tolist())))
+    each the floats of :func:`quat_euler`."""
+    out = np.empty((3, q.shape[1]))
+    _euler_rows(np.ascontiguousarray(q, dtype=float), out)
+    return out
 
 
 @kernel
-def solution_rows(out, rows, x, interval, dq, nav_time, r_scale, columns, pitch_terms):
+def solution_rows(out, rows, x, interval, dq, nav_time, r_scale, columns):
     """:meth:`AhrsFilter._write_solution` without the sigmas for the batch rows ``rows``
     (the state ``x`` (B, 6), pending ``interval`` (B,) and ``dq`` (B, 4), ``nav_time``
     (B,), ``r_scale`` (B, 2)) into the rows of ``out``: ``columns`` of nav_time, aligned,
-    nav_roll, nav_yaw, nav_bg_x/y/z, r_scale_accel, r_scale_mag; the pitch is left to the
-    caller, its terms (sine, a, b) of row i of ``rows`` in the columns of ``pitch_terms``
-    (3, len(rows)) (:func:`pitch_of_terms`)."""
+    nav_roll, nav_pitch, nav_yaw, nav_bg_x/y/z, r_scale_accel, r_scale_mag."""
     for i in range(rows.shape[0]):
         b = rows[i]
         r = x[b]
         q = _state_quat(r[0], r[1], r[2], r[3], r[4], r[5], interval[b],
                         (dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]))
-        roll, yaw, sine, ta, tb = _euler_terms(q[0], q[1], q[2], q[3])
         o = out[b]
         o[columns[0]] = nav_time[b]
         o[columns[1]] = 1.0
-        o[columns[2]] = roll
-        o[columns[3]] = _folded_yaw(yaw)
-        o[columns[4]], o[columns[5]], o[columns[6]] = r[3], r[4], r[5]
-        o[columns[7]], o[columns[8]] = r_scale[b, 0], r_scale[b, 1]
-        pitch_terms[0, i], pitch_terms[1, i], pitch_terms[2, i] = sine, ta, tb
+        o[columns[2]], o[columns[3]], o[columns[4]] = _euler(q[0], q[1], q[2], q[3])
+        o[columns[5]], o[columns[6]], o[columns[7]] = r[3], r[4], r[5]
+        o[columns[8]], o[columns[9]] = r_scale[b, 0], r_scale[b, 1]
 
 
 @kernel
