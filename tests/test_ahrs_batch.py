@@ -272,8 +272,9 @@ def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
     """accumulate_rows against _qmul and _rotvec_quat of each row (the single engine's
     accumulate) and the shell's test of a due update, solution_rows against quat_euler of
     the single engine's _state_quat (its current_quat) and the state's bias and scales, and
-    the time update's kernel against its Python source, bit for bit, compiled and as their Python source, on both sides of the small-angle series
-    (|v| = 1e-6), at zero and with no pending interval."""
+    the time update's kernel against its Python source, bit for bit, compiled and as their
+    Python source, on both sides of the small-angle series (|v| = 1e-6), at zero and with
+    no pending interval."""
     from navcore.filters.ahrs import (_propagate_rows, _qmul, _rotvec_quat, _state_quat,
                                       accumulate_rows, quat_euler, solution_rows)
     accumulate = accumulate_rows if compiled else accumulate_rows.py_func
