@@ -40,6 +40,7 @@ field, alpha/beta/kappa) or whose class steps otherwise.
 """
 from __future__ import annotations
 
+import math
 from typing import List
 
 import numpy as np
@@ -99,6 +100,35 @@ def _steps_of_rows(values, low, high, alive, started, native, nav_time, out, upd
             step[b] = _NATIVE
         else:
             step[b] = _OWN
+
+
+@kernel
+def _finite_rows(values, rows, out):
+    """Whether every value of ``values[rows[i]]`` is finite, into ``out[i]``."""
+    for i in range(rows.shape[0]):
+        finite = True
+        for v in values[rows[i]].flat:
+            if not math.isfinite(v):
+                finite = False
+                break
+        out[i] = finite
+
+
+def finite_rows(values: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Per run of ``rows``, whether its row of ``values`` (B, ...) is finite throughout."""
+    out = np.empty(len(rows), dtype=bool)
+    _finite_rows(values, rows, out)
+    return out
+
+
+@kernel
+def _near_shadow_rows(x, rows, out):
+    """Whether the MRP of ``x[rows[i]]`` (its first 3 values) has a squared norm above 0.5,
+    into ``out[i]``: the runs that may switch to the shadow set (which the engine's own
+    test, |sigma|^2 > 1, decides)."""
+    for i in range(rows.shape[0]):
+        r = x[rows[i]]
+        out[i] = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] > 0.5
 
 
 def _engine_path(engine, path):
@@ -235,9 +265,9 @@ class AhrsFilterBatch(ComponentBatch):
         step = np.empty(self.runs, dtype=np.int8)
         _steps_of_rows(values, low, high, self._alive(), self.started, self._native,
                        self.nav_time, self.out, self.columns["updated"], step)
-        rows = np.flatnonzero(step == _NATIVE)
+        rows = (step == _NATIVE).nonzero()[0]
         self._step_rows(rows, values[rows])
-        for b in np.flatnonzero(step == _OWN).tolist():
+        for b in (step == _OWN).nonzero()[0].tolist():
             self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
         return self.out
 
@@ -261,9 +291,8 @@ class AhrsFilterBatch(ComponentBatch):
                      imu_time: np.ndarray) -> np.ndarray:
         """:meth:`UkfAhrsEngine.update` of the runs ``rows``; the rows that updated."""
         # checked_covariance's state_error is None for every run whose x and P are finite
-        usable = (np.isfinite(self.x[rows]).all(axis=1)
-                  & np.isfinite(self.P[rows]).all(axis=(1, 2)))
-        for i in np.flatnonzero(~usable).tolist():
+        usable = finite_rows(self.x, rows) & finite_rows(self.P, rows)
+        for i in (~usable).nonzero()[0].tolist():
             self.fail(int(rows[i]), state_error(self.x[rows[i]], self.P[rows[i]]))
         rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
         ok = self._predict_rows(rows)
@@ -322,7 +351,7 @@ class AhrsFilterBatch(ComponentBatch):
         R = self.R0[rows] * np.repeat(self.r_scale[rows], 3, axis=1)[:, :, None]
         result = correct_rows(self.x[rows], self.P[rows], z, z_pred, Pzz + R, Pxz)
         ok = result.status == 0
-        for i in np.flatnonzero(~ok).tolist():
+        for i in (~ok).nonzero()[0].tolist():
             self.fail(int(rows[i]), correction_error(result.status[i]))
         rows = rows[ok]
         self.x[rows], self.P[rows] = result.x[ok], result.P[ok]
@@ -350,7 +379,8 @@ class AhrsFilterBatch(ComponentBatch):
 
     def _shadow_rows(self, rows: np.ndarray) -> None:
         """Each engine's switch to the shadow MRP (:func:`shadow_switched`, its own test)."""
-        near = np.einsum("bi,bi->b", self.x[rows, :3], self.x[rows, :3]) > 0.5
+        near = np.empty(len(rows), dtype=bool)
+        _near_shadow_rows(self.x, rows, near)
         for b in rows[near].tolist():
             switched = shadow_switched(self.x[b], self.P[b])
             if switched is not None:
@@ -360,8 +390,8 @@ class AhrsFilterBatch(ComponentBatch):
     def _write_solutions(self, rows: np.ndarray, updated: np.ndarray) -> None:
         """:meth:`AhrsFilter._write_solution` of the runs ``rows`` (sigmas: ``updated``); a
         run whose state is not finite writes its own (its DivergenceError)."""
-        if not np.isfinite(self.x[rows]).all():
-            finite = np.isfinite(self.x[rows]).all(axis=1)
+        finite = finite_rows(self.x, rows)
+        if not finite.all():
             for b in rows[~finite].tolist():
                 self._by_itself(b, lambda m: m._write_solution(sigmas=False))
             rows = rows[finite]
