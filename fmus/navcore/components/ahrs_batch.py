@@ -322,9 +322,12 @@ class AhrsFilterBatch(ComponentBatch):
     def _predict_rows(self, rows: np.ndarray) -> np.ndarray:
         """The time update of the runs ``rows``; which of them did not fail."""
         T = self.interval[rows]
-        x = self.x
-        diagonal = np.array([process_noise_diagonal(float(x[b, :3] @ x[b, :3]), T_b, arw, rw)
-                             for b, T_b, (arw, rw) in zip(rows.tolist(), T.tolist(),
+        mrp = self.x[rows, :3]
+        # |sigma|^2 of each run: numpy's stacked product of a row and a column takes each
+        # slice's 1-D dot, the engine's float(x[:3] @ x[:3])
+        squares = np.matmul(mrp[:, None, :], mrp[:, :, None])[:, 0, 0]
+        diagonal = np.array([process_noise_diagonal(s, T_b, arw, rw)
+                             for s, T_b, (arw, rw) in zip(squares.tolist(), T.tolist(),
                                                           self.gyro_noise[rows].tolist())])
         Q = np.zeros((len(rows), 6, 6))
         Q[:, _DIAGONAL, _DIAGONAL] = np.repeat(diagonal, 3, axis=1)
