@@ -57,16 +57,22 @@ def _batch(cls, run_parameters):
     return batch
 
 
-def _run_both(cls, run_parameters, feeds, steps, meddle=None):
-    """The batch and each run alone on ``feeds``; ``meddle(k, batch, singles)`` may change
-    both before step k.  Returns the batch's outputs, the singles' and the batch."""
+def _started(cls, run_parameters):
+    """The batch of the runs and each run alone, started."""
     batch = _batch(cls, run_parameters)
     batch.start(0.0)
     singles = []
     for p in run_parameters:
-        f = cls(**{**AHRS_PARAMS, **p})
-        f.start(0.0)
-        singles.append(f)
+        single = cls(**{**AHRS_PARAMS, **p})
+        single.start(0.0)
+        singles.append(single)
+    return batch, singles
+
+
+def _run_both(cls, run_parameters, feeds, steps, meddle=None):
+    """The batch and each run alone on ``feeds``; ``meddle(k, batch, singles)`` may change
+    both before step k.  Returns the batch's outputs, the singles' and the batch."""
+    batch, singles = _started(cls, run_parameters)
     names = [p.name for p in cls.outputs]
     together, alone = [], []
     for k in range(steps):
@@ -125,7 +131,8 @@ def test_the_runs_update_together_in_one_call(monkeypatch, profiles):  # noqa: F
     assert len(calls) >= 15 and set(calls) == {3}
 
 
-def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(profiles):  # noqa: F811
+@pytest.mark.parametrize("cls", [UkfAhrs, FuzzyUkfAhrs])
+def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(cls, profiles):  # noqa: F811
     feeds = _feeds(profiles(TABLE), [3, 4, 5], 300)
     feeds[0][120] = {**feeds[0][120], "imu_dt": -1.0}            # refused: imu_dt > 0
 
@@ -134,7 +141,7 @@ def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(profiles):
             batch.P[2, 1, 1] = math.nan
             singles[2].engine.ukf.P = batch.P[2].copy()
 
-    together, alone, batch = _run_both(UkfAhrs, [{}, {}, {}], feeds, 300, meddle)
+    together, alone, batch = _run_both(cls, [{}, {}, {}], feeds, 300, meddle)
     failures = batch.take_failures()
     assert sorted(failures) == [0, 2]
     assert "imu_dt" in str(failures[0]) and "'P' contains NaN" in str(failures[2])
@@ -398,3 +405,25 @@ def test_stacked_row_column_products_are_each_row_s_dot():
     stacked = np.matmul(mrp[:, None, :], mrp[:, :, None])[:, 0, 0]
     assert np.array_equal(_bits(stacked), _bits([float(r @ r) for r in mrp]))
     assert not np.array_equal(_bits(np.einsum("bi,bi->b", mrp, mrp)), _bits(stacked))
+
+
+@pytest.mark.parametrize("cls", [UkfAhrs, FuzzyUkfAhrs])
+def test_the_runs_a_batch_keeps_go_on_as_alone(cls, profiles):  # noqa: F811
+    """Three runs (their own fuzzy windows), the middle one dropped from the batch after 60
+    steps (as the master drops a failed run): the two kept runs' outputs stay their single
+    runs', bit for bit, through the updates after it."""
+    runs = [{"fuzzy_window": w} for w in (4, 6, 8)] if cls is FuzzyUkfAhrs else [{}, {}, {}]
+    feeds = _feeds(profiles(TABLE), [3, 4, 5], 200)
+    kept = [0, 2]
+    batch, singles = _started(cls, runs)
+    names = [p.name for p in cls.outputs]
+    for k in range(200):
+        if k == 60:
+            batch.keep(kept)
+            singles = [singles[b] for b in kept]
+            feeds = [feeds[b] for b in kept]
+        out = batch.advance(k * STEP, STEP, _batch_inputs(feeds, k))
+        for b, single in enumerate(singles):
+            expected = single.advance(k * STEP, STEP, feeds[b][k])
+            assert np.array_equal(_bits(out[b]), _bits([float(expected[n]) for n in names]))
+    assert batch.take_failures() == {} and batch.runs == 2

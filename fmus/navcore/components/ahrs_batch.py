@@ -49,10 +49,10 @@ from ..core import signals
 from ..core.batch import ComponentBatch, open_bounds, row_accepted
 from ..core.kernels import kernel
 from ..core.timing import same_instant
-from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adapt_r_scales,
-                            euler_sigma_rows, measure_points,
-                            process_noise_diagonal, propagate_points,
-                            shadow_switched, solution_rows)
+from ..filters.ahrs import (FuzzyAdaptiveR, FuzzyWindows, UkfAhrsEngine, accumulate_rows,
+                            adapt_r_scales, euler_sigma_rows, measure_points,
+                            process_noise_diagonal, propagate_points, shadow_switched,
+                            solution_rows)
 from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
                                  predicted_moments_rows, predicted_state_error,
@@ -158,7 +158,7 @@ class AhrsFilterBatch(ComponentBatch):
         self.last_update = np.zeros(runs)
         self.nav_time = np.full(runs, float(start_time))
         alive = [b for b in range(runs) if b not in self._failures]
-        self._blocks = {}            # the stacked fuzzy inferences of sets of runs
+        self._blocks = {}            # rows of runs -> their stacked fuzzy inferences
         self._native = bool(alive) and self._stands_for(alive)
         col = self.columns
         self._solution_columns = np.array(
@@ -204,11 +204,27 @@ class AhrsFilterBatch(ComponentBatch):
             self.field_intensity[b] = engine.field_intensity
             self.gyro_noise[b] = engine.gyro_arw, engine.gyro_bias_rw
             self.R0[b] = engine.R0
+        self._stack_windows(alive)
         if alive:
             engine = self.members[alive[0]].engine
             ukf = engine.ukf
             self.Wm, self.Wc, self.spread = ukf.Wm, ukf.Wc, ukf._spread
             self.gravity, self.field_unit = engine.gravity, engine.field_unit
+
+    def _stack_windows(self, alive: List[int]) -> None:
+        """The fuzzy adaptations of the runs that have one as the rows of one
+        :class:`~navcore.filters.ahrs.FuzzyWindows` (``windows``; a run without one has
+        window 0), their state taken by :meth:`_adopt`."""
+        adaptives = [self.members[b].engine.adaptive if b in alive else None
+                     for b in range(self.runs)]
+        window = np.array([0 if a is None else a.window for a in adaptives], dtype=np.int64)
+        self.windows = FuzzyWindows(
+            np.zeros((self.runs, int(window.max(initial=0)), 6)),
+            np.zeros(self.runs, dtype=np.int64), np.zeros((self.runs, 2)),
+            np.zeros((self.runs, 2)), window,
+            np.array([1.0 if a is None else a.r_scale_min for a in adaptives]),
+            np.array([1.0 if a is None else a.r_scale_max for a in adaptives]))
+        self._adaptive_rows = (window > 0).nonzero()[0]
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -220,6 +236,12 @@ class AhrsFilterBatch(ComponentBatch):
             getattr(self, name)[b] = getattr(obj, attr)
         self.dq[b] = engine.dq
         self.started[b] = engine.started
+        adaptive = engine.adaptive
+        if adaptive is not None:
+            w = self.windows
+            w.residuals[b, :adaptive.window] = adaptive.residuals
+            w.count[b] = adaptive.count
+            w.e[b], w.de[b] = adaptive.e, adaptive.de
         self.last_update[b] = member.last_update
         self.nav_time[b] = member.nav_time
         self.out[b] = self._outputs_of(member)
@@ -233,6 +255,12 @@ class AhrsFilterBatch(ComponentBatch):
             value = getattr(self, name)[b]
             setattr(obj, attr, value.item() if value.ndim == 0 else value.copy())
         engine.dq = tuple(self.dq[b].tolist())
+        adaptive = engine.adaptive
+        if adaptive is not None:
+            w = self.windows
+            adaptive.residuals = w.residuals[b, :adaptive.window].copy()
+            adaptive.count = w.count[b].item()
+            adaptive.e, adaptive.de = w.e[b].copy(), w.de[b].copy()
         member.nav_time = self.nav_time[b].item()
         member.last_update = self.last_update[b].item()
         out = member.out
@@ -247,6 +275,9 @@ class AhrsFilterBatch(ComponentBatch):
                      "nav_time",
                      "update_interval", "max_mag_age", "field_intensity", "gyro_noise", "R0"):
             setattr(self, name, getattr(self, name)[rows])
+        self.windows = FuzzyWindows(*(values[rows] for values in self.windows))
+        self._blocks = {}                      # keyed by the runs' rows, which moved
+        self._adaptive_rows = (self.windows.window > 0).nonzero()[0]
 
     def _alive(self) -> np.ndarray:
         if not self._failures:                 # the common case: one array, made once
@@ -305,10 +336,10 @@ class AhrsFilterBatch(ComponentBatch):
         self.out[rows, col["nis"]] = self.last_nis[rows]
         self.out[rows, col["nis_dof"]] = 6.0
         if "fuzzy_e_accel" in col and rows.size:
-            adaptives = [self.members[b].engine.adaptive for b in rows.tolist()]
             fuzzy = [col[n] for n in ("fuzzy_e_accel", "fuzzy_e_mag", "fuzzy_de_accel",
                                       "fuzzy_de_mag")]
-            self.out[rows[:, None], fuzzy] = [(*a.e, *a.de) for a in adaptives]
+            self.out[rows[:, None], fuzzy] = np.concatenate((self.windows.e[rows],
+                                                             self.windows.de[rows]), axis=1)
         return rows
 
     def _points(self, rows: np.ndarray) -> np.ndarray:
@@ -365,19 +396,17 @@ class AhrsFilterBatch(ComponentBatch):
 
     def _adapt_r(self, rows: np.ndarray, innovations: np.ndarray, Pzz: np.ndarray) -> None:
         """The fuzzy adaptation of R of the runs ``rows`` that have one, in one
-        :func:`~navcore.filters.ahrs.adapt_r_scales` call."""
-        adaptives = [self.members[b].engine.adaptive for b in rows.tolist()]
-        picked = [i for i, a in enumerate(adaptives) if a is not None]
-        if not picked:
+        :func:`~navcore.filters.ahrs.adapt_r_scales` call on the batch's windows."""
+        picked = (self.windows.window[rows] > 0).nonzero()[0]
+        if not picked.size:
             return
-        adaptives = [adaptives[i] for i in picked]
-        key = tuple(id(a.inference) for a in adaptives)    # the cache holds them: ids stay
-        blocks = self._blocks.get(key)
-        if blocks is None:
-            blocks = self._blocks[key] = StackedInference(
-                [a.inference for a in adaptives for _ in range(2)])
         runs = rows[picked]
-        self.r_scale[runs] = adapt_r_scales(adaptives, blocks, innovations[picked],
+        key = tuple(runs.tolist())
+        blocks = self._blocks.get(key)
+        if blocks is None:           # the runs' inferences, in the order of these runs
+            blocks = self._blocks[key] = StackedInference(
+                [self.members[b].engine.adaptive.inference for b in key for _ in range(2)])
+        self.r_scale[runs] = adapt_r_scales(self.windows, runs, blocks, innovations[picked],
                                             Pzz[picked], self.R0[runs], self.r_scale[runs])[0]
 
     def _shadow_rows(self, rows: np.ndarray) -> None:

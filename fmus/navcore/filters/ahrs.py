@@ -38,7 +38,7 @@ Fuzzy adaptive R (paper 003 eqs. 15-19, 25): see :class:`FuzzyAdaptiveR`.
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 
@@ -397,53 +397,78 @@ class FuzzyAdaptiveR:
         self.e = np.zeros(2)
         self.de = np.zeros(2)
 
+    def windows(self) -> "FuzzyWindows":
+        """This adaptation as the one row of a :class:`FuzzyWindows`, whose arrays but the
+        count are views of its own."""
+        return FuzzyWindows(self.residuals[None], np.array([self.count]), self.e[None],
+                            self.de[None], np.array([self.window]),
+                            np.array([self.r_scale_min]), np.array([self.r_scale_max]))
+
     def step(self, innovation, Pzz, R0, r_scale):
         """New block scales after the innovation ``innovation`` (see the class docstring);
         ``r_scale`` itself until the window is full."""
-        new, adapted = adapt_r_scales([self], self.blocks, np.asarray(innovation)[None],
-                                      np.asarray(Pzz)[None], np.asarray(R0)[None],
+        windows = self.windows()
+        new, adapted = adapt_r_scales(windows, np.zeros(1, dtype=np.intp), self.blocks,
+                                      np.asarray(innovation)[None], np.asarray(Pzz)[None],
+                                      np.asarray(R0)[None],
                                       np.asarray(r_scale, dtype=float)[None])
+        self.count = int(windows.count[0])
         return new[0] if adapted[0] else r_scale
 
 
-def adapt_r_scales(adaptives, blocks, innovations, Pzz, R0, r_scales):
-    """:meth:`FuzzyAdaptiveR.step` of the adaptations ``adaptives`` (n, one per filter) at
-    once, with their innovations (n, 6), ``Pzz`` and ``R0`` (n, 6, 6) and scales (n, 2);
-    ``blocks`` the :class:`~navcore.filters.fuzzy.StackedInference` of their 2n blocks
-    (filter i's accelerometer then magnetometer).  Returns the new scales (n, 2) and which
-    filters adapted them (a list of n bools: their window is full); the others' rows are
-    their scales.  Each filter's floats are those of its step alone (numpy's reductions
-    over the window and over a block's 3 values add in the same order stacked)."""
-    for a, innovation in zip(adaptives, innovations):
-        a.residuals[a.count % a.window] = innovation
-        a.count += 1
-    adapted = [a.count >= a.window for a in adaptives]
+class FuzzyWindows(NamedTuple):
+    """The state and limits of n :class:`FuzzyAdaptiveR` as rows: innovation windows
+    ``residuals`` (n, W, 6; filter i's first ``window[i]`` rows), ``count`` (n,), ``e`` and
+    ``de`` (n, 2), the scale limits ``low`` and ``high`` (n,)."""
+
+    residuals: np.ndarray
+    count: np.ndarray
+    e: np.ndarray
+    de: np.ndarray
+    window: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+
+
+def adapt_r_scales(windows: FuzzyWindows, runs, blocks, innovations, Pzz, R0, r_scales):
+    """:meth:`FuzzyAdaptiveR.step` of the adaptations of rows ``runs`` (n) of ``windows``
+    at once (their rows changed in place), with their innovations (n, 6), ``Pzz`` and ``R0``
+    (n, 6, 6) and scales (n, 2); ``blocks`` the :class:`~navcore.filters.fuzzy.
+    StackedInference` of their 2n blocks (filter i's accelerometer then magnetometer).
+    Returns the new scales (n, 2) and which filters adapted them (n bools: their window is
+    full); the others' rows are their scales.  Each filter's floats are those of its step
+    alone (numpy's reductions over the window and over a block's 3 values add in the same
+    order stacked)."""
+    window = windows.window[runs]
+    windows.residuals[runs, windows.count[runs] % window] = innovations
+    windows.count[runs] += 1
+    count = windows.count[runs]
+    adapted = count >= window
     new = np.array(r_scales, dtype=float)
-    if not any(adapted):
+    if not adapted.any():
         return new, adapted
-    if all(adapted):
-        rows, ready, scales = slice(None), adaptives, new
+    if adapted.all():
+        rows, scales = slice(None), new
     else:
-        rows = np.flatnonzero(adapted)
-        ready = [adaptives[i] for i in rows.tolist()]
+        rows = adapted.nonzero()[0]
         scales = new[rows]
         Pzz, R0 = Pzz[rows], R0[rows]
         blocks = blocks.rows(np.repeat(2 * rows, 2) + np.tile([0, 1], len(rows)))
+    ready, window, count = runs[rows], window[rows], count[rows]
     Pz = (np.diagonal(Pzz, axis1=1, axis2=2)
           + np.diagonal(R0, axis1=1, axis2=2) * np.repeat(scales, 3, axis=1))
-    if len({a.window for a in ready}) == 1:
-        residuals = np.stack([a.residuals for a in ready])
+    residuals = windows.residuals[ready]
+    if (window == window[0]).all():
+        residuals = residuals[:, :window[0]]
         Cz = np.mean(residuals * residuals, axis=1)
     else:
-        Cz = np.array([np.mean(a.residuals * a.residuals, axis=0) for a in ready])
+        Cz = np.array([np.mean(r[:w] * r[:w], axis=0)
+                       for r, w in zip(residuals, window.tolist())])
     Pz_sum = Pz.reshape(-1, 2, 3).sum(axis=2)
     e_new = (Cz.reshape(-1, 2, 3).sum(axis=2) - Pz_sum) / Pz_sum
-    going_on = np.array([a.count > a.window for a in ready])[:, None]
-    de = np.where(going_on, e_new - np.array([a.e for a in ready]), 0.0)
-    for a, e_row, de_row in zip(ready, e_new, de):      # views of arrays no one else holds
-        a.e, a.de = e_row, de_row
+    de = np.where((count > window)[:, None], e_new - windows.e[ready], 0.0)
+    windows.e[ready], windows.de[ready] = e_new, de
     factors = blocks(e_new.reshape(-1), de.reshape(-1)).reshape(-1, 2)
-    low = np.array([a.r_scale_min for a in ready])[:, None]
-    high = np.array([a.r_scale_max for a in ready])[:, None]
-    new[rows] = np.minimum(np.maximum(scales * factors, low), high)
+    new[rows] = np.minimum(np.maximum(scales * factors, windows.low[ready][:, None]),
+                           windows.high[ready][:, None])
     return new, adapted
