@@ -357,19 +357,23 @@ def _same_instants(a, b, period, out):
         out[i] = same_instant(a[i], b[i], period[i])
 
 
-def test_euler_angles_of_quaternion_columns_are_those_of_each_quaternion():
-    """quat_euler_rows against quat_euler bit for bit: random attitudes, unnormalized ones,
+def test_euler_angles_of_sigma_points_are_those_of_each_point():
+    """The Euler angles of the sigma points' MRPs of many filters (_mrp_euler_rows) against
+    quat_euler of each point's quaternion bit for bit: random attitudes, the shadow set,
     pitch at +-90 deg and yaw at -180 deg (reported as +180)."""
-    from navcore.filters.ahrs import quat_euler, quat_euler_rows
+    from navcore.filters.ahrs import _mrp_euler_rows, quat_euler
+    from navcore.ins.mrp import quat_of_mrp, quat_to_mrp
     rng = np.random.default_rng(3)
-    q = rng.normal(size=(4, 500))
-    q[:, 250:] /= np.linalg.norm(q[:, 250:], axis=0)
+    X = rng.normal(size=(40, 13, 6))
+    X[20:, :, :3] *= 3.0                               # |sigma| > 1: the shadow set
     half = math.sqrt(0.5)
-    q[:, 0] = (half, 0.0, half, 0.0)                 # pitch +90 deg
-    q[:, 1] = (-0.0, -0.0, 0.0, 1.0)                 # yaw atan2(-0, -1) = -180 deg
-    rows = quat_euler_rows(q)
-    assert np.array_equal(_bits(rows.T), _bits([quat_euler(c) for c in q.T.tolist()]))
-    assert rows[2, 1] == math.pi
+    X[0, 0, :3] = quat_to_mrp(np.array([half, 0.0, half, 0.0]))       # pitch +90 deg
+    X[0, 1, :3] = quat_to_mrp(np.array([0.0, 0.0, 0.0, 1.0]))         # yaw -180 deg
+    angles = np.empty((40, 13, 3))
+    _mrp_euler_rows(X, angles)
+    expected = [quat_euler(quat_of_mrp(*p[:3].tolist())) for p in X.reshape(-1, 6)]
+    assert np.array_equal(_bits(angles.reshape(-1, 3)), _bits(expected))
+    assert angles[0, 1, 2] == math.pi and abs(angles[0, 0, 1] - math.pi / 2) < 1e-8
 
 
 def test_accepted_rows_is_each_input_s_declared_range():

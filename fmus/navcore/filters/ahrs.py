@@ -46,7 +46,7 @@ from ..core.kernels import jitable, kernel
 from ..core.python_math import hypot
 from ..errors import InputError
 from .fuzzy import FuzzyRScale
-from ..ins.mrp import (dcm_to_mrp, mrp_of_quat, mrp_to_dcm_batch, mrp_to_quat, nearer_set,
+from ..ins.mrp import (dcm_to_mrp, mrp_of_quat, mrp_to_dcm_batch, nearer_set,
                        quat_of_mrp, shadow, shadow_jacobian)
 from ..ins.rotations import wrap_angle
 from .unscented import UnscentedKalmanFilter
@@ -154,21 +154,6 @@ def quat_euler(q):
 
 
 @kernel
-def _euler_rows(q, out):
-    """:func:`_euler` of every column of ``q`` (4, N) into the columns of ``out`` (3, N)."""
-    for i in range(q.shape[1]):
-        out[0, i], out[1, i], out[2, i] = _euler(q[0, i], q[1, i], q[2, i], q[3, i])
-
-
-def quat_euler_rows(q):
-    """:func:`quat_euler` of every column of ``q`` (4, N): the (3, N) roll, pitch and yaw,
-    each the floats of :func:`quat_euler`."""
-    out = np.empty((3, q.shape[1]))
-    _euler_rows(np.ascontiguousarray(q, dtype=float), out)
-    return out
-
-
-@kernel
 def solution_rows(out, rows, x, interval, dq, nav_time, r_scale, columns):
     """:meth:`AhrsFilter._write_solution` without the sigmas for the batch rows ``rows``
     (the state ``x`` (B, 6), pending ``interval`` (B,) and ``dq`` (B, 4), ``nav_time``
@@ -248,14 +233,23 @@ def shadow_switched(x, P):
     return np.concatenate((shadow(sigma), x[3:])), 0.5 * (P + P.T)
 
 
+@kernel
+def _mrp_euler_rows(X, out):
+    """:func:`quat_euler` of the quaternion of the MRP of every point of ``X`` (B, P, >= 3)
+    into ``out`` (B, P, 3)."""
+    for b in range(X.shape[0]):
+        for i in range(X.shape[1]):
+            w, x, y, z = quat_of_mrp(X[b, i, 0], X[b, i, 1], X[b, i, 2])
+            out[b, i, 0], out[b, i, 1], out[b, i, 2] = _euler(w, x, y, z)
+
+
 def euler_sigma_rows(X, Wm, Wc):
     """1-sigma of roll, pitch, yaw (B, 3) from the sigma points ``X`` (B, 13, 6) of B
-    filters (weights ``Wm``, ``Wc``): the angles of every point (:func:`quat_euler_rows`),
+    filters (weights ``Wm``, ``Wc``): the angles of every point (:func:`quat_euler`),
     wrapped about the central point's."""
-    runs, points = X.shape[:2]
-    q = mrp_to_quat(X[:, :, :3].reshape(-1, 3))
     # C order: the stacked products below round by the layout of their operands
-    angles = np.ascontiguousarray(quat_euler_rows(q.T).T).reshape(runs, points, 3)
+    angles = np.empty(X.shape[:2] + (3,))
+    _mrp_euler_rows(np.ascontiguousarray(X, dtype=float), angles)
     dev = wrap_angle(angles - angles[:, :1])
     mean = Wm @ dev
     dev = dev - mean[:, None, :]
