@@ -323,14 +323,17 @@ class AhrsFilterBatch(ComponentBatch):
         """:meth:`UkfAhrsEngine.update` of the runs ``rows``; the rows that updated."""
         # checked_covariance's state_error is None for every run whose x and P are finite
         usable = finite_rows(self.x, rows) & finite_rows(self.P, rows)
-        for i in (~usable).nonzero()[0].tolist():
-            self.fail(int(rows[i]), state_error(self.x[rows[i]], self.P[rows[i]]))
-        rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
+        if not usable.all():
+            for i in (~usable).nonzero()[0].tolist():
+                self.fail(int(rows[i]), state_error(self.x[rows[i]], self.P[rows[i]]))
+            rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
         ok = self._predict_rows(rows)
-        rows, f_b, m_b, imu_time = rows[ok], f_b[ok], m_b[ok], imu_time[ok]
+        if not ok.all():
+            rows, f_b, m_b, imu_time = rows[ok], f_b[ok], m_b[ok], imu_time[ok]
         ok = self._correct_rows(rows, f_b, m_b)
-        rows = rows[ok]
-        self.last_update[rows] = imu_time[ok]
+        if not ok.all():
+            rows, imu_time = rows[ok], imu_time[ok]
+        self.last_update[rows] = imu_time
         col = self.columns
         self.out[rows, col["updated"]] = 1.0
         self.out[rows, col["nis"]] = self.last_nis[rows]
@@ -366,10 +369,12 @@ class AhrsFilterBatch(ComponentBatch):
         Y = propagate_points(X, self.dq[rows], T)
         x, P, finite = predicted_moments_rows(Y, self.Wm, self.Wc, Q,
                                               np.ones(len(rows)))
-        for b in rows[~finite].tolist():
-            self.fail(b, predicted_state_error())
-        rows = rows[finite]
-        self.x[rows], self.P[rows] = x[finite], P[finite]
+        taken = slice(None)
+        if not finite.all():
+            for b in rows[~finite].tolist():
+                self.fail(b, predicted_state_error())
+            rows, taken = rows[finite], finite
+        self.x[rows], self.P[rows] = x[taken], P[taken]
         self.dq[rows] = (1.0, 0.0, 0.0, 0.0)
         self.interval[rows] = 0.0
         self._shadow_rows(rows)
@@ -385,12 +390,14 @@ class AhrsFilterBatch(ComponentBatch):
         R = self.R0[rows] * np.repeat(self.r_scale[rows], 3, axis=1)[:, :, None]
         result = correct_rows(self.x[rows], self.P[rows], z, z_pred, Pzz + R, Pxz)
         ok = result.status == 0
-        for i in (~ok).nonzero()[0].tolist():
-            self.fail(int(rows[i]), correction_error(result.status[i]))
-        rows = rows[ok]
-        self.x[rows], self.P[rows] = result.x[ok], result.P[ok]
-        self.last_nis[rows] = self.ukf_nis[rows] = result.nis[ok]
-        self.log_likelihood[rows] = result.log_likelihood[ok]
+        taken = slice(None)
+        if not ok.all():
+            for i in (~ok).nonzero()[0].tolist():
+                self.fail(int(rows[i]), correction_error(result.status[i]))
+            rows, taken = rows[ok], ok
+        self.x[rows], self.P[rows] = result.x[taken], result.P[taken]
+        self.last_nis[rows] = self.ukf_nis[rows] = result.nis[taken]
+        self.log_likelihood[rows] = result.log_likelihood[taken]
         self._shadow_rows(rows)
         return ok
 
