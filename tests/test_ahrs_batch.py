@@ -57,16 +57,22 @@ def _batch(cls, run_parameters):
     return batch
 
 
-def _run_both(cls, run_parameters, feeds, steps, meddle=None):
-    """The batch and each run alone on ``feeds``; ``meddle(k, batch, singles)`` may change
-    both before step k.  Returns the batch's outputs, the singles' and the batch."""
+def _started(cls, run_parameters):
+    """The batch of the runs and each run alone, started."""
     batch = _batch(cls, run_parameters)
     batch.start(0.0)
     singles = []
     for p in run_parameters:
-        f = cls(**{**AHRS_PARAMS, **p})
-        f.start(0.0)
-        singles.append(f)
+        single = cls(**{**AHRS_PARAMS, **p})
+        single.start(0.0)
+        singles.append(single)
+    return batch, singles
+
+
+def _run_both(cls, run_parameters, feeds, steps, meddle=None):
+    """The batch and each run alone on ``feeds``; ``meddle(k, batch, singles)`` may change
+    both before step k.  Returns the batch's outputs, the singles' and the batch."""
+    batch, singles = _started(cls, run_parameters)
     names = [p.name for p in cls.outputs]
     together, alone = [], []
     for k in range(steps):
@@ -125,7 +131,8 @@ def test_the_runs_update_together_in_one_call(monkeypatch, profiles):  # noqa: F
     assert len(calls) >= 15 and set(calls) == {3}
 
 
-def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(profiles):  # noqa: F811
+@pytest.mark.parametrize("cls", [UkfAhrs, FuzzyUkfAhrs])
+def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(cls, profiles):  # noqa: F811
     feeds = _feeds(profiles(TABLE), [3, 4, 5], 300)
     feeds[0][120] = {**feeds[0][120], "imu_dt": -1.0}            # refused: imu_dt > 0
 
@@ -134,7 +141,7 @@ def test_a_refused_input_and_a_broken_covariance_fail_their_run_alone(profiles):
             batch.P[2, 1, 1] = math.nan
             singles[2].engine.ukf.P = batch.P[2].copy()
 
-    together, alone, batch = _run_both(UkfAhrs, [{}, {}, {}], feeds, 300, meddle)
+    together, alone, batch = _run_both(cls, [{}, {}, {}], feeds, 300, meddle)
     failures = batch.take_failures()
     assert sorted(failures) == [0, 2]
     assert "imu_dt" in str(failures[0]) and "'P' contains NaN" in str(failures[2])
@@ -270,14 +277,13 @@ def test_magnetometer_draws_each_sample_s_numbers_from_its_own_stream():
 @pytest.mark.parametrize("compiled", [True, False], ids=["kernel", "source"])
 def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
     """accumulate_rows against _qmul and _rotvec_quat of each row (the single engine's
-    accumulate) and the shell's test of a due update, solution_rows with pitch_of_terms
-    against quat_euler of the single engine's _state_quat (its current_quat) and the
-    state's bias and scales, and the time update's kernel against its Python source, bit
-    for bit, compiled and as their Python source, on both sides of the small-angle series
-    (|v| = 1e-6), at zero and with no pending interval."""
+    accumulate) and the shell's test of a due update, solution_rows against quat_euler of
+    the single engine's _state_quat (its current_quat) and the state's bias and scales, and
+    the time update's kernel against its Python source, bit for bit, compiled and as their
+    Python source, on both sides of the small-angle series (|v| = 1e-6), at zero and with
+    no pending interval."""
     from navcore.filters.ahrs import (_propagate_rows, _qmul, _rotvec_quat, _state_quat,
-                                      accumulate_rows, pitch_of_terms, quat_euler,
-                                      solution_rows)
+                                      accumulate_rows, quat_euler, solution_rows)
     accumulate = accumulate_rows if compiled else accumulate_rows.py_func
     solutions = solution_rows if compiled else solution_rows.py_func
     rng = np.random.default_rng(5)
@@ -313,13 +319,11 @@ def test_quaternion_kernels_of_rows_are_the_single_engine_s_floats(compiled):
     nav_time, r_scale = rng.uniform(0, 100, 800), rng.uniform(0.5, 2.0, (800, 2))
     rows = np.arange(0, 800, 2)
     out = np.zeros((800, 12))
-    terms = np.empty((3, rows.size))
-    solutions(out, rows, x, interval, dq, nav_time, r_scale, np.arange(9), terms)
-    out[rows, 9] = pitch_of_terms(*terms)
+    solutions(out, rows, x, interval, dq, nav_time, r_scale, np.arange(10))
     for b in rows.tolist():
         roll, pitch, yaw = quat_euler(_state_quat(*x[b].tolist(), interval[b].item(),
                                                   tuple(dq[b].tolist())))
-        expected = [nav_time[b], 1.0, roll, yaw, *x[b, 3:], *r_scale[b], pitch]
+        expected = [nav_time[b], 1.0, roll, pitch, yaw, *x[b, 3:], *r_scale[b]]
         assert np.array_equal(_bits(out[b, :10]), _bits(expected)), b
     assert not out[1::2].any()
     # the time update over the points of 50 filters, spread wide enough to need the shadow
@@ -353,19 +357,23 @@ def _same_instants(a, b, period, out):
         out[i] = same_instant(a[i], b[i], period[i])
 
 
-def test_euler_angles_of_quaternion_columns_are_those_of_each_quaternion():
-    """quat_euler_rows against quat_euler bit for bit: random attitudes, unnormalized ones,
+def test_euler_angles_of_sigma_points_are_those_of_each_point():
+    """The Euler angles of the sigma points' MRPs of many filters (_mrp_euler_rows) against
+    quat_euler of each point's quaternion bit for bit: random attitudes, the shadow set,
     pitch at +-90 deg and yaw at -180 deg (reported as +180)."""
-    from navcore.filters.ahrs import quat_euler, quat_euler_rows
+    from navcore.filters.ahrs import _mrp_euler_rows, quat_euler
+    from navcore.ins.mrp import quat_of_mrp, quat_to_mrp
     rng = np.random.default_rng(3)
-    q = rng.normal(size=(4, 500))
-    q[:, 250:] /= np.linalg.norm(q[:, 250:], axis=0)
+    X = rng.normal(size=(40, 13, 6))
+    X[20:, :, :3] *= 3.0                               # |sigma| > 1: the shadow set
     half = math.sqrt(0.5)
-    q[:, 0] = (half, 0.0, half, 0.0)                 # pitch +90 deg
-    q[:, 1] = (-0.0, -0.0, 0.0, 1.0)                 # yaw atan2(-0, -1) = -180 deg
-    rows = quat_euler_rows(q)
-    assert np.array_equal(_bits(rows.T), _bits([quat_euler(c) for c in q.T.tolist()]))
-    assert rows[2, 1] == math.pi
+    X[0, 0, :3] = quat_to_mrp(np.array([half, 0.0, half, 0.0]))       # pitch +90 deg
+    X[0, 1, :3] = quat_to_mrp(np.array([0.0, 0.0, 0.0, 1.0]))         # yaw -180 deg
+    angles = np.empty((40, 13, 3))
+    _mrp_euler_rows(X, angles)
+    expected = [quat_euler(quat_of_mrp(*p[:3].tolist())) for p in X.reshape(-1, 6)]
+    assert np.array_equal(_bits(angles.reshape(-1, 3)), _bits(expected))
+    assert angles[0, 1, 2] == math.pi and abs(angles[0, 0, 1] - math.pi / 2) < 1e-8
 
 
 def test_accepted_rows_is_each_input_s_declared_range():
@@ -390,3 +398,36 @@ def test_accepted_rows_is_each_input_s_declared_range():
     expected = [all(limits[n].contains(v) for n, v in zip(names, row)) for row in values.tolist()]
     assert rows.tolist() == expected
     assert 0 < sum(expected) < len(expected)
+
+
+def test_stacked_row_column_products_are_each_row_s_dot():
+    """The batch's |sigma|^2 of every run (numpy's stacked (1, 3) x (3, 1) products) against
+    the engine's float(x[:3] @ x[:3]) per run, bit for bit, over 16 decades (a stacked
+    einsum, by contrast, rounds otherwise)."""
+    rng = np.random.default_rng(8)
+    mrp = rng.normal(size=(20000, 3)) * 10.0 ** rng.integers(-8, 8, (20000, 1))
+    stacked = np.matmul(mrp[:, None, :], mrp[:, :, None])[:, 0, 0]
+    assert np.array_equal(_bits(stacked), _bits([float(r @ r) for r in mrp]))
+    assert not np.array_equal(_bits(np.einsum("bi,bi->b", mrp, mrp)), _bits(stacked))
+
+
+@pytest.mark.parametrize("cls", [UkfAhrs, FuzzyUkfAhrs])
+def test_the_runs_a_batch_keeps_go_on_as_alone(cls, profiles):  # noqa: F811
+    """Three runs (their own fuzzy windows), the middle one dropped from the batch after 60
+    steps (as the master drops a failed run): the two kept runs' outputs stay their single
+    runs', bit for bit, through the updates after it."""
+    runs = [{"fuzzy_window": w} for w in (4, 6, 8)] if cls is FuzzyUkfAhrs else [{}, {}, {}]
+    feeds = _feeds(profiles(TABLE), [3, 4, 5], 200)
+    kept = [0, 2]
+    batch, singles = _started(cls, runs)
+    names = [p.name for p in cls.outputs]
+    for k in range(200):
+        if k == 60:
+            batch.keep(kept)
+            singles = [singles[b] for b in kept]
+            feeds = [feeds[b] for b in kept]
+        out = batch.advance(k * STEP, STEP, _batch_inputs(feeds, k))
+        for b, single in enumerate(singles):
+            expected = single.advance(k * STEP, STEP, feeds[b][k])
+            assert np.array_equal(_bits(out[b]), _bits([float(expected[n]) for n in names]))
+    assert batch.take_failures() == {} and batch.runs == 2

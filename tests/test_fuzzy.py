@@ -231,3 +231,16 @@ def test_the_compiled_aggregation_is_numpy_s_minimum_and_maximum(compiled):
         expected = np.max(np.minimum(f.output_sets, fired[:, None]), axis=0)
         assert np.array_equal(got[k], expected, equal_nan=True), k
     assert np.isnan(got[7]).all() and np.isnan(got[15]).all()
+
+
+def test_stacked_centroid_products_are_each_row_s_dot():
+    """The centroids' stacked (1, grid) x (grid, 1) products of StackedInference against
+    numpy's 1-D dot of each row (what one inference computed before they were stacked),
+    bit for bit, on the grid's length and on random memberships."""
+    from navcore.filters.fuzzy import _GRID_POINTS
+    rng = np.random.default_rng(4)
+    aggregate = rng.random((400, _GRID_POINTS))
+    grids = np.log(rng.uniform(0.2, 5.0, (400, _GRID_POINTS)))
+    stacked = np.matmul(aggregate[:, None, :], grids[:, :, None])[:, 0, 0]
+    expected = [float(np.dot(a, g)) for a, g in zip(aggregate, grids)]
+    assert stacked.view(np.uint64).tolist() == np.array(expected).view(np.uint64).tolist()

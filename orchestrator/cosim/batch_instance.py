@@ -290,7 +290,10 @@ class NativeBatchInstance(BatchInstance):
     def get_outputs(self):
         out = self._outputs
         for columns, buf in self._out_columns:
-            buf[:] = out[:, columns]
+            if buf.dtype == out.dtype and not isinstance(columns, slice):
+                out.take(columns, 1, buf, "clip")    # no temporary; the columns are valid
+            else:
+                buf[:] = out[:, columns]
         return self.real_out, self.int_out, self.bool_out
 
     def do_step(self, t: float, h: float) -> None:

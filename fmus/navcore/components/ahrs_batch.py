@@ -23,14 +23,13 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
   rotation-vector quaternions are the single engine's float formulas (``_qmul``,
   ``_rotvec_quat``) compiled into a kernel over the runs
   (:func:`~navcore.filters.ahrs.accumulate_rows`; compiled ``sin``, ``cos`` and ``atan2``
-  are libm's, as Python's), and the outputs but the sigmas and the pitch are one kernel call
+  are libm's, as Python's), and the outputs but the sigmas are one kernel call
   (:func:`~navcore.filters.ahrs.solution_rows`: the engine's ``_state_quat`` and Euler
-  terms, the formulas the single run's ``current_quat`` and ``quat_euler`` call), whose
-  pitch's ``hypot`` stays Python's ``math`` per element
-  (:func:`~navcore.filters.ahrs.pitch_of_terms`): numpy's and the compiled ``hypot`` differ
-  from Python's (which is not libm's) in the last place for about 0.6 % of arguments, as
-  numpy's ``arctan2`` does from libm's for about 8 %, so they would not give each run the
-  floats of its single run.
+  angles, the formulas the single run's ``current_quat`` and ``quat_euler`` call), whose
+  pitch's ``hypot`` is Python's compiled (:func:`navcore.core.python_math.hypot`): numpy's
+  and C's ``hypot`` differ from Python's in the last place for a fraction of a percent of
+  arguments, as numpy's ``arctan2`` does from libm's for about 8 %, so they would not give
+  each run the floats of its single run.
 
 Everything else is the run's own component, given the batch's values first (:meth:`_lend`)
 and taken back after (:meth:`_adopt`): a run not started yet (TRIAD from its first samples),
@@ -41,6 +40,7 @@ field, alpha/beta/kappa) or whose class steps otherwise.
 """
 from __future__ import annotations
 
+import math
 from typing import List
 
 import numpy as np
@@ -49,10 +49,10 @@ from ..core import signals
 from ..core.batch import ComponentBatch, open_bounds, row_accepted
 from ..core.kernels import kernel
 from ..core.timing import same_instant
-from ..filters.ahrs import (FuzzyAdaptiveR, UkfAhrsEngine, accumulate_rows, adapt_r_scales,
-                            euler_sigma_rows, measure_points,
-                            pitch_of_terms, process_noise_diagonal, propagate_points,
-                            shadow_switched, solution_rows)
+from ..filters.ahrs import (FuzzyAdaptiveR, FuzzyWindows, UkfAhrsEngine, accumulate_rows,
+                            adapt_r_scales, euler_sigma_rows, measure_points,
+                            process_noise_diagonal, propagate_points, shadow_switched,
+                            solution_rows)
 from ..filters.fuzzy import StackedInference
 from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
                                  predicted_moments_rows, predicted_state_error,
@@ -102,6 +102,35 @@ def _steps_of_rows(values, low, high, alive, started, native, nav_time, out, upd
             step[b] = _OWN
 
 
+@kernel
+def _finite_rows(values, rows, out):
+    """Whether every value of ``values[rows[i]]`` is finite, into ``out[i]``."""
+    for i in range(rows.shape[0]):
+        finite = True
+        for v in values[rows[i]].flat:
+            if not math.isfinite(v):
+                finite = False
+                break
+        out[i] = finite
+
+
+def finite_rows(values: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Per run of ``rows``, whether its row of ``values`` (B, ...) is finite throughout."""
+    out = np.empty(len(rows), dtype=bool)
+    _finite_rows(values, rows, out)
+    return out
+
+
+@kernel
+def _near_shadow_rows(x, rows, out):
+    """Whether the MRP of ``x[rows[i]]`` (its first 3 values) has a squared norm above 0.5,
+    into ``out[i]``: the runs that may switch to the shadow set (which the engine's own
+    test, |sigma|^2 > 1, decides)."""
+    for i in range(rows.shape[0]):
+        r = x[rows[i]]
+        out[i] = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] > 0.5
+
+
 def _engine_path(engine, path):
     obj = engine
     for part in path.split(".")[:-1]:
@@ -129,14 +158,13 @@ class AhrsFilterBatch(ComponentBatch):
         self.last_update = np.zeros(runs)
         self.nav_time = np.full(runs, float(start_time))
         alive = [b for b in range(runs) if b not in self._failures]
-        self._blocks = {}            # the stacked fuzzy inferences of sets of runs
+        self._blocks = {}            # rows of runs -> their stacked fuzzy inferences
         self._native = bool(alive) and self._stands_for(alive)
         col = self.columns
         self._solution_columns = np.array(
-            [col[n] for n in ("nav_time", "aligned", "nav_roll", "nav_yaw",
+            [col[n] for n in ("nav_time", "aligned", "nav_roll", "nav_pitch", "nav_yaw",
                               *signals.NAV_BG_NAMES, "r_scale_accel", "r_scale_mag")],
             dtype=np.intp)
-        self._pitch_column = col["nav_pitch"]
         self._std_columns = np.array([col[n] for n in ("std_roll", "std_pitch", "std_yaw")],
                                      dtype=np.intp)
         self._constants(alive)
@@ -176,11 +204,27 @@ class AhrsFilterBatch(ComponentBatch):
             self.field_intensity[b] = engine.field_intensity
             self.gyro_noise[b] = engine.gyro_arw, engine.gyro_bias_rw
             self.R0[b] = engine.R0
+        self._stack_windows(alive)
         if alive:
             engine = self.members[alive[0]].engine
             ukf = engine.ukf
             self.Wm, self.Wc, self.spread = ukf.Wm, ukf.Wc, ukf._spread
             self.gravity, self.field_unit = engine.gravity, engine.field_unit
+
+    def _stack_windows(self, alive: List[int]) -> None:
+        """The fuzzy adaptations of the runs that have one as the rows of one
+        :class:`~navcore.filters.ahrs.FuzzyWindows` (``windows``; a run without one has
+        window 0), their state taken by :meth:`_adopt`."""
+        adaptives = [self.members[b].engine.adaptive if b in alive else None
+                     for b in range(self.runs)]
+        window = np.array([0 if a is None else a.window for a in adaptives], dtype=np.int64)
+        self.windows = FuzzyWindows(
+            np.zeros((self.runs, int(window.max(initial=0)), 6)),
+            np.zeros(self.runs, dtype=np.int64), np.zeros((self.runs, 2)),
+            np.zeros((self.runs, 2)), window,
+            np.array([1.0 if a is None else a.r_scale_min for a in adaptives]),
+            np.array([1.0 if a is None else a.r_scale_max for a in adaptives]))
+        self._adaptive_rows = (window > 0).nonzero()[0]
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -192,6 +236,12 @@ class AhrsFilterBatch(ComponentBatch):
             getattr(self, name)[b] = getattr(obj, attr)
         self.dq[b] = engine.dq
         self.started[b] = engine.started
+        adaptive = engine.adaptive
+        if adaptive is not None:
+            w = self.windows
+            w.residuals[b, :adaptive.window] = adaptive.residuals
+            w.count[b] = adaptive.count
+            w.e[b], w.de[b] = adaptive.e, adaptive.de
         self.last_update[b] = member.last_update
         self.nav_time[b] = member.nav_time
         self.out[b] = self._outputs_of(member)
@@ -205,6 +255,12 @@ class AhrsFilterBatch(ComponentBatch):
             value = getattr(self, name)[b]
             setattr(obj, attr, value.item() if value.ndim == 0 else value.copy())
         engine.dq = tuple(self.dq[b].tolist())
+        adaptive = engine.adaptive
+        if adaptive is not None:
+            w = self.windows
+            adaptive.residuals = w.residuals[b, :adaptive.window].copy()
+            adaptive.count = w.count[b].item()
+            adaptive.e, adaptive.de = w.e[b].copy(), w.de[b].copy()
         member.nav_time = self.nav_time[b].item()
         member.last_update = self.last_update[b].item()
         out = member.out
@@ -219,8 +275,16 @@ class AhrsFilterBatch(ComponentBatch):
                      "nav_time",
                      "update_interval", "max_mag_age", "field_intensity", "gyro_noise", "R0"):
             setattr(self, name, getattr(self, name)[rows])
+        self.windows = FuzzyWindows(*(values[rows] for values in self.windows))
+        self._blocks = {}                      # keyed by the runs' rows, which moved
+        self._adaptive_rows = (self.windows.window > 0).nonzero()[0]
 
     def _alive(self) -> np.ndarray:
+        if not self._failures:                 # the common case: one array, made once
+            everyone = self.__dict__.get("_everyone")
+            if everyone is None or len(everyone) != self.runs:
+                everyone = self._everyone = np.ones(self.runs, dtype=bool)
+            return everyone
         alive = np.ones(self.runs, dtype=bool)
         alive[list(self._failures)] = False
         return alive
@@ -232,9 +296,9 @@ class AhrsFilterBatch(ComponentBatch):
         step = np.empty(self.runs, dtype=np.int8)
         _steps_of_rows(values, low, high, self._alive(), self.started, self._native,
                        self.nav_time, self.out, self.columns["updated"], step)
-        rows = np.flatnonzero(step == _NATIVE)
+        rows = (step == _NATIVE).nonzero()[0]
         self._step_rows(rows, values[rows])
-        for b in np.flatnonzero(step == _OWN).tolist():
+        for b in (step == _OWN).nonzero()[0].tolist():
             self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
         return self.out
 
@@ -258,25 +322,27 @@ class AhrsFilterBatch(ComponentBatch):
                      imu_time: np.ndarray) -> np.ndarray:
         """:meth:`UkfAhrsEngine.update` of the runs ``rows``; the rows that updated."""
         # checked_covariance's state_error is None for every run whose x and P are finite
-        usable = (np.isfinite(self.x[rows]).all(axis=1)
-                  & np.isfinite(self.P[rows]).all(axis=(1, 2)))
-        for i in np.flatnonzero(~usable).tolist():
-            self.fail(int(rows[i]), state_error(self.x[rows[i]], self.P[rows[i]]))
-        rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
+        usable = finite_rows(self.x, rows) & finite_rows(self.P, rows)
+        if not usable.all():
+            for i in (~usable).nonzero()[0].tolist():
+                self.fail(int(rows[i]), state_error(self.x[rows[i]], self.P[rows[i]]))
+            rows, f_b, m_b, imu_time = rows[usable], f_b[usable], m_b[usable], imu_time[usable]
         ok = self._predict_rows(rows)
-        rows, f_b, m_b, imu_time = rows[ok], f_b[ok], m_b[ok], imu_time[ok]
+        if not ok.all():
+            rows, f_b, m_b, imu_time = rows[ok], f_b[ok], m_b[ok], imu_time[ok]
         ok = self._correct_rows(rows, f_b, m_b)
-        rows = rows[ok]
-        self.last_update[rows] = imu_time[ok]
+        if not ok.all():
+            rows, imu_time = rows[ok], imu_time[ok]
+        self.last_update[rows] = imu_time
         col = self.columns
         self.out[rows, col["updated"]] = 1.0
         self.out[rows, col["nis"]] = self.last_nis[rows]
         self.out[rows, col["nis_dof"]] = 6.0
         if "fuzzy_e_accel" in col and rows.size:
-            adaptives = [self.members[b].engine.adaptive for b in rows.tolist()]
             fuzzy = [col[n] for n in ("fuzzy_e_accel", "fuzzy_e_mag", "fuzzy_de_accel",
                                       "fuzzy_de_mag")]
-            self.out[rows[:, None], fuzzy] = [(*a.e, *a.de) for a in adaptives]
+            self.out[rows[:, None], fuzzy] = np.concatenate((self.windows.e[rows],
+                                                             self.windows.de[rows]), axis=1)
         return rows
 
     def _points(self, rows: np.ndarray) -> np.ndarray:
@@ -290,9 +356,12 @@ class AhrsFilterBatch(ComponentBatch):
     def _predict_rows(self, rows: np.ndarray) -> np.ndarray:
         """The time update of the runs ``rows``; which of them did not fail."""
         T = self.interval[rows]
-        x = self.x
-        diagonal = np.array([process_noise_diagonal(float(x[b, :3] @ x[b, :3]), T_b, arw, rw)
-                             for b, T_b, (arw, rw) in zip(rows.tolist(), T.tolist(),
+        mrp = self.x[rows, :3]
+        # |sigma|^2 of each run: numpy's stacked product of a row and a column takes each
+        # slice's 1-D dot, the engine's float(x[:3] @ x[:3])
+        squares = np.matmul(mrp[:, None, :], mrp[:, :, None])[:, 0, 0]
+        diagonal = np.array([process_noise_diagonal(s, T_b, arw, rw)
+                             for s, T_b, (arw, rw) in zip(squares.tolist(), T.tolist(),
                                                           self.gyro_noise[rows].tolist())])
         Q = np.zeros((len(rows), 6, 6))
         Q[:, _DIAGONAL, _DIAGONAL] = np.repeat(diagonal, 3, axis=1)
@@ -300,10 +369,12 @@ class AhrsFilterBatch(ComponentBatch):
         Y = propagate_points(X, self.dq[rows], T)
         x, P, finite = predicted_moments_rows(Y, self.Wm, self.Wc, Q,
                                               np.ones(len(rows)))
-        for b in rows[~finite].tolist():
-            self.fail(b, predicted_state_error())
-        rows = rows[finite]
-        self.x[rows], self.P[rows] = x[finite], P[finite]
+        taken = slice(None)
+        if not finite.all():
+            for b in rows[~finite].tolist():
+                self.fail(b, predicted_state_error())
+            rows, taken = rows[finite], finite
+        self.x[rows], self.P[rows] = x[taken], P[taken]
         self.dq[rows] = (1.0, 0.0, 0.0, 0.0)
         self.interval[rows] = 0.0
         self._shadow_rows(rows)
@@ -319,35 +390,36 @@ class AhrsFilterBatch(ComponentBatch):
         R = self.R0[rows] * np.repeat(self.r_scale[rows], 3, axis=1)[:, :, None]
         result = correct_rows(self.x[rows], self.P[rows], z, z_pred, Pzz + R, Pxz)
         ok = result.status == 0
-        for i in np.flatnonzero(~ok).tolist():
-            self.fail(int(rows[i]), correction_error(result.status[i]))
-        rows = rows[ok]
-        self.x[rows], self.P[rows] = result.x[ok], result.P[ok]
-        self.last_nis[rows] = self.ukf_nis[rows] = result.nis[ok]
-        self.log_likelihood[rows] = result.log_likelihood[ok]
+        taken = slice(None)
+        if not ok.all():
+            for i in (~ok).nonzero()[0].tolist():
+                self.fail(int(rows[i]), correction_error(result.status[i]))
+            rows, taken = rows[ok], ok
+        self.x[rows], self.P[rows] = result.x[taken], result.P[taken]
+        self.last_nis[rows] = self.ukf_nis[rows] = result.nis[taken]
+        self.log_likelihood[rows] = result.log_likelihood[taken]
         self._shadow_rows(rows)
         return ok
 
     def _adapt_r(self, rows: np.ndarray, innovations: np.ndarray, Pzz: np.ndarray) -> None:
         """The fuzzy adaptation of R of the runs ``rows`` that have one, in one
-        :func:`~navcore.filters.ahrs.adapt_r_scales` call."""
-        adaptives = [self.members[b].engine.adaptive for b in rows.tolist()]
-        picked = [i for i, a in enumerate(adaptives) if a is not None]
-        if not picked:
+        :func:`~navcore.filters.ahrs.adapt_r_scales` call on the batch's windows."""
+        picked = (self.windows.window[rows] > 0).nonzero()[0]
+        if not picked.size:
             return
-        adaptives = [adaptives[i] for i in picked]
-        key = tuple(id(a.inference) for a in adaptives)    # the cache holds them: ids stay
-        blocks = self._blocks.get(key)
-        if blocks is None:
-            blocks = self._blocks[key] = StackedInference(
-                [a.inference for a in adaptives for _ in range(2)])
         runs = rows[picked]
-        self.r_scale[runs] = adapt_r_scales(adaptives, blocks, innovations[picked],
+        key = tuple(runs.tolist())
+        blocks = self._blocks.get(key)
+        if blocks is None:           # the runs' inferences, in the order of these runs
+            blocks = self._blocks[key] = StackedInference(
+                [self.members[b].engine.adaptive.inference for b in key for _ in range(2)])
+        self.r_scale[runs] = adapt_r_scales(self.windows, runs, blocks, innovations[picked],
                                             Pzz[picked], self.R0[runs], self.r_scale[runs])[0]
 
     def _shadow_rows(self, rows: np.ndarray) -> None:
         """Each engine's switch to the shadow MRP (:func:`shadow_switched`, its own test)."""
-        near = np.einsum("bi,bi->b", self.x[rows, :3], self.x[rows, :3]) > 0.5
+        near = np.empty(len(rows), dtype=bool)
+        _near_shadow_rows(self.x, rows, near)
         for b in rows[near].tolist():
             switched = shadow_switched(self.x[b], self.P[b])
             if switched is not None:
@@ -357,16 +429,14 @@ class AhrsFilterBatch(ComponentBatch):
     def _write_solutions(self, rows: np.ndarray, updated: np.ndarray) -> None:
         """:meth:`AhrsFilter._write_solution` of the runs ``rows`` (sigmas: ``updated``); a
         run whose state is not finite writes its own (its DivergenceError)."""
-        if not np.isfinite(self.x[rows]).all():
-            finite = np.isfinite(self.x[rows]).all(axis=1)
+        finite = finite_rows(self.x, rows)
+        if not finite.all():
             for b in rows[~finite].tolist():
                 self._by_itself(b, lambda m: m._write_solution(sigmas=False))
             rows = rows[finite]
             updated = updated[np.isin(updated, rows)]
-        pitch_terms = np.empty((3, len(rows)))
         solution_rows(self.out, rows, self.x, self.interval, self.dq, self.nav_time,
-                      self.r_scale, self._solution_columns, pitch_terms)
-        self.out[rows, self._pitch_column] = pitch_of_terms(*pitch_terms)
+                      self.r_scale, self._solution_columns)
         if updated.size:
             self.out[updated[:, None], self._std_columns] = euler_sigma_rows(
                 self._points(updated), self.Wm, self.Wc)

@@ -38,14 +38,15 @@ Fuzzy adaptive R (paper 003 eqs. 15-19, 25): see :class:`FuzzyAdaptiveR`.
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 
 from ..core.kernels import jitable, kernel
+from ..core.python_math import hypot
 from ..errors import InputError
 from .fuzzy import FuzzyRScale
-from ..ins.mrp import (dcm_to_mrp, mrp_of_quat, mrp_to_dcm_batch, mrp_to_quat, nearer_set,
+from ..ins.mrp import (dcm_to_mrp, mrp_of_quat, mrp_to_dcm_batch, nearer_set,
                        quat_of_mrp, shadow, shadow_jacobian)
 from ..ins.rotations import wrap_angle
 from .unscented import UnscentedKalmanFilter
@@ -138,61 +139,37 @@ def _folded_yaw(yaw):
     return math.pi if yaw <= -math.pi else yaw
 
 
+@jitable
+def _euler(w, x, y, z):
+    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z), yaw in
+    (-pi, pi] (Python's ``hypot`` in kernels too: a C one rounds otherwise)."""
+    roll, yaw, sine, a, b = _euler_terms(w, x, y, z)
+    return roll, math.atan2(sine, hypot(a, b)), _folded_yaw(yaw)
+
+
 def quat_euler(q):
     """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion ``q`` (a 4-sequence of
     floats), yaw in (-pi, pi]."""
-    roll, yaw, sine, a, b = _euler_terms(*q)
-    return roll, math.atan2(sine, math.hypot(a, b)), _folded_yaw(yaw)
+    return _euler(*q)
 
 
 @kernel
-def _euler_terms_rows(q, out):
-    """:func:`_euler_terms` of every column of ``q`` (4, N) into the columns of ``out``
-    (5, N)."""
-    for i in range(q.shape[1]):
-        terms = _euler_terms(q[0, i], q[1, i], q[2, i], q[3, i])
-        out[0, i], out[1, i], out[2, i], out[3, i], out[4, i] = terms
-
-
-def quat_euler_rows(q):
-    """:func:`quat_euler` of every column of ``q`` (4, N): the (3, N) roll, pitch and yaw,
-    each the floats of :func:`quat_euler` (its terms compiled, whose ``atan2`` is libm's as
-    Python's; the pitch's ``hypot`` Python's per element: a compiled one, or numpy's, rounds
-    otherwise)."""
-    terms = np.empty((5, q.shape[1]))
-    _euler_terms_rows(np.ascontiguousarray(q, dtype=float), terms)
-    roll, yaw, sine, a, b = terms
-    return np.array((roll, pitch_of_terms(sine, a, b), np.where(yaw <= -math.pi, math.pi, yaw)))
-
-
-def pitch_of_terms(sine, a, b):
-    """The pitch of :func:`quat_euler` from the arrays of its terms: Python's ``math.atan2``
-    and ``math.hypot`` per element (numpy's and a compiled ``hypot`` round otherwise)."""
-    return list(map(math.atan2, sine.tolist(), map(math.hypot, a.tolist(), b.tolist())))
-
-
-@kernel
-def solution_rows(out, rows, x, interval, dq, nav_time, r_scale, columns, pitch_terms):
+def solution_rows(out, rows, x, interval, dq, nav_time, r_scale, columns):
     """:meth:`AhrsFilter._write_solution` without the sigmas for the batch rows ``rows``
     (the state ``x`` (B, 6), pending ``interval`` (B,) and ``dq`` (B, 4), ``nav_time``
     (B,), ``r_scale`` (B, 2)) into the rows of ``out``: ``columns`` of nav_time, aligned,
-    nav_roll, nav_yaw, nav_bg_x/y/z, r_scale_accel, r_scale_mag; the pitch is left to the
-    caller, its terms (sine, a, b) of row i of ``rows`` in the columns of ``pitch_terms``
-    (3, len(rows)) (:func:`pitch_of_terms`)."""
+    nav_roll, nav_pitch, nav_yaw, nav_bg_x/y/z, r_scale_accel, r_scale_mag."""
     for i in range(rows.shape[0]):
         b = rows[i]
         r = x[b]
         q = _state_quat(r[0], r[1], r[2], r[3], r[4], r[5], interval[b],
                         (dq[b, 0], dq[b, 1], dq[b, 2], dq[b, 3]))
-        roll, yaw, sine, ta, tb = _euler_terms(q[0], q[1], q[2], q[3])
         o = out[b]
         o[columns[0]] = nav_time[b]
         o[columns[1]] = 1.0
-        o[columns[2]] = roll
-        o[columns[3]] = _folded_yaw(yaw)
-        o[columns[4]], o[columns[5]], o[columns[6]] = r[3], r[4], r[5]
-        o[columns[7]], o[columns[8]] = r_scale[b, 0], r_scale[b, 1]
-        pitch_terms[0, i], pitch_terms[1, i], pitch_terms[2, i] = sine, ta, tb
+        o[columns[2]], o[columns[3]], o[columns[4]] = _euler(q[0], q[1], q[2], q[3])
+        o[columns[5]], o[columns[6]], o[columns[7]] = r[3], r[4], r[5]
+        o[columns[8]], o[columns[9]] = r_scale[b, 0], r_scale[b, 1]
 
 
 @kernel
@@ -256,14 +233,23 @@ def shadow_switched(x, P):
     return np.concatenate((shadow(sigma), x[3:])), 0.5 * (P + P.T)
 
 
+@kernel
+def _mrp_euler_rows(X, out):
+    """:func:`quat_euler` of the quaternion of the MRP of every point of ``X`` (B, P, >= 3)
+    into ``out`` (B, P, 3)."""
+    for b in range(X.shape[0]):
+        for i in range(X.shape[1]):
+            w, x, y, z = quat_of_mrp(X[b, i, 0], X[b, i, 1], X[b, i, 2])
+            out[b, i, 0], out[b, i, 1], out[b, i, 2] = _euler(w, x, y, z)
+
+
 def euler_sigma_rows(X, Wm, Wc):
     """1-sigma of roll, pitch, yaw (B, 3) from the sigma points ``X`` (B, 13, 6) of B
-    filters (weights ``Wm``, ``Wc``): the angles of every point (:func:`quat_euler_rows`),
+    filters (weights ``Wm``, ``Wc``): the angles of every point (:func:`quat_euler`),
     wrapped about the central point's."""
-    runs, points = X.shape[:2]
-    q = mrp_to_quat(X[:, :, :3].reshape(-1, 3))
     # C order: the stacked products below round by the layout of their operands
-    angles = np.ascontiguousarray(quat_euler_rows(q.T).T).reshape(runs, points, 3)
+    angles = np.empty(X.shape[:2] + (3,))
+    _mrp_euler_rows(np.ascontiguousarray(X, dtype=float), angles)
     dev = wrap_angle(angles - angles[:, :1])
     mean = Wm @ dev
     dev = dev - mean[:, None, :]
@@ -405,53 +391,78 @@ class FuzzyAdaptiveR:
         self.e = np.zeros(2)
         self.de = np.zeros(2)
 
+    def windows(self) -> "FuzzyWindows":
+        """This adaptation as the one row of a :class:`FuzzyWindows`, whose arrays but the
+        count are views of its own."""
+        return FuzzyWindows(self.residuals[None], np.array([self.count]), self.e[None],
+                            self.de[None], np.array([self.window]),
+                            np.array([self.r_scale_min]), np.array([self.r_scale_max]))
+
     def step(self, innovation, Pzz, R0, r_scale):
         """New block scales after the innovation ``innovation`` (see the class docstring);
         ``r_scale`` itself until the window is full."""
-        new, adapted = adapt_r_scales([self], self.blocks, np.asarray(innovation)[None],
-                                      np.asarray(Pzz)[None], np.asarray(R0)[None],
+        windows = self.windows()
+        new, adapted = adapt_r_scales(windows, np.zeros(1, dtype=np.intp), self.blocks,
+                                      np.asarray(innovation)[None], np.asarray(Pzz)[None],
+                                      np.asarray(R0)[None],
                                       np.asarray(r_scale, dtype=float)[None])
+        self.count = int(windows.count[0])
         return new[0] if adapted[0] else r_scale
 
 
-def adapt_r_scales(adaptives, blocks, innovations, Pzz, R0, r_scales):
-    """:meth:`FuzzyAdaptiveR.step` of the adaptations ``adaptives`` (n, one per filter) at
-    once, with their innovations (n, 6), ``Pzz`` and ``R0`` (n, 6, 6) and scales (n, 2);
-    ``blocks`` the :class:`~navcore.filters.fuzzy.StackedInference` of their 2n blocks
-    (filter i's accelerometer then magnetometer).  Returns the new scales (n, 2) and which
-    filters adapted them (a list of n bools: their window is full); the others' rows are
-    their scales.  Each filter's floats are those of its step alone (numpy's reductions
-    over the window and over a block's 3 values add in the same order stacked)."""
-    for a, innovation in zip(adaptives, innovations):
-        a.residuals[a.count % a.window] = innovation
-        a.count += 1
-    adapted = [a.count >= a.window for a in adaptives]
+class FuzzyWindows(NamedTuple):
+    """The state and limits of n :class:`FuzzyAdaptiveR` as rows: innovation windows
+    ``residuals`` (n, W, 6; filter i's first ``window[i]`` rows), ``count`` (n,), ``e`` and
+    ``de`` (n, 2), the scale limits ``low`` and ``high`` (n,)."""
+
+    residuals: np.ndarray
+    count: np.ndarray
+    e: np.ndarray
+    de: np.ndarray
+    window: np.ndarray
+    low: np.ndarray
+    high: np.ndarray
+
+
+def adapt_r_scales(windows: FuzzyWindows, runs, blocks, innovations, Pzz, R0, r_scales):
+    """:meth:`FuzzyAdaptiveR.step` of the adaptations of rows ``runs`` (n) of ``windows``
+    at once (their rows changed in place), with their innovations (n, 6), ``Pzz`` and ``R0``
+    (n, 6, 6) and scales (n, 2); ``blocks`` the :class:`~navcore.filters.fuzzy.
+    StackedInference` of their 2n blocks (filter i's accelerometer then magnetometer).
+    Returns the new scales (n, 2) and which filters adapted them (n bools: their window is
+    full); the others' rows are their scales.  Each filter's floats are those of its step
+    alone (numpy's reductions over the window and over a block's 3 values add in the same
+    order stacked)."""
+    window = windows.window[runs]
+    windows.residuals[runs, windows.count[runs] % window] = innovations
+    windows.count[runs] += 1
+    count = windows.count[runs]
+    adapted = count >= window
     new = np.array(r_scales, dtype=float)
-    if not any(adapted):
+    if not adapted.any():
         return new, adapted
-    if all(adapted):
-        rows, ready, scales = slice(None), adaptives, new
+    if adapted.all():
+        rows, scales = slice(None), new
     else:
-        rows = np.flatnonzero(adapted)
-        ready = [adaptives[i] for i in rows.tolist()]
+        rows = adapted.nonzero()[0]
         scales = new[rows]
         Pzz, R0 = Pzz[rows], R0[rows]
         blocks = blocks.rows(np.repeat(2 * rows, 2) + np.tile([0, 1], len(rows)))
+    ready, window, count = runs[rows], window[rows], count[rows]
     Pz = (np.diagonal(Pzz, axis1=1, axis2=2)
           + np.diagonal(R0, axis1=1, axis2=2) * np.repeat(scales, 3, axis=1))
-    if len({a.window for a in ready}) == 1:
-        residuals = np.stack([a.residuals for a in ready])
+    residuals = windows.residuals[ready]
+    if (window == window[0]).all():
+        residuals = residuals[:, :window[0]]
         Cz = np.mean(residuals * residuals, axis=1)
     else:
-        Cz = np.array([np.mean(a.residuals * a.residuals, axis=0) for a in ready])
+        Cz = np.array([np.mean(r[:w] * r[:w], axis=0)
+                       for r, w in zip(residuals, window.tolist())])
     Pz_sum = Pz.reshape(-1, 2, 3).sum(axis=2)
     e_new = (Cz.reshape(-1, 2, 3).sum(axis=2) - Pz_sum) / Pz_sum
-    going_on = np.array([a.count > a.window for a in ready])[:, None]
-    de = np.where(going_on, e_new - np.array([a.e for a in ready]), 0.0)
-    for a, e_row, de_row in zip(ready, e_new, de):      # views of arrays no one else holds
-        a.e, a.de = e_row, de_row
+    de = np.where((count > window)[:, None], e_new - windows.e[ready], 0.0)
+    windows.e[ready], windows.de[ready] = e_new, de
     factors = blocks(e_new.reshape(-1), de.reshape(-1)).reshape(-1, 2)
-    low = np.array([a.r_scale_min for a in ready])[:, None]
-    high = np.array([a.r_scale_max for a in ready])[:, None]
-    new[rows] = np.minimum(np.maximum(scales * factors, low), high)
+    new[rows] = np.minimum(np.maximum(scales * factors, windows.low[ready][:, None]),
+                           windows.high[ready][:, None])
     return new, adapted

@@ -193,14 +193,15 @@ class StackedInference:
     once by :meth:`__call__`, each giving the floats it gives alone: the memberships (the
     scalar functions), the rules' min and the aggregation's max of every row are one kernel
     call (min and max are exact in any order), and each centroid's dot product is numpy's
-    1-D product of its row (the stacked matrix product rounds otherwise)."""
+    1-D product of its row: a stacked (1, grid) x (grid, 1) product, which numpy computes
+    slice by slice as that dot (a stacked 2-D product of the rows rounds otherwise)."""
 
     def __init__(self, inferences: Sequence[FuzzyRScale]):
         self.inferences = list(inferences)
         #: (8, K): the e then the de feet of every inference
         self.feet = np.array([f.e_feet + f.de_feet for f in inferences], dtype=float).T.copy()
         self.output_sets = np.stack([f.output_sets for f in inferences])  # (K, 5, grid)
-        self.grids = [f.grid for f in inferences]
+        self.grids = np.stack([f.grid for f in inferences])[:, :, None]   # (K, grid, 1)
 
     def rows(self, indices: Sequence[int]) -> "StackedInference":
         """The inferences of the rows ``indices``, in that order."""
@@ -212,7 +213,8 @@ class StackedInference:
         _aggregate_rows(np.asarray(e, dtype=float), np.asarray(de, dtype=float), self.feet,
                         self.output_sets, _FIRING, aggregate)
         total = aggregate.sum(axis=1)
-        centroid = np.array(list(map(np.dot, aggregate, self.grids)))
+        # each slice of the stacked (1, grid) x (grid, 1) product is numpy's 1-D dot
+        centroid = np.matmul(aggregate[:, None, :], self.grids)[:, 0, 0]
         fires = ~(total <= 0.0)
         return np.where(fires, np.exp(centroid / np.where(fires, total, 1.0)), 1.0)
 

@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from ..core.kernels import jitable
+from ..core.python_math import hypot
 
 # Below this angle [rad] the Rodrigues coefficients are evaluated by their Taylor series;
 # truncation error of the kept terms is < theta^6/5040 ~ 2e-22 there, far below rounding.
@@ -134,12 +135,13 @@ def roll_yaw_from_elements(c00, c10, c21, c22):
     return math.atan2(c21, c22), (math.pi if yaw <= -math.pi else yaw)
 
 
+@jitable
 def pitch_from_elements(c20, c21, c22):
     """Pitch of the ZYX Euler angles of a DCM from its elements ``C[i][j]``, by Python's
-    ``math`` (numpy's vectorized ``arctan2`` and ``hypot`` round otherwise, and a compiled
-    ``hypot`` is the C library's, not Python's own algorithm)."""
+    ``math`` (numpy's vectorized ``arctan2`` and ``hypot`` round otherwise; compiled, the
+    ``hypot`` is Python's own algorithm, :mod:`navcore.core.python_math`)."""
     # atan2 instead of asin: exact near +-90 deg and immune to |C20| > 1 by rounding
-    return math.atan2(-c20, math.hypot(c21, c22))
+    return math.atan2(-c20, hypot(c21, c22))
 
 
 def euler_from_elements(c00, c10, c20, c21, c22):
