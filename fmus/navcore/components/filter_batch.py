@@ -427,8 +427,6 @@ class InsGnssFilterBatch(ComponentBatch):
         _solution_rows(out, c, rows, stack["gyro_bias"], stack["accel_bias"],
                        self._covariance_diagonals(), float(self.nav_time),
                        columns["nav_time"], columns["updated"])
-        # the pitch by Python's math (its hypot is not the C library's), as the run alone
-        out[:, c + 7] = list(map(pitch_from_elements, *rows[:, 12:15].T.tolist()))
         if math.isfinite(out.sum()):     # NaN or inf anywhere makes the sum non-finite
             return
         for b in np.flatnonzero(~np.isfinite(out).all(axis=1)).tolist():
@@ -470,10 +468,11 @@ def _any_new_epoch(epoch, last_epoch) -> bool:
 @kernel
 def _solution_rows(out, col, rows, gyro_bias, accel_bias, diagonal, nav_time, time_col,
                    updated_col):
-    """The solution outputs of every run but the pitch, into ``out`` (B, n_outputs) from
-    column ``col`` on, in :data:`~navcore.core.signals.FILTER_OUTPUTS`' order: position and
-    velocity (the strapdown rows' first six columns), roll and yaw
-    (:func:`~navcore.ins.rotations.roll_yaw_from_elements`, as :meth:`Strapdown.solution`),
+    """The solution outputs of every run, into ``out`` (B, n_outputs) from column ``col``
+    on, in :data:`~navcore.core.signals.FILTER_OUTPUTS`' order: position and velocity (the
+    strapdown rows' first six columns), roll, pitch and yaw
+    (:func:`~navcore.ins.rotations.roll_yaw_from_elements` and
+    :func:`~navcore.ins.rotations.pitch_from_elements`, as :meth:`Strapdown.solution`),
     the biases, the sigmas ``sqrt(max(d, 0))`` of the covariance diagonals ``d`` (as numpy's
     ``maximum``: NaN and -0.0 pass), then ``nav_time`` and ``updated`` = 0."""
     for b in range(rows.shape[0]):
@@ -483,6 +482,7 @@ def _solution_rows(out, col, rows, gyro_bias, accel_bias, diagonal, nav_time, ti
             o[col + j] = r[j]
         # C_bn by rows in columns 6..14: C[i][j] is column 6 + 3 i + j
         o[col + 6], o[col + 8] = roll_yaw_from_elements(r[6], r[9], r[13], r[14])
+        o[col + 7] = pitch_from_elements(r[12], r[13], r[14])
         for j in range(3):
             o[col + 9 + j] = gyro_bias[b, j]
             o[col + 12 + j] = accel_bias[b, j]
