@@ -67,6 +67,13 @@ _AHRS_PARAMETERS = (
 )
 
 
+def _vectors(inputs, imu_dt):
+    """The specific force [m/s^2] (the velocity increment over ``imu_dt``) and the
+    magnetometer reading [T] of a step's inputs."""
+    return (np.array([inputs[n] for n in signals.IMU_DVEL_NAMES]) / imu_dt,
+            np.array([inputs[n] for n in signals.MAG_NAMES]))
+
+
 class AhrsFilter(Component):
     """Common shell of the AHRS filters (see the module docstring)."""
 
@@ -124,22 +131,21 @@ class AhrsFilter(Component):
                 f"{imu_dt!r} s starts at {begin!r} s, but the last IMU interval integrated "
                 f"ended at nav_time = {self.nav_time!r} s; step the filter at least as often "
                 "as the IMU delivers samples")
-        f_b = np.array([inputs[n] for n in signals.IMU_DVEL_NAMES]) / imu_dt
-        m_b = np.array([inputs[n] for n in signals.MAG_NAMES])
         mag_fresh = abs(inputs["mag_time"] - imu_time) <= self.params["max_mag_age"] + 1e-9
         engine = self.engine
         self.nav_time = imu_time
         if not engine.started:
             if not mag_fresh:
                 return out
-            engine.start(triad_attitude(f_b, m_b, self.params["mag_inclination"]))
+            engine.start(triad_attitude(*_vectors(inputs, imu_dt),
+                                        self.params["mag_inclination"]))
             self.last_update = imu_time
             self._write_solution(sigmas=True)
             return out
-        engine.accumulate(np.array([inputs[n] for n in signals.IMU_DTHETA_NAMES]), imu_dt)
+        engine.accumulate([inputs[n] for n in signals.IMU_DTHETA_NAMES], imu_dt)
         due = imu_time - self.last_update >= self.params["update_interval"] - 1e-9
         if due and mag_fresh:
-            engine.update(f_b, m_b)
+            engine.update(*_vectors(inputs, imu_dt))
             self.last_update = imu_time
             out["updated"] = True
             out["nis"] = engine.last_nis

@@ -299,7 +299,8 @@ class UkfAhrsEngine:
 
     def accumulate(self, dtheta, dt):
         """Add one gyro increment [rad] over ``dt`` [s] to the pending time update."""
-        self.dq = _qmul(self.dq, _rotvec_quat(*np.asarray(dtheta, dtype=float).tolist()))
+        x, y, z = dtheta
+        self.dq = _qmul(self.dq, _rotvec_quat(float(x), float(y), float(z)))
         self.interval += dt
 
     def _switch_to_shadow(self):
