@@ -83,7 +83,8 @@ def _steps_of_rows(values, low, high, alive, started, native, nav_time, out, upd
     into ``step``: none for a failed run; for a started run whose inputs lie in their open
     bounds ``(low, high)`` (a ``native`` batch): quiet when no new IMU sample came (its
     ``updated`` output column of ``out`` set to 0, the others hold), the batch's step
-    when the new interval starts at its ``nav_time`` (:func:`same_instant`); else its own
+    when the new interval starts at its ``nav_time`` (:func:`same_instant`; ``updated`` set
+    to 0 too, until the run updates); else its own
     code (not started, an input refused, an interval that does not follow: its own error)."""
     for b in range(values.shape[0]):
         if not alive[b]:
@@ -97,6 +98,7 @@ def _steps_of_rows(values, low, high, alive, started, native, nav_time, out, upd
             out[b, updated] = 0.0
             step[b] = _QUIET
         elif same_instant(imu_time - dt, nav_time[b], dt):
+            out[b, updated] = 0.0
             step[b] = _NATIVE
         else:
             step[b] = _OWN
@@ -311,7 +313,6 @@ class AhrsFilterBatch(ComponentBatch):
         accumulate_rows(rows, v[:, 0], v[:, 1], v[:, 2:5], v[:, 8], self.nav_time, self.dq,
                         self.interval, self.last_update, self.update_interval,
                         self.max_mag_age, due)
-        self.out[rows, self.columns["updated"]] = 0.0
         updated = rows[due]
         if updated.size:
             v = v[due]
