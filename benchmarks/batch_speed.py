@@ -8,7 +8,10 @@ swapping from pair to pair.  A campaign's cost is the CPU time of its process (u
 ``resource.getrusage`` of the children: the core-seconds it took, steadier than wall time on
 a shared machine); the printed number per case is the median over the pairs of
 ``(R / cost this) / (R / cost other)``, the ratio of runs per core-second.  Each campaign
-includes its process start and imports, as a user's command does.
+includes its process start and imports, as a user's command does.  Before the first pair
+each checkout runs a two-run campaign of every case, 2 s long, untimed: the compiled kernels
+a case uses are then in the disk cache, as on any machine after its first campaign (a first
+campaign after a change to navcore compiles them, several seconds).
 
     python benchmarks/batch_speed.py --other /path/to/other/checkout --pairs 3 --stop 60
     python benchmarks/batch_speed.py --other ../ref --cases aircraft_500s:Kf --batch 1
@@ -36,6 +39,10 @@ CASES = (("aircraft_500s", "Kf"), ("aircraft_500s", "SageHusaFading"),
          ("ahrs_turntable", "UkfAhrs"), ("ahrs_turntable", "FuzzyUkfAhrs"))
 
 
+#: stop time [s] of the untimed two-run campaign of each case and checkout before the pairs
+WARM_UP_STOP = 2.0
+
+
 def _children_cpu() -> float:
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
@@ -60,6 +67,10 @@ def measure(other: Path, cases, pairs: int, runs: int, stop, batch):
     checkouts = {"this": HERE, "other": other}
     costs = {f"{s}:{f}": [] for s, f in cases}
     with tempfile.TemporaryDirectory(prefix="navfmu-batch-") as tmp:
+        for scenario, filter_name in cases:      # untimed: the kernels compile once per machine
+            for label, checkout in checkouts.items():
+                campaign_cost(checkout, scenario, filter_name, 2, WARM_UP_STOP,
+                              Path(tmp) / f"warm-{label}-{scenario}-{filter_name}")
         for i, order in alternating(pairs, ("this", "other")):
             for scenario, filter_name in cases:
                 key = f"{scenario}:{filter_name}"
