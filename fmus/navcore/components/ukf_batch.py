@@ -33,7 +33,8 @@ from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
                                        interval_means, predict_filter_groups, predict_rows,
                                        prediction_due)
-from ..filters.unscented import checked_covariances, predicted_state_error
+from ..filters.unscented_rows import (checked_covariances, predicted_state_error,
+                                      update_filters)
 from ..ins.error_model import N_STATES
 from .filter_batch import InsGnssFilterBatch
 
@@ -234,6 +235,84 @@ class UkfFilterBatch(InsGnssFilterBatch):
         if member.applies_fixes:
             self._record_last(b)
         self._adopt(b)
+
+    # -- fixes ----------------------------------------------------------------------------
+    def _updates_like_kf(self, member) -> bool:
+        """Whether the batch may update the run's filters with the other runs' (one
+        :func:`update_filters` call): where its shell applies a fix as
+        :meth:`InsGnssFilter._apply` and its engine updates as :meth:`UkfEngine.update` with
+        the linear measurement of :meth:`UkfEngine._h`."""
+        engine = type(member.engine)
+        return (type(member)._apply is self.shell._apply and engine.update is UkfEngine.update
+                and engine._h is UkfEngine._h)
+
+    def _update_together(self, measured: List[tuple]) -> None:
+        """The updates of the runs ``measured`` ((run, z): lent, their own code run up to
+        :meth:`UkfEngine.update`): each engine's code before its filters' update
+        (:meth:`UkfEngine.measured_filters`: the prediction due, CTFA's reacquisition, the
+        IMM's mixing and statistic), the filters of all runs in one :func:`update_filters`
+        call, the IMM banks' probabilities and combinations in one
+        :meth:`UkfEngine.filters_corrected` call, then each run's own code after it
+        (:meth:`UkfEngine.update_finished`, :meth:`InsGnssFilter._applied`), and the run taken
+        back.  Runs of other engine classes or measurement sizes update each by its own
+        :meth:`UkfEngine.update`; a run whose part fails fails alone with its own error."""
+        members = [self.members[b] for b, _ in measured]
+        kinds = {(type(m.engine), m.engine.m, len(z)) for m, (_, z) in zip(members, measured)}
+        if len(kinds) > 1 or self._differ_in_transform(members):
+            for (b, z), member in zip(measured, members):
+                try:
+                    member._applied(z, member.engine.update(z))
+                except Exception as exc:              # the run's own error
+                    self.fail(b, exc)
+                    continue
+                self._adopt(b)
+            return
+        started = []                                  # (run, z, filters, before)
+        for (b, z), member in zip(measured, members):
+            try:
+                filters, before = member.engine.measured_filters(z)
+            except Exception as exc:                  # the run's own error
+                self.fail(b, exc)
+                continue
+            started.append((b, z, filters, before))
+        if not started:
+            return
+        counts = [len(filters) for _, _, filters, _ in started]
+        engine = self.members[started[0][0]].engine
+        corrections, errors = update_filters(
+            [flt for _, _, filters, _ in started for flt in filters],
+            np.repeat(np.array([z for _, z, _, _ in started]), counts, axis=0),
+            np.repeat(np.array([self.members[b].engine.R0 for b, *_ in started]), counts,
+                      axis=0), engine._h)
+        corrected, first = [], 0
+        for (b, z, filters, before), count in zip(started, counts):
+            own = corrections[first:first + count]
+            error = next((e for e in errors[first:first + count] if e is not None), None)
+            first += count
+            if error is not None:
+                self.fail(b, error)
+            else:
+                corrected.append((b, z, before, own))
+        if not corrected:
+            return
+        errors = type(engine).filters_corrected([self.members[b].engine for b, *_ in corrected],
+                                                [own for *_, own in corrected])
+        for (b, z, before, own), error in zip(corrected, errors):
+            member = self.members[b]
+            try:
+                if error is not None:
+                    raise error
+                member._applied(z, member.engine.update_finished(before, own))
+            except Exception as exc:                  # the run's own error
+                self.fail(b, exc)
+                continue
+            self._adopt(b)
+
+    @staticmethod
+    def _differ_in_transform(members) -> bool:
+        """Whether the runs' filters differ in their unscented transform (the points of all
+        runs' filters are one :func:`update_filters` call of one transform)."""
+        return len({(m.engine.alpha, m.engine.beta, m.engine.kappa) for m in members}) > 1
 
     def _covariance_diagonals(self) -> np.ndarray:
         """Every run's :meth:`UkfEngine.covariance_diagonal` (B, 15)."""

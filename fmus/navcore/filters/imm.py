@@ -216,6 +216,34 @@ def imm_combine_rows(mu: np.ndarray, X: np.ndarray,
     return x, 0.5 * (P + P.transpose(0, 2, 1))
 
 
+def update_banks(banks: Sequence["ImmBank"],
+                 log_likelihoods: Sequence[Sequence[float]]) -> List[Optional[Exception]]:
+    """The end of :meth:`ImmBank.update` for every bank of ``banks`` (r models of one state
+    dimension each) after its models' updates, whose log-likelihoods are
+    ``log_likelihoods[i]``: each bank's model probabilities
+    (:func:`imm_update_probabilities`), then the combination of all banks in one
+    :func:`imm_combine_rows` call.  Returns, per bank, the error its own update raised (the
+    bank is then not combined), or None."""
+    errors: List[Optional[Exception]] = [None] * len(banks)
+    updated = []
+    for i, (bank, log_liks) in enumerate(zip(banks, log_likelihoods)):
+        try:
+            bank.mu = imm_update_probabilities(bank.mu, np.asarray(log_liks, dtype=float),
+                                               log=True, floor=bank.floor)
+        except Exception as exc:       # the bank's own error (InputError)
+            errors[i] = exc
+            continue
+        updated.append(bank)
+    if updated:
+        x, P = imm_combine_rows(np.stack([bank.mu for bank in updated]),
+                                np.array([[f.x for f in bank.filters] for bank in updated]),
+                                np.array([[f.P for f in bank.filters] for bank in updated]))
+        for bank, x_bank, P_bank in zip(updated, x, P):
+            bank.x, bank.P = x_bank, P_bank
+            bank.needs_mixing = True
+    return errors
+
+
 class ImmBank:
     """A bank of filters run as an IMM (module docstring).
 
@@ -305,11 +333,9 @@ class ImmBank:
         for j, flt in enumerate(self.filters):
             result = update_fn(flt, j)
             log_liks[j] = result["log_likelihood"] if isinstance(result, dict) else float(result)
-        self.mu = imm_update_probabilities(self.mu, log_liks, log=True, floor=self.floor)
-        self.x, self.P = imm_combine(
-            self.mu, [f.x for f in self.filters], [f.P for f in self.filters]
-        )
-        self.needs_mixing = True
+        error = update_banks([self], [log_liks])[0]
+        if error is not None:
+            raise error
         return log_liks
 
     def subtract_from_states(self, delta: np.ndarray) -> None:
