@@ -54,6 +54,9 @@ class UkfFilterBatch(InsGnssFilterBatch):
         self._predict_interval = np.zeros(runs)
         self._ukf = {}
         self._q_cache = {}
+        self._models_q_cache = {}               # the kept Q of all runs, for each model
+        self._models_q_scales_cache = None
+        self._predicted = None                  # (x, P, views) of the last bank prediction
         alive = [m for b, m in enumerate(self.members) if b not in self._failures]
         engine = alive[0].engine if alive else None
         # the runs predict together when their engines predict as a Ukf with one transform
@@ -106,6 +109,9 @@ class UkfFilterBatch(InsGnssFilterBatch):
             self._predict_interval = self._predict_interval[rows]
             self._ukf = {k: v[rows] for k, v in self._ukf.items()}
             self._q_cache = {}
+            self._models_q_cache = {}
+            self._models_q_scales_cache = None
+            self._predicted = None
 
     # -- stepping -------------------------------------------------------------------------
     def _propagate_rows(self, dtheta, dvel, dt: float) -> None:
@@ -171,43 +177,91 @@ class UkfFilterBatch(InsGnssFilterBatch):
         if not banks:
             return
         models = len(next(iter(banks.values())).filters)
-        P, errors = checked_covariances([flt for bank in banks.values() for flt in bank.filters])
-        checked = []
-        for i, b in enumerate(banks):       # a run fails with its first model's error
-            error = next((e for e in errors[i * models:(i + 1) * models] if e is not None), None)
-            if error is not None:
-                self.fail(b, error)
-            checked.append(error is None)
-        if not all(checked):
+        filters = [flt for bank in banks.values() for flt in bank.filters]
+        stacked = self._predicted_states(filters)
+        if stacked is not None:
+            x, P = stacked
+            errors = ()
+        else:
+            x, _, P, errors = checked_covariances(filters)
+        if any(error is not None for error in errors):
+            checked = []
+            for i, b in enumerate(banks):   # a run fails with its first model's error
+                error = next((e for e in errors[i * models:(i + 1) * models] if e is not None),
+                             None)
+                if error is not None:
+                    self.fail(b, error)
+                checked.append(error is None)
             banks = {b: bank for (b, bank), ok in zip(banks.items(), checked) if ok}
+            x = x.reshape(-1, models, N_STATES)[checked].reshape(-1, N_STATES)
             P = P.reshape(-1, models, N_STATES, N_STATES)[checked].reshape(-1, N_STATES, N_STATES)
         if banks:
-            self._predict_checked_banks(banks, P, models)
+            self._predict_checked_banks(banks, x, P, models)
 
-    def _predict_checked_banks(self, banks, P, models: int) -> None:
+    def _predict_checked_banks(self, banks, x, P, models: int) -> None:
         """The prediction and combination of :meth:`_predict_banks` for the banks ``banks``
-        (run: bank) whose models' checked covariances are ``P``."""
+        (run: bank) whose models' states are ``x`` and checked covariances ``P``."""
         rows = np.array(list(banks))
         filters = [flt for bank in banks.values() for flt in bank.filters]
         sums = self.stack["sums"][:, 0]
         cfg = self.members[rows[0]].engine.config
         finite, x, P = predict_filter_groups(
-            filters, P, interval_means(sums[rows]),
-            np.repeat(self._process_noise(rows, sums[rows, 0]), models, axis=0),
-            np.concatenate([self.members[b].engine.q_scales for b in rows.tolist()]),
-            cfg.gyro_bias_tau, cfg.accel_bias_tau, models)
+            filters, x, P, interval_means(sums[rows]),
+            self._models_process_noise(rows, sums[rows, 0], models),
+            self._models_q_scales(rows), cfg.gyro_bias_tau, cfg.accel_bias_tau, models)
         sums[rows] = 0.0
-        for b in rows[~finite].tolist():
-            self.fail(b, predicted_state_error())
-        if not finite.any():
-            return
-        combined = rows[finite].tolist()
-        x, P = imm_combine_rows(np.stack([banks[b].mu for b in combined]),
-                                x.reshape(-1, models, N_STATES)[finite],
-                                P.reshape(-1, models, N_STATES, N_STATES)[finite])
+        self._predicted = ((x, P, [flt.x for flt in filters], [flt.P for flt in filters])
+                           if finite.all() else None)
+        x = x.reshape(-1, models, N_STATES)
+        P = P.reshape(-1, models, N_STATES, N_STATES)
+        if not finite.all():
+            for b in rows[~finite].tolist():
+                self.fail(b, predicted_state_error())
+            if not finite.any():
+                return
+            rows, x, P = rows[finite], x[finite], P[finite]
+        combined = rows.tolist()
+        x, P = imm_combine_rows(np.stack([banks[b].mu for b in combined]), x, P)
         for i, b in enumerate(combined):
             banks[b].x, banks[b].P = x[i], P[i]
         self._diagonal[combined] = np.diagonal(P, axis1=1, axis2=2)
+
+    def _predicted_states(self, filters):
+        """The states (F, n) and covariances (F, n, n) of the filters ``filters`` as the
+        last bank prediction left them, when it did and nothing has replaced them since
+        (each filter's ``x`` and ``P`` are still the views of that prediction's arrays,
+        which nothing writes into): finite and symmetric, as :func:`checked_covariances`
+        would find them; else None."""
+        predicted = self._predicted
+        if predicted is None:
+            return None
+        x, P, states, covariances = predicted
+        if len(states) != len(filters) or not all(
+                flt.x is state and flt.P is covariance
+                for flt, state, covariance in zip(filters, states, covariances)):
+            return None
+        return x, P
+
+    def _models_process_noise(self, rows: np.ndarray, T: np.ndarray, models: int) -> np.ndarray:
+        """:meth:`_process_noise` of the runs ``rows``, each repeated for its ``models``
+        models (kept, as the runs' own, for all runs' one interval)."""
+        Q = self._process_noise(rows, T)
+        interval = T[0].item()
+        if Q is not self._q_cache.get(interval):
+            return np.repeat(Q, models, axis=0)
+        repeated = self._models_q_cache.get(interval)
+        if repeated is None:
+            repeated = self._models_q_cache[interval] = np.repeat(Q, models, axis=0)
+        return repeated
+
+    def _models_q_scales(self, rows: np.ndarray) -> np.ndarray:
+        """The models' Q scales (:attr:`ImmUkfEngine.q_scales`) of the runs ``rows``, one
+        after the other (parameters: kept for all runs)."""
+        scales = self._models_q_scales_cache
+        if scales is None:
+            scales = self._models_q_scales_cache = np.stack(
+                [member.engine.q_scales for member in self.members])
+        return (scales if len(rows) == len(scales) else scales[rows]).reshape(-1)
 
     def _process_noise(self, rows: np.ndarray, T: np.ndarray) -> np.ndarray:
         """Every run's :meth:`UkfEngine.process_noise` of its interval ``T`` (all runs' for
@@ -279,11 +333,11 @@ class UkfFilterBatch(InsGnssFilterBatch):
             return
         counts = [len(filters) for _, _, filters, _ in started]
         engine = self.members[started[0][0]].engine
+        filters = [flt for _, _, own, _ in started for flt in own]
         corrections, errors = update_filters(
-            [flt for _, _, filters, _ in started for flt in filters],
-            np.repeat(np.array([z for _, z, _, _ in started]), counts, axis=0),
+            filters, np.repeat(np.array([z for _, z, _, _ in started]), counts, axis=0),
             np.repeat(np.array([self.members[b].engine.R0 for b, *_ in started]), counts,
-                      axis=0), engine._h)
+                      axis=0), engine._h, self._predicted_states(filters))
         corrected, first = [], 0
         for (b, z, filters, before), count in zip(started, counts):
             own = corrections[first:first + count]

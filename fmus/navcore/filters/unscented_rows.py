@@ -102,28 +102,53 @@ def predicted_moments_rows(Y: np.ndarray, Wm: np.ndarray, Wc: np.ndarray, Q: np.
     return x, 0.5 * (P + P.transpose(0, 2, 1)), finite
 
 
-def checked_covariances(filters) -> Tuple[np.ndarray, List[Optional[Exception]]]:
+def checked_covariances(filters) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
+                                          List[Optional[Exception]]]:
     """:meth:`UnscentedKalmanFilter.checked_covariance` of every filter of ``filters`` (one
-    state dimension): the covariances (F, n, n) and, per filter, the error its own check
-    raised (None if none; its row is then not meaningful).  The finite, symmetric
-    covariances of every filter are checked by stacked comparisons; a filter that fails them
-    runs its own check, which symmetrizes or raises."""
+    state dimension): the states (F, n), the covariances as given (F, n, n), the checked
+    ones (the given ones, but symmetrized where a filter's own check symmetrized them) and,
+    per filter, the error its own check raised (None if none; its rows are then not
+    meaningful).  The covariances and states of every filter are checked for finite values
+    and symmetry by one kernel call (:func:`_finite_symmetric_rows`); a filter that fails
+    them runs its own check, which symmetrizes or raises."""
     n = filters[0].n
+    count = len(filters)
+    passed = np.zeros(count, dtype=bool)
     if all(f.x.shape == (n,) and f.P.shape == (n, n) for f in filters):
-        P = np.stack([f.P for f in filters])
         x = np.stack([f.x for f in filters])
-        passed = (np.isfinite(P).all(axis=(1, 2)) & np.isfinite(x).all(axis=1)
-                  & (P == P.transpose(0, 2, 1)).all(axis=(1, 2)))
+        P = np.stack([f.P for f in filters])
+        _finite_symmetric_rows(x, P, passed)
     else:
-        P = np.empty((len(filters), n, n))
-        passed = np.zeros(len(filters), dtype=bool)
-    errors: List[Optional[Exception]] = [None] * len(filters)
+        x, P = np.zeros((count, n)), np.zeros((count, n, n))
+    checked = P
+    errors: List[Optional[Exception]] = [None] * count
     for j in np.flatnonzero(~passed).tolist():
+        flt = filters[j]
         try:
-            P[j] = filters[j].checked_covariance()
+            P_checked = flt.checked_covariance()
         except Exception as exc:       # the filter's own error (InputError)
             errors[j] = exc
-    return P, errors
+            continue
+        if checked is P:
+            checked = P.copy()
+        x[j], P[j], checked[j] = flt.x, flt.P, P_checked
+    return x, P, checked, errors
+
+
+@kernel
+def _finite_symmetric_rows(x, P, passed):
+    """Whether each filter's state ``x[b]`` and covariance ``P[b]`` are finite and ``P[b]``
+    is symmetric (equal to its transpose, element for element), into ``passed``."""
+    n = x.shape[1]
+    for b in range(x.shape[0]):
+        ok = True
+        for i in range(n):
+            if not math.isfinite(x[b, i]):
+                ok = False
+            for j in range(n):
+                if not (math.isfinite(P[b, i, j]) and P[b, i, j] == P[b, j, i]):
+                    ok = False
+        passed[b] = ok
 
 
 def state_error(x: np.ndarray, P: np.ndarray) -> Optional[InputError]:
@@ -259,8 +284,8 @@ class Correction(NamedTuple):
     log_likelihood: float
 
 
-def update_filters(filters, z: np.ndarray, R: np.ndarray,
-                   h) -> Tuple[List[Optional[Correction]], List[Optional[Exception]]]:
+def update_filters(filters, z: np.ndarray, R: np.ndarray, h, checked=None,
+                   ) -> Tuple[List[Optional[Correction]], List[Optional[Exception]]]:
     """The measurement update (paper 000 eqs. 17-23) of every filter of ``filters`` (one
     transform: the same n, weights and spread) with its measurement ``z[i]`` (F, m) and noise
     ``R[i]`` (F, m, m), through ``h`` mapping the points of all filters at once
@@ -269,8 +294,13 @@ def update_filters(filters, z: np.ndarray, R: np.ndarray,
     call of each row function.  Each filter updated takes its new ``x``, ``P``,
     ``last_nis``, ``last_log_likelihood`` and square-root fallbacks; returns per filter its
     :class:`Correction` and the error its own update raises (None if none; the filter is
-    then not corrected)."""
-    _, errors = checked_covariances(filters)
+    then not corrected).  ``checked``: the filters' states and covariances stacked, when
+    the caller knows them finite and symmetric (else None: checked here)."""
+    if checked is None:
+        # the covariances as given: the sigma points symmetrize what is not symmetric
+        x, P, _, errors = checked_covariances(filters)
+    else:
+        (x, P), errors = checked, [None] * len(filters)
     for i in np.flatnonzero(~np.isfinite(z).all(axis=1)).tolist():
         if errors[i] is None:
             errors[i] = InputError("UnscentedKalmanFilter.correct: 'z' contains NaN or inf")
@@ -279,13 +309,11 @@ def update_filters(filters, z: np.ndarray, R: np.ndarray,
     if not done:
         return corrections, errors
     updated = [filters[i] for i in done]
+    if len(done) < len(filters):
+        x, P, z, R = x[done], P[done], z[done], R[done]
     first = updated[0]
-    x = np.stack([f.x for f in updated])
-    P = np.stack([f.P for f in updated])          # as given: the points symmetrize it
     X, fallback = sigma_points_rows(x, P, first._spread)
     z_pred, Pzz, Pxz = measurement_moments_rows(X, h(X), x, first.Wm, first.Wc)
-    if len(done) < len(filters):
-        z, R = z[done], R[done]
     rows = correct_rows(x, P, z, z_pred, Pzz + R, Pxz)
     for k, (i, flt) in enumerate(zip(done, updated)):
         flt.sqrt_fallbacks += bool(fallback[k])
