@@ -222,8 +222,8 @@ class UkfFilterBatch(InsGnssFilterBatch):
             rows, x, P = rows[finite], x[finite], P[finite]
         combined = rows.tolist()
         x, P = imm_combine_rows(np.stack([banks[b].mu for b in combined]), x, P)
-        for i, b in enumerate(combined):
-            banks[b].x, banks[b].P = x[i], P[i]
+        for b, state, covariance in zip(combined, list(x), list(P)):
+            banks[b].x, banks[b].P = state, covariance
         self._diagonal[combined] = np.diagonal(P, axis1=1, axis2=2)
 
     def _predicted_states(self, filters):

@@ -341,11 +341,13 @@ def predict_filter_groups(filters, x, P, nom, Q, q_scales, tau_g, tau_a, models)
     x, P, fallback, finite = predict_rows(x, P, nom, Q, q_scales, first.Wm, first.Wc,
                                           first._spread, tau_g, tau_a)
     finite_runs = finite.reshape(-1, models).all(axis=1)
+    if fallback.any():
+        for flt, fell_back in zip(filters, fallback.tolist()):
+            flt.sqrt_fallbacks += fell_back
     taken = finite_runs.tolist()
-    for j, (flt, fell_back) in enumerate(zip(filters, fallback.tolist())):
-        flt.sqrt_fallbacks += fell_back
+    for j, (flt, state, covariance) in enumerate(zip(filters, list(x), list(P))):
         if taken[j // models]:
-            flt.x, flt.P = x[j], P[j]
+            flt.x, flt.P = state, covariance
     return finite_runs, x, P
 
 
