@@ -3,8 +3,8 @@
 predictions computed for all runs at once.
 
 It is the Kalman filters' batch (:mod:`navcore.components.filter_batch`: every run keeps its
-own component; a fix, a rollback, a checkpoint or a run not started yet runs the run's own
-code, lent the batch's values first) with the UKF engines' time update
+own component; a fix held back or applied in the past, a checkpoint or a run not started yet
+runs the run's own code, lent the batch's values first) with the UKF engines' time update
 (:meth:`~navcore.filters.ukf_filters.UkfEngine.propagate`) in place of the Kf's:
 
 * every IMU interval of all runs: the bias compensation, the mechanization and the interval
@@ -20,7 +20,15 @@ code, lent the batch's values first) with the UKF engines' time update
   not in the state the call expects (a covariance not finite or not symmetric, other
   unscented-transform parameters or another number of IMM models than the batch's first
   run), predicts by its own code, before the interval enters its latency history, as it
-  does alone.
+  does alone;
+* the runs that apply a fix at the same step update together
+  (:meth:`UkfFilterBatch._update_together`): each run's own code before the update (its
+  epoch, its measurement, :meth:`~navcore.filters.ukf_filters.UkfEngine.measured_filters`),
+  the filters of all runs in one :func:`~navcore.filters.unscented_rows.update_filters` call
+  and the IMM banks' probabilities and combinations in one
+  :func:`~navcore.filters.imm.update_banks` call (the functions each engine's own ``update``
+  calls with its filters), then each run's own code after it (the feedback, the latency
+  history's restart, the outputs); a run whose part fails fails alone with its own error.
 """
 from __future__ import annotations
 
@@ -28,6 +36,7 @@ from typing import List
 
 import numpy as np
 
+from ..core.kernels import kernel
 from ..filters.imm import ImmBank, imm_combine_rows, mix_banks
 from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
@@ -371,8 +380,20 @@ class UkfFilterBatch(InsGnssFilterBatch):
     def _covariance_diagonals(self) -> np.ndarray:
         """Every run's :meth:`UkfEngine.covariance_diagonal` (B, 15)."""
         stack = self.stack
-        return (self._diagonal
-                + stack["q_scale"][:, None] * self.q_density * stack["sums"][:, 0, :1])
+        diagonals = np.empty_like(self._diagonal)
+        _pending_noise_rows(self._diagonal, stack["q_scale"], self.q_density,
+                            stack["sums"][:, 0, 0], diagonals)
+        return diagonals
+
+
+@kernel
+def _pending_noise_rows(diagonal, q_scale, q_density, T, out):
+    """Every run's covariance diagonal at its last prediction plus the noise of its pending
+    interval ``T``, ``diagonal + q_scale q_density T`` in :meth:`UkfEngine.
+    covariance_diagonal`'s order (the scale times the density, then times T), into ``out``."""
+    for b in range(diagonal.shape[0]):
+        for i in range(diagonal.shape[1]):
+            out[b, i] = diagonal[b, i] + q_scale[b] * q_density[b, i] * T[b]
 
 
 __all__ = ["UkfFilterBatch"]
