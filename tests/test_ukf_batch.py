@@ -20,7 +20,7 @@ from navcore.components import ukf_batch
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
 from navcore.errors import InputError
 from navcore.filters import ukf_filters, ukf_time_update
-from navcore.filters.imm import ImmBank, update_banks
+from navcore.filters.imm import ImmBank, imm_probabilities_rows, update_banks
 from navcore.filters.ukf_time_update import (N_SUMS, NominalInterval, accumulate_rows,
                                              error_dynamics, interval_means,
                                              predict_filter_groups, predict_rows,
@@ -225,6 +225,42 @@ def test_update_banks_is_each_banks_own_update():
             assert np.array_equal(_bits(getattr(bank, name)), _bits(getattr(own, name))), name
         assert bank.needs_mixing and own.needs_mixing
     assert [e is None for e in errors] == [True, True, True, False, True]
+
+
+def _probabilities_of_one_bank(c_bar, log_lik, floor):
+    """The IMM probability update of one bank written out (imm module docstring, step 3)."""
+    a = np.log(c_bar, out=np.full(len(c_bar), -np.inf), where=c_bar > 0.0) + log_lik
+    a_max = a.max()
+    if a_max == -np.inf:
+        mu = c_bar / c_bar.sum()
+    else:
+        mu = np.exp(a - a_max)
+        mu /= mu.sum()
+    if floor > 0.0:
+        mu = np.maximum(mu, floor)
+        mu /= mu.sum()
+    return mu
+
+
+def test_the_probabilities_of_many_banks_are_each_banks_own():
+    """imm_probabilities_rows on 1 to 24 banks of 1 to 3 models (zero probabilities, zero
+    likelihoods, floors of 0 and not) against one bank's update written out, bit for bit."""
+    rng = np.random.default_rng(37)
+    for trial in range(600):
+        r, runs = rng.integers(1, 4), rng.integers(1, 25)
+        c_bar = rng.dirichlet(np.ones(r), runs)
+        if trial % 7 == 0 and r > 1:
+            c_bar[0] = np.r_[0.0, c_bar[0, 1:] / c_bar[0, 1:].sum()]
+        log_lik = rng.normal(-10.0, 200.0, (runs, r))
+        if trial % 11 == 0:
+            log_lik[-1] = -np.inf
+        floor = np.full(runs, [0.0, 1e-12, 1e-3][trial % 3])
+        floor[0] = 0.0 if trial % 5 == 0 else floor[0]
+        mu, infinite = imm_probabilities_rows(c_bar, log_lik, floor)
+        assert not infinite.any()
+        for b in range(runs):
+            own = _probabilities_of_one_bank(c_bar[b], log_lik[b], floor[b])
+            assert np.array_equal(_bits(mu[b]), _bits(own)), (trial, b)
 
 
 @pytest.mark.parametrize("filter_name, models", [("Ukf", 1), ("CtfaUkf", 1), ("ImmUkf", 2)])
