@@ -42,8 +42,8 @@ from ..filters.ukf_filters import ImmUkfEngine, UkfEngine
 from ..filters.ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
                                        interval_means, predict_filter_groups, predict_rows,
                                        prediction_due)
-from ..filters.unscented_rows import (checked_covariances, predicted_state_error,
-                                      update_filters)
+from ..filters.unscented_rows import (checked_covariances, finite_symmetric_rows,
+                                      predicted_state_error, update_filters)
 from ..ins.error_model import N_STATES
 from .filter_batch import InsGnssFilterBatch
 
@@ -149,9 +149,9 @@ class UkfFilterBatch(InsGnssFilterBatch):
     def _predictable(self) -> np.ndarray:
         """The runs whose filter state is what :func:`predict_rows` takes (finite, P
         symmetric); the others' own code raises or symmetrizes as it does alone."""
-        x, P = self._ukf["x"], self._ukf["P"]
-        return (np.isfinite(x).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
-                & (P == P.transpose(0, 2, 1)).all(axis=(1, 2)))
+        predictable = np.empty(self.runs, dtype=bool)
+        finite_symmetric_rows(self._ukf["x"], self._ukf["P"], predictable)
+        return predictable
 
     def _predict_together(self, rows: np.ndarray) -> None:
         """:meth:`UkfEngine._predict` of the runs ``rows`` in one :func:`predict_rows` call."""

@@ -109,7 +109,7 @@ def checked_covariances(filters) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
     ones (the given ones, but symmetrized where a filter's own check symmetrized them) and,
     per filter, the error its own check raised (None if none; its rows are then not
     meaningful).  The covariances and states of every filter are checked for finite values
-    and symmetry by one kernel call (:func:`_finite_symmetric_rows`); a filter that fails
+    and symmetry by one kernel call (:func:`finite_symmetric_rows`); a filter that fails
     them runs its own check, which symmetrizes or raises."""
     n = filters[0].n
     count = len(filters)
@@ -117,7 +117,7 @@ def checked_covariances(filters) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
     if all(f.x.shape == (n,) and f.P.shape == (n, n) for f in filters):
         x = np.stack([f.x for f in filters])
         P = np.stack([f.P for f in filters])
-        _finite_symmetric_rows(x, P, passed)
+        finite_symmetric_rows(x, P, passed)
     else:
         x, P = np.zeros((count, n)), np.zeros((count, n, n))
     checked = P
@@ -136,7 +136,7 @@ def checked_covariances(filters) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
 
 
 @kernel
-def _finite_symmetric_rows(x, P, passed):
+def finite_symmetric_rows(x, P, passed):
     """Whether each filter's state ``x[b]`` and covariance ``P[b]`` are finite and ``P[b]``
     is symmetric (equal to its transpose, element for element), into ``passed``."""
     n = x.shape[1]
