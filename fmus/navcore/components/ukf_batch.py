@@ -209,31 +209,35 @@ class UkfFilterBatch(InsGnssFilterBatch):
 
     def _predict_checked_banks(self, banks, x, P, models: int) -> None:
         """The prediction and combination of :meth:`_predict_banks` for the banks ``banks``
-        (run: bank) whose models' states are ``x`` and checked covariances ``P``."""
+        (run: bank, in the runs' order) whose models' states are ``x`` and checked
+        covariances ``P``."""
         rows = np.array(list(banks))
+        # every run (the usual case): slices of the stacks instead of copies
+        index = slice(None) if len(rows) == self.runs else rows
         filters = [flt for bank in banks.values() for flt in bank.filters]
         sums = self.stack["sums"][:, 0]
         cfg = self.members[rows[0]].engine.config
         finite, x, P = predict_filter_groups(
-            filters, x, P, interval_means(sums[rows]),
-            self._models_process_noise(rows, sums[rows, 0], models),
+            filters, x, P, interval_means(sums[index]),
+            self._models_process_noise(rows, sums[index, 0], models),
             self._models_q_scales(rows), cfg.gyro_bias_tau, cfg.accel_bias_tau, models)
-        sums[rows] = 0.0
-        self._predicted = ((x, P, [flt.x for flt in filters], [flt.P for flt in filters])
-                           if finite.all() else None)
+        sums[index] = 0.0
+        if finite.all():
+            self._predicted = (x, P, [flt.x for flt in filters], [flt.P for flt in filters])
         x = x.reshape(-1, models, N_STATES)
         P = P.reshape(-1, models, N_STATES, N_STATES)
         if not finite.all():
+            self._predicted = None
             for b in rows[~finite].tolist():
                 self.fail(b, predicted_state_error())
             if not finite.any():
                 return
-            rows, x, P = rows[finite], x[finite], P[finite]
-        combined = rows.tolist()
-        x, P = imm_combine_rows(np.stack([banks[b].mu for b in combined]), x, P)
-        for b, state, covariance in zip(combined, list(x), list(P)):
-            banks[b].x, banks[b].P = state, covariance
-        self._diagonal[combined] = np.diagonal(P, axis1=1, axis2=2)
+            rows, index, x, P = rows[finite], rows[finite], x[finite], P[finite]
+        combined = [banks[b] for b in rows.tolist()]
+        x, P = imm_combine_rows(np.array([bank.mu for bank in combined]), x, P)
+        for bank, state, covariance in zip(combined, list(x), list(P)):
+            bank.x, bank.P = state, covariance
+        self._diagonal[index] = np.diagonal(P, axis1=1, axis2=2)
 
     def _predicted_states(self, filters):
         """The states (F, n) and covariances (F, n, n) of the filters ``filters`` as the
