@@ -109,17 +109,19 @@ def checked_covariances(filters) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
     ones (the given ones, but symmetrized where a filter's own check symmetrized them) and,
     per filter, the error its own check raised (None if none; its rows are then not
     meaningful).  The covariances and states of every filter are checked for finite values
-    and symmetry by one kernel call (:func:`finite_symmetric_rows`); a filter that fails
-    them runs its own check, which symmetrizes or raises."""
+    and symmetry by stacked comparisons (a single filter's update calls this too; a batch
+    checks its filters before each prediction by :func:`finite_symmetric_rows`); a filter
+    that fails them runs its own check, which symmetrizes or raises."""
     n = filters[0].n
     count = len(filters)
-    passed = np.zeros(count, dtype=bool)
     if all(f.x.shape == (n,) and f.P.shape == (n, n) for f in filters):
         x = np.stack([f.x for f in filters])
         P = np.stack([f.P for f in filters])
-        finite_symmetric_rows(x, P, passed)
+        passed = (np.isfinite(P).all(axis=(1, 2)) & np.isfinite(x).all(axis=1)
+                  & (P == P.transpose(0, 2, 1)).all(axis=(1, 2)))
     else:
         x, P = np.zeros((count, n)), np.zeros((count, n, n))
+        passed = np.zeros(count, dtype=bool)
     checked = P
     errors: List[Optional[Exception]] = [None] * count
     for j in np.flatnonzero(~passed).tolist():
@@ -138,7 +140,9 @@ def checked_covariances(filters) -> Tuple[np.ndarray, np.ndarray, np.ndarray,
 @kernel
 def finite_symmetric_rows(x, P, passed):
     """Whether each filter's state ``x[b]`` and covariance ``P[b]`` are finite and ``P[b]``
-    is symmetric (equal to its transpose, element for element), into ``passed``."""
+    is symmetric (equal to its transpose, element for element), into ``passed``: the
+    checks of :func:`checked_covariances` as one kernel, for a batch's filters at every
+    prediction."""
     n = x.shape[1]
     for b in range(x.shape[0]):
         ok = True
