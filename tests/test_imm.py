@@ -278,3 +278,18 @@ def test_banks_mix_and_combine_together_as_each_bank_alone(r):
                                    [f.P for f in bank.filters])
         assert np.array_equal(_bits(x[k]), _bits(own_x))
         assert np.array_equal(_bits(P[k]), _bits(own_P))
+
+
+@pytest.mark.parametrize("r", [2, 3])
+def test_banks_that_all_pass_their_checks_mix_as_each_bank_alone(r):
+    """mix_banks of banks whose every probability vector is a distribution (the inputs of
+    all banks stacked and checked at once) against each bank's own mix, bit for bit."""
+    banks = _random_banks(np.random.default_rng(50 + r), 6, r)
+    alone = copy.deepcopy(banks)
+    assert mix_banks(banks) == [None] * 6
+    for bank, own_bank in zip(banks, alone):
+        own_bank.mix()
+        assert np.array_equal(_bits(bank.mu), _bits(own_bank.mu)) and not bank.needs_mixing
+        for flt, own_flt in zip(bank.filters, own_bank.filters):
+            assert np.array_equal(_bits(flt.x), _bits(own_flt.x))
+            assert np.array_equal(_bits(flt.P), _bits(own_flt.P))

@@ -17,7 +17,7 @@ from scipy.linalg import lapack
 
 from navcore.core.kernels import kernel
 from navcore.core.lapack_kernels import potrf_lower, potrs_lower, trtrs_lower
-from navcore.filters.unscented import correct_rows, points_from_sqrt_rows, sigma_points_rows
+from navcore.filters.unscented_rows import correct_rows, points_from_sqrt_rows, sigma_points_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -134,7 +134,7 @@ def test_a_kernel_read_from_the_cache_calls_this_process_s_routine(tmp_path):
     factors."""
     script = textwrap.dedent("""
         import numpy as np
-        from navcore.filters.unscented import sigma_points_rows
+        from navcore.filters.unscented_rows import sigma_points_rows
         rng = np.random.default_rng(0)
         A = rng.normal(size=(5, 6, 6))
         P = A @ A.transpose(0, 2, 1) + np.eye(6)
@@ -152,7 +152,7 @@ def test_sigma_points_rows_are_each_filter_s_own_points():
     """sigma_points_rows against UnscentedKalmanFilter.sigma_points of each filter, bit for
     bit: covariances of 6 and 15 states, one not symmetric (symmetrized for its points), one
     singular (the eigenvalue fallback)."""
-    from navcore.filters.unscented import UnscentedKalmanFilter, sigma_points_rows
+    from navcore.filters.unscented import UnscentedKalmanFilter
     rng = np.random.default_rng(21)
     for n in (6, 15):
         P = _spd(rng, 30, n)

@@ -4,8 +4,10 @@ error_dynamics over the points of many runs, predict_rows).
 
 The whole batch is compared with each filter alone, bit for bit, in tests/test_kf_batch.py and
 tests/test_batch_simulation.py; here: the pieces against independent references (the
-pointwise process model of tests/test_ukf_process_model.py, a trapezoid sum by hand), and
-that the runs of a batch do predict in one call.
+pointwise process model of tests/test_ukf_process_model.py, a trapezoid sum by hand), the
+measurement update of many filters (navcore.filters.unscented_rows.update_filters) and of many
+IMM banks (navcore.filters.imm.update_banks) against each one's own update, and that the runs
+of a batch do predict and update in one call.
 """
 from __future__ import annotations
 
@@ -16,12 +18,15 @@ from test_ukf_process_model import TAU_A, TAU_G, reference_derivative
 
 from navcore.components import ukf_batch
 from navcore.components.ukf_components import CtfaUkf, ImmUkf, Ukf
+from navcore.errors import InputError
 from navcore.filters import ukf_filters, ukf_time_update
+from navcore.filters.imm import ImmBank, imm_probabilities_rows, update_banks
 from navcore.filters.ukf_time_update import (N_SUMS, NominalInterval, accumulate_rows,
                                              error_dynamics, interval_means,
                                              predict_filter_groups, predict_rows,
                                              propagate_points)
 from navcore.filters.unscented import UnscentedKalmanFilter
+from navcore.filters.unscented_rows import update_filters
 from orchestrator.cosim.batch import BatchSimulation
 from orchestrator.running.scenarios import load_scenario, registry, swap_filter
 
@@ -145,6 +150,133 @@ def test_the_interval_sums_are_the_trapezoids_of_the_rows_compiled_or_not():
     means = interval_means(compiled)
     np.testing.assert_allclose(means.C * (steps * 0.02), compiled[:, 6:15].reshape(runs, 3, 3),
                                rtol=1e-15)
+
+
+def _random_filter(rng):
+    A = rng.normal(0, 1, (15, 15)) * np.logspace(-4, 0, 15)
+    return UnscentedKalmanFilter(15, P0=A @ A.T + 1e-12 * np.eye(15), x0=rng.normal(0, 1e-3, 15))
+
+
+def _position(X):
+    return X[..., :3]
+
+
+def _assert_same_filter(a, b):
+    for name in ("x", "P"):
+        assert np.array_equal(_bits(getattr(a, name)), _bits(getattr(b, name))), name
+    for name in ("last_nis", "last_log_likelihood", "sqrt_fallbacks"):
+        assert getattr(a, name) == getattr(b, name), name
+
+
+def test_update_filters_is_each_filters_own_update():
+    """The filters of one update_filters call (a covariance not symmetric, one not finite,
+    a measurement not finite, an innovation covariance not positive definite among them)
+    end as each filter's own UnscentedKalmanFilter.update leaves it, bit for bit, with its
+    results or its error."""
+    import copy
+    rng = np.random.default_rng(35)
+    filters = [_random_filter(rng) for _ in range(7)]
+    filters[1].P = filters[1].P + np.triu(np.full((15, 15), 1e-12), 1)   # not symmetric
+    filters[2].P = filters[2].P.copy()
+    filters[2].P[4, 4] = np.nan
+    z = rng.normal(0, 1e-2, (7, 3))
+    z[3, 1] = np.inf
+    R = np.stack([np.diag(rng.uniform(1e-4, 1e-2, 3)) for _ in range(7)])
+    R[5] = -10.0 * np.eye(3)                     # S not positive definite
+    alone = copy.deepcopy(filters)
+    corrections, errors = update_filters(filters, z, R, _position)
+    for i, (flt, own) in enumerate(zip(filters, alone)):
+        try:
+            result = own.update(z[i], _position, R[i], vectorized=True)
+        except InputError as exc:
+            assert corrections[i] is None and str(errors[i]) == str(exc), i
+            continue
+        assert errors[i] is None, i
+        _assert_same_filter(flt, own)
+        assert np.array_equal(_bits(corrections[i].v), _bits(result["innovation"]))
+        assert np.array_equal(_bits(corrections[i].S), _bits(result["S"]))
+        assert (corrections[i].nis, corrections[i].log_likelihood) == (
+            result["nis"], result["log_likelihood"])
+    assert [e is None for e in errors] == [True, True, False, False, True, False, True]
+
+
+def test_update_banks_is_each_banks_own_update():
+    """update_banks (the probabilities of every bank, all combinations in one call) leaves
+    each bank as its own ImmBank.update does, bit for bit; a bank with a NaN likelihood
+    fails alone with its own error."""
+    import copy
+    rng = np.random.default_rng(36)
+    Pi = np.array([[0.95, 0.05], [0.05, 0.95]])
+    banks = [ImmBank([_random_filter(rng) for _ in range(2)], Pi) for _ in range(5)]
+    log_liks = rng.normal(-5.0, 3.0, (5, 2))
+    log_liks[3, 0] = np.nan
+    for bank in banks:              # mixed and predicted: the update ends the cycle
+        bank.needs_mixing = False
+    alone = copy.deepcopy(banks)
+    errors = update_banks(banks, log_liks.tolist())
+    for i, (bank, own) in enumerate(zip(banks, alone)):
+        try:
+            own.update(lambda flt, j, i=i: log_liks[i, j])
+        except InputError as exc:
+            assert str(errors[i]) == str(exc), i
+            continue
+        assert errors[i] is None
+        for name in ("mu", "x", "P"):
+            assert np.array_equal(_bits(getattr(bank, name)), _bits(getattr(own, name))), name
+        assert bank.needs_mixing and own.needs_mixing
+    assert [e is None for e in errors] == [True, True, True, False, True]
+
+
+def _probabilities_of_one_bank(c_bar, log_lik, floor):
+    """The IMM probability update of one bank written out (imm module docstring, step 3)."""
+    a = np.log(c_bar, out=np.full(len(c_bar), -np.inf), where=c_bar > 0.0) + log_lik
+    a_max = a.max()
+    if a_max == -np.inf:
+        mu = c_bar / c_bar.sum()
+    else:
+        mu = np.exp(a - a_max)
+        mu /= mu.sum()
+    if floor > 0.0:
+        mu = np.maximum(mu, floor)
+        mu /= mu.sum()
+    return mu
+
+
+def test_the_probabilities_of_many_banks_are_each_banks_own():
+    """imm_probabilities_rows on 1 to 24 banks of 1 to 3 models (zero probabilities, zero
+    likelihoods, floors of 0 and not) against one bank's update written out, bit for bit."""
+    rng = np.random.default_rng(37)
+    for trial in range(600):
+        r, runs = rng.integers(1, 4), rng.integers(1, 25)
+        c_bar = rng.dirichlet(np.ones(r), runs)
+        if trial % 7 == 0 and r > 1:
+            c_bar[0] = np.r_[0.0, c_bar[0, 1:] / c_bar[0, 1:].sum()]
+        log_lik = rng.normal(-10.0, 200.0, (runs, r))
+        if trial % 11 == 0:
+            log_lik[-1] = -np.inf
+        floor = np.full(runs, [0.0, 1e-12, 1e-3][trial % 3])
+        floor[0] = 0.0 if trial % 5 == 0 else floor[0]
+        mu, infinite = imm_probabilities_rows(c_bar, log_lik, floor)
+        assert not infinite.any()
+        for b in range(runs):
+            own = _probabilities_of_one_bank(c_bar[b], log_lik[b], floor[b])
+            assert np.array_equal(_bits(mu[b]), _bits(own)), (trial, b)
+
+
+@pytest.mark.parametrize("filter_name, models", [("Ukf", 1), ("CtfaUkf", 1), ("ImmUkf", 2)])
+def test_the_runs_of_a_batch_update_in_one_call(monkeypatch, filter_name, models):
+    calls = []
+
+    def counting(filters, *args):
+        calls.append(len(filters))
+        return update_filters(filters, *args)
+
+    monkeypatch.setattr(ukf_batch, "update_filters", counting)
+    model = swap_filter(load_scenario(MODELS / "uav_maneuver"), filter_name)
+    sets = [{"trajectory.seed": 3 + b, "gnss.seed": 40 + b} for b in range(4)]
+    BatchSimulation(model, registry(), sets).run(stop_time=4.0)
+    # a fix per second: every run's filters in one call
+    assert len(calls) >= 3 and set(calls) == {4 * models}
 
 
 @pytest.mark.parametrize("filter_name, models", [("Ukf", 1), ("CtfaUkf", 1), ("ImmUkf", 2),

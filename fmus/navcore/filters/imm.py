@@ -132,6 +132,10 @@ def mix_banks(banks: Sequence["ImmBank"]) -> List[Optional[Exception]]:
     """:meth:`ImmBank.mix` of every bank of ``banks`` (r models each, states of one shape),
     in one :func:`imm_mix_rows` call.  Returns, per bank, the error its own mixing raised
     (the bank is then not mixed), or None."""
+    stacked = _stacked_inputs(banks)
+    if stacked is not None:
+        _mix_stacked(banks, *stacked)
+        return [None] * len(banks)
     errors: List[Optional[Exception]] = [None] * len(banks)
     mixed, inputs = [], []
     for i, bank in enumerate(banks):
@@ -146,11 +150,35 @@ def mix_banks(banks: Sequence["ImmBank"]) -> List[Optional[Exception]]:
     shapes = {(X.shape, P.shape) for _, X, P in inputs}
     if len(shapes) > 1:            # states of other sizes: each bank by itself
         return [mix_banks([bank])[0] for bank in banks]
-    mu, X, P = (np.stack(arrays) for arrays in zip(*inputs))
-    mixed_X, mixed_P, c_bar = imm_mix_rows(mu, np.stack([bank.Pi for bank in mixed]), X, P)
-    for bank, xs, Ps, c in zip(mixed, mixed_X, mixed_P, c_bar):
-        bank.take_mixed(xs, Ps, c)
+    _mix_stacked(mixed, *(np.stack(arrays) for arrays in zip(*inputs)))
     return errors
+
+
+def _stacked_inputs(banks: Sequence["ImmBank"]):
+    """The probabilities (B, r), states (B, r, n) and covariances (B, r, n, n) of the banks
+    ``banks``, stacked, when every bank's would pass :func:`_mixing_inputs` and all have
+    one shape (the checks of each row, its min and its sum of r terms, are a bank's own);
+    else None."""
+    try:
+        mu = np.array([bank.mu for bank in banks], dtype=float)
+        X = np.array([[f.x for f in bank.filters] for bank in banks], dtype=float)
+        P = np.array([[f.P for f in bank.filters] for bank in banks], dtype=float)
+    except ValueError:             # states of other sizes or numbers of models
+        return None
+    if not (mu.ndim == 2 and X.ndim == 3 and X.shape[:2] == mu.shape
+            and P.shape == X.shape + X.shape[2:]):
+        return None
+    if not ((mu.min(axis=1) >= 0.0) & (np.abs(mu.sum(axis=1) - 1.0) <= 1e-9)).all():
+        return None
+    return mu, X, P
+
+
+def _mix_stacked(banks: Sequence["ImmBank"], mu: np.ndarray, X: np.ndarray,
+                 P: np.ndarray) -> None:
+    """:func:`imm_mix_rows` of the banks ``banks``, checked and stacked, each taking its mix."""
+    mixed_X, mixed_P, c_bar = imm_mix_rows(mu, np.stack([bank.Pi for bank in banks]), X, P)
+    for bank, xs, Ps, c in zip(banks, mixed_X, mixed_P, c_bar):
+        bank.take_mixed(xs, Ps, c)
 
 
 def imm_update_probabilities(c_bar: np.ndarray, likelihoods: np.ndarray, *, log: bool = False,
@@ -177,19 +205,38 @@ def imm_update_probabilities(c_bar: np.ndarray, likelihoods: np.ndarray, *, log:
     r = c_bar.shape[0]
     # log(0) = -inf without a divide warning (np.errstate costs more than the whole update)
     log_lik = lik if log else np.log(lik, out=np.full(r, -np.inf), where=lik > 0.0)
-    a = np.log(c_bar, out=np.full(r, -np.inf), where=c_bar > 0.0) + log_lik
-    if (a == np.inf).any():
+    mu, infinite = imm_probabilities_rows(c_bar[None], log_lik[None], np.full(1, float(floor)))
+    if infinite[0]:
         raise InputError(f"imm_update_probabilities: infinite model likelihood {lik}")
-    a_max = a.max()
-    if a_max == -np.inf:
-        mu = c_bar / c_bar.sum()
-    else:
-        mu = np.exp(a - a_max)
-        mu /= mu.sum()
-    if floor > 0.0:
-        mu = np.maximum(mu, floor)
-        mu /= mu.sum()
-    return mu
+    return mu[0]
+
+
+def imm_probabilities_rows(c_bar: np.ndarray, log_lik: np.ndarray,
+                           floor: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """The arithmetic of :func:`imm_update_probabilities` for B banks at once: predicted
+    probabilities ``c_bar`` (B, r), log-likelihoods ``log_lik`` (B, r, none NaN) and floors
+    (B,) checked.  Returns the posterior probabilities (B, r) and, per bank, whether a
+    likelihood is infinite (its row is then not meaningful).  Elementwise operations and the
+    reductions of each row (its max; its sum of r terms in order, as numpy sums one row
+    alone) give every bank the floats of its own call."""
+    runs, r = c_bar.shape
+    a = np.log(c_bar, out=np.full((runs, r), -np.inf), where=c_bar > 0.0) + log_lik
+    infinite = (a == np.inf).any(axis=1)
+    a_max = a.max(axis=1, keepdims=True)
+    # no model with a likelihood: c_bar (the shift by -inf would give NaN)
+    special = infinite | (a_max[:, 0] == -np.inf)
+    mu = np.exp(a - np.where(special[:, None], 0.0, a_max))
+    if special.any():
+        mu[special] = c_bar[special]
+    mu /= mu.sum(axis=1, keepdims=True)
+    floored = floor > 0.0
+    if floored.all():
+        mu = np.maximum(mu, floor[:, None])
+        mu /= mu.sum(axis=1, keepdims=True)
+    elif floored.any():
+        at_least = np.maximum(mu[floored], floor[floored, None])
+        mu[floored] = at_least / at_least.sum(axis=1, keepdims=True)
+    return mu, infinite
 
 
 def imm_combine(mu: np.ndarray, xs: Sequence[np.ndarray],
@@ -214,6 +261,46 @@ def imm_combine_rows(mu: np.ndarray, X: np.ndarray,
     P = ((weights @ P.reshape(runs, r, n * n)).reshape(runs, n, n)
          + (d.transpose(0, 2, 1) * weights) @ d)
     return x, 0.5 * (P + P.transpose(0, 2, 1))
+
+
+def update_banks(banks: Sequence["ImmBank"],
+                 log_likelihoods: Sequence[Sequence[float]]) -> List[Optional[Exception]]:
+    """The end of :meth:`ImmBank.update` for every bank of ``banks`` (r models of one state
+    dimension each) after its models' updates, whose log-likelihoods are
+    ``log_likelihoods[i]``: each bank's model probabilities
+    (:func:`imm_update_probabilities`), then the combination of all banks in one
+    :func:`imm_combine_rows` call.  Returns, per bank, the error its own update raised (the
+    bank is then not combined), or None."""
+    errors: List[Optional[Exception]] = [None] * len(banks)
+    log_lik = np.array(log_likelihoods, dtype=float)
+    c_bar = np.array([bank.mu for bank in banks])
+    floor = np.array([bank.floor for bank in banks])
+    mu, own = None, np.ones(len(banks), dtype=bool)
+    if log_lik.shape == c_bar.shape and log_lik.ndim == 2:
+        # a NaN likelihood or a floor out of range: the bank's own call raises
+        mu, infinite = imm_probabilities_rows(c_bar, np.where(np.isnan(log_lik), 0.0, log_lik),
+                                              floor)
+        own = infinite | np.isnan(log_lik).any(axis=1) | ~((floor >= 0.0)
+                                                           & (floor < 1.0 / c_bar.shape[1]))
+    updated = []
+    for i, bank in enumerate(banks):
+        try:
+            bank.mu = (imm_update_probabilities(bank.mu, np.asarray(log_likelihoods[i],
+                                                                    dtype=float),
+                                                log=True, floor=bank.floor)
+                       if own[i] else mu[i])
+        except Exception as exc:       # the bank's own error (InputError)
+            errors[i] = exc
+            continue
+        updated.append(bank)
+    if updated:
+        x, P = imm_combine_rows(np.stack([bank.mu for bank in updated]),
+                                np.array([[f.x for f in bank.filters] for bank in updated]),
+                                np.array([[f.P for f in bank.filters] for bank in updated]))
+        for bank, x_bank, P_bank in zip(updated, x, P):
+            bank.x, bank.P = x_bank, P_bank
+            bank.needs_mixing = True
+    return errors
 
 
 class ImmBank:
@@ -305,11 +392,9 @@ class ImmBank:
         for j, flt in enumerate(self.filters):
             result = update_fn(flt, j)
             log_liks[j] = result["log_likelihood"] if isinstance(result, dict) else float(result)
-        self.mu = imm_update_probabilities(self.mu, log_liks, log=True, floor=self.floor)
-        self.x, self.P = imm_combine(
-            self.mu, [f.x for f in self.filters], [f.P for f in self.filters]
-        )
-        self.needs_mixing = True
+        error = update_banks([self], [log_liks])[0]
+        if error is not None:
+            raise error
         return log_liks
 
     def subtract_from_states(self, delta: np.ndarray) -> None:

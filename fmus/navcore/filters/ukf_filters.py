@@ -36,13 +36,14 @@ import numpy as np
 from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from ..ins.error_model import ATT, BA, BG, N_STATES, POS, VEL
 from ..ins.strapdown import Strapdown
-from .imm import ImmBank, imm_combine
+from .imm import ImmBank, imm_combine, update_banks
 from .innovation_stats import nis
 from .ins_gnss_kf import KfEngine, UpdateResult
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
 from .ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
                               interval_means, predict_unscented_filters, prediction_due)
 from .unscented import UnscentedKalmanFilter
+from .unscented_rows import update_filters
 
 
 class UkfEngine(KfEngine):
@@ -137,16 +138,45 @@ class UkfEngine(KfEngine):
 
     # -- measurement update ------------------------------------------------------------
     def _h(self, X):
-        """Measurement model of paper 000 eqs. 3-4 (linear: H = [I_m 0]) over the sigma points."""
-        return X[:, :self.m]
+        """Measurement model of paper 000 eqs. 3-4 (linear: H = [I_m 0]) over the sigma points
+        (the last axis of ``X``: one filter's or many filters' points)."""
+        return X[..., :self.m]
 
     def update(self, z):
-        """UKF measurement update (paper 000 eqs. 17-23) then closed-loop feedback."""
+        """UKF measurement update (paper 000 eqs. 17-23) then closed-loop feedback: the
+        engine's code before its filters' update (:meth:`measured_filters`), their update by
+        :func:`~navcore.filters.unscented_rows.update_filters` (which a batch calls with the
+        filters of all its runs), :meth:`filters_corrected` and :meth:`update_finished`."""
+        filters, before = self.measured_filters(z)
+        corrections, errors = update_filters(filters, np.tile(z, (len(filters), 1)),
+                                             np.tile(self.R0, (len(filters), 1, 1)), self._h)
+        error = next((e for e in errors if e is not None), None)
+        if error is not None:
+            raise error
+        error = self.filters_corrected([self], [corrections])[0]
+        if error is not None:
+            raise error
+        return self.update_finished(before, corrections)
+
+    def measured_filters(self, z):
+        """:meth:`update` before the filters' update with ``z``: the prediction due; returns
+        the filters to update and what :meth:`update_finished` takes of this part."""
         self._predict()
-        res = self.ukf.update(z, self._h, self.R0, vectorized=True)
+        return [self.ukf], None
+
+    @staticmethod
+    def filters_corrected(engines, corrections):
+        """:meth:`update` after the filters' update, for the engines ``engines`` at once
+        (their filters' :class:`~navcore.filters.unscented_rows.Correction` lists): nothing
+        for one filter.  Returns per engine the error its own update raises, or None."""
+        return [None] * len(engines)
+
+    def update_finished(self, before, corrections):
+        """The end of :meth:`update`: the closed-loop feedback and the update's result."""
+        correction = corrections[0]
         self._feedback(self.ukf.x)
         self.ukf.x = np.zeros(N_STATES)
-        return UpdateResult(res["innovation"], res["S"], res["nis"], q_scale=self.q_scale)
+        return UpdateResult(correction.v, correction.S, correction.nis, q_scale=self.q_scale)
 
     def reacquire(self, z, x, P, filters):
         """Recovery guard (:mod:`navcore.filters.recovery`) of the adaptive UKFs, which accept
@@ -215,10 +245,13 @@ class CtfaUkfEngine(GuardedEngine, UkfEngine):
                                       pass_decay)
         self.chi2 = 0.0
 
-    def update(self, z):
-        self._predict()
+    def measured_filters(self, z):
+        filters, before = super().measured_filters(z)
         self.reacquire(z, self.ukf.x, self.ukf.P, (self.ukf,))
-        result = super().update(z)
+        return filters, before
+
+    def update_finished(self, before, corrections):
+        result = super().update_finished(before, corrections)
         self.chi2 = result.nis                       # paper 000 eq. 24
         self.q_scale = float(self.schedule.update(self.chi2)[0, 0])   # paper 000 eq. 25, next steps
         result.q_scale = self.q_scale
@@ -275,7 +308,7 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
     def covariance(self):
         return self.bank.P.copy()
 
-    def update(self, z):
+    def measured_filters(self, z):
         self._predict()
         bank = self.bank
         if bank.needs_mixing:        # no prediction since the last update: start the cycle
@@ -287,9 +320,18 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
         # chi-square statistic of the combined (mixture) prediction
         v = z - bank.x[:m]
         S = bank.P[:m, :m] + self.R0
-        statistic = nis(v, S)
-        h, R = self._h, self.R0
-        bank.update(lambda flt, j: flt.update(z, h, R, vectorized=True))
+        return bank.filters, (v, S, nis(v, S))
+
+    @staticmethod
+    def filters_corrected(engines, corrections):
+        """The banks' model probabilities and combinations after their models' updates
+        (:func:`~navcore.filters.imm.update_banks`: all banks' combinations in one call)."""
+        return update_banks([engine.bank for engine in engines],
+                            [[c.log_likelihood for c in models] for models in corrections])
+
+    def update_finished(self, before, corrections):
+        v, S, statistic = before
+        bank = self.bank
         dx = bank.x.copy()
         self._feedback(dx)
         bank.subtract_from_states(dx)

@@ -75,7 +75,7 @@ from ..ins import earth
 from ..ins.error_model import N_STATES, POS, VEL
 from ..ins.strapdown import _gravity, _radii, update_rows
 from .ins_gnss_kf import compensated_rows
-from .unscented import predicted_moments_rows, predicted_state_error, sigma_points_rows
+from .unscented_rows import predicted_moments_rows, predicted_state_error, sigma_points_rows
 
 #: tolerance on accumulated time when deciding that a prediction interval is complete [s]
 _TIME_EPS = 1e-9
@@ -328,23 +328,26 @@ def discrete_process_noise(q_density, T):
     return Q
 
 
-def predict_filter_groups(filters, P, nom, Q, q_scales, tau_g, tau_a, models):
+def predict_filter_groups(filters, x, P, nom, Q, q_scales, tau_g, tau_a, models):
     """:func:`predict_rows` of the unscented filters ``filters``
-    (:class:`~navcore.filters.unscented.UnscentedKalmanFilter`, one transform) whose checked
-    covariances are ``P`` (F, n, n), with process noises ``Q`` (F, n, n) times
-    ``q_scales`` (F,): ``models`` consecutive filters per run of ``nom``.  Every filter
-    counts its square-root fallbacks; the filters of a run take their prediction when all
-    of them are finite.  Returns, per run, whether they were, and the predicted means
-    (F, n) and covariances (F, n, n) of all filters (the filters' own are views of them)."""
+    (:class:`~navcore.filters.unscented.UnscentedKalmanFilter`, one transform) whose states
+    are ``x`` (F, n) and checked covariances ``P`` (F, n, n), with process noises ``Q``
+    (F, n, n) times ``q_scales`` (F,): ``models`` consecutive filters per run of ``nom``.
+    Every filter counts its square-root fallbacks; the filters of a run take their
+    prediction when all of them are finite.  Returns, per run, whether they were, and the
+    predicted means (F, n) and covariances (F, n, n) of all filters (the filters' own are
+    views of them)."""
     first = filters[0]
-    x, P, fallback, finite = predict_rows(
-        np.stack([flt.x for flt in filters]), P, nom, Q, q_scales, first.Wm, first.Wc,
-        first._spread, tau_g, tau_a)
+    x, P, fallback, finite = predict_rows(x, P, nom, Q, q_scales, first.Wm, first.Wc,
+                                          first._spread, tau_g, tau_a)
     finite_runs = finite.reshape(-1, models).all(axis=1)
-    for j, flt in enumerate(filters):
-        flt.sqrt_fallbacks += int(fallback[j])
-        if finite_runs[j // models]:
-            flt.x, flt.P = x[j], P[j]
+    if fallback.any():
+        for flt, fell_back in zip(filters, fallback.tolist()):
+            flt.sqrt_fallbacks += fell_back
+    taken = finite_runs.tolist()
+    for j, (flt, state, covariance) in enumerate(zip(filters, list(x), list(P))):
+        if taken[j // models]:
+            flt.x, flt.P = state, covariance
     return finite_runs, x, P
 
 
@@ -354,7 +357,8 @@ def predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a):
     :meth:`~navcore.filters.unscented.UnscentedKalmanFilter.predict` checks them, updated in
     place; raises its error when a prediction is not finite."""
     P = np.stack([flt.checked_covariance() for flt in filters])
+    x = np.stack([flt.x for flt in filters])
     Q = np.broadcast_to(Q, (len(filters),) + np.shape(Q))
-    if not predict_filter_groups(filters, P, nom, Q, np.asarray(q_scales, dtype=float),
+    if not predict_filter_groups(filters, x, P, nom, Q, np.asarray(q_scales, dtype=float),
                                  tau_g, tau_a, len(filters))[0][0]:
         raise predicted_state_error()
