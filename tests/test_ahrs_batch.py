@@ -1,5 +1,5 @@
 """The AHRS filters' batch (navcore.components.ahrs_batch) and the row functions it shares
-with one filter alone (navcore.filters.unscented: measurement_moments_rows, correct_rows).
+with one filter alone (navcore.filters.unscented_rows: measurement_moments_rows, correct_rows).
 
 Each run of a batch against the same component stepped alone on the same inputs, bit for
 bit, with per-run parameters, a late start, a shadow-set switch, inputs one step late, a
@@ -22,7 +22,8 @@ from navcore.core.kernels import kernel
 from navcore.core.timing import same_instant
 from navcore.errors import InputError
 from navcore.filters import unscented
-from navcore.filters.unscented import correct_rows, measurement_moments_rows
+from navcore.filters import unscented_rows
+from navcore.filters.unscented_rows import correct_rows, measurement_moments_rows
 
 STEP = 0.02
 
@@ -211,8 +212,8 @@ def test_a_filter_that_cannot_be_corrected_is_flagged_alone():
     z[2, 3] = math.inf                       # not finite
     result = correct_rows(x, P, z, z_pred, S, Pxz)
     assert result.status[1] == 0 and result.status[0] and result.status[2]
-    assert "positive definite" in str(unscented.correction_error(result.status[0]))
-    assert "NaN or inf" in str(unscented.correction_error(result.status[2]))
+    assert "positive definite" in str(unscented_rows.correction_error(result.status[0]))
+    assert "NaN or inf" in str(unscented_rows.correction_error(result.status[2]))
 
 
 def test_magnetometer_batch_rows_are_each_model_alone():
@@ -400,12 +401,13 @@ def test_accepted_rows_is_each_input_s_declared_range():
     assert 0 < sum(expected) < len(expected)
 
 
-def test_stacked_row_column_products_are_each_row_s_dot():
-    """The batch's |sigma|^2 of every run (numpy's stacked (1, 3) x (3, 1) products) against
-    the engine's float(x[:3] @ x[:3]) per run, bit for bit, over 16 decades (a stacked
-    einsum, by contrast, rounds otherwise)."""
+@pytest.mark.parametrize("m", [3, 6, 15])
+def test_stacked_row_column_products_are_each_row_s_dot(m):
+    """The batch's |sigma|^2 of every run and correct_rows' NIS |u|^2 of every filter
+    (numpy's stacked (1, m) x (m, 1) products) against one run's float(v @ v), bit for bit,
+    over 16 decades (a stacked einsum, by contrast, rounds otherwise)."""
     rng = np.random.default_rng(8)
-    mrp = rng.normal(size=(20000, 3)) * 10.0 ** rng.integers(-8, 8, (20000, 1))
+    mrp = rng.normal(size=(20000, m)) * 10.0 ** rng.integers(-8, 8, (20000, 1))
     stacked = np.matmul(mrp[:, None, :], mrp[:, :, None])[:, 0, 0]
     assert np.array_equal(_bits(stacked), _bits([float(r @ r) for r in mrp]))
     assert not np.array_equal(_bits(np.einsum("bi,bi->b", mrp, mrp)), _bits(stacked))

@@ -10,13 +10,13 @@ for all runs at once what :meth:`AhrsFilter.step` does for one:
 * the gyro increment into the pending time update;
 * for the runs whose measurement update is due, the UKF time and measurement updates, by
   the functions the single engine calls with one run: the sigma points of all runs
-  (:func:`~navcore.filters.unscented.sigma_points_rows`: each covariance's Cholesky
+  (:func:`~navcore.filters.unscented_rows.sigma_points_rows`: each covariance's Cholesky
   factor by the LAPACK routine one run alone calls, from one kernel for all runs),
   :func:`~navcore.filters.ahrs.propagate_points` and
   :func:`~navcore.filters.ahrs.measure_points` on the points of all runs, the stacked
-  moments (:func:`~navcore.filters.unscented.predicted_moments_rows`,
-  :func:`~navcore.filters.unscented.measurement_moments_rows`) and
-  :func:`~navcore.filters.unscented.correct_rows`; the fuzzy adaptation of R of all runs in
+  moments (:func:`~navcore.filters.unscented_rows.predicted_moments_rows`,
+  :func:`~navcore.filters.unscented_rows.measurement_moments_rows`) and
+  :func:`~navcore.filters.unscented_rows.correct_rows`; the fuzzy adaptation of R of all runs in
   one :func:`~navcore.filters.ahrs.adapt_r_scales` call (each run's window and state its own
   object's, the inferences of all runs' blocks stacked);
 * the solution outputs.  The quaternion products of the gyro increments and the
@@ -54,9 +54,9 @@ from ..filters.ahrs import (FuzzyAdaptiveR, FuzzyWindows, UkfAhrsEngine, accumul
                             process_noise_diagonal, propagate_points, shadow_switched,
                             solution_rows)
 from ..filters.fuzzy import StackedInference
-from ..filters.unscented import (correct_rows, correction_error, measurement_moments_rows,
-                                 predicted_moments_rows, predicted_state_error,
-                                 sigma_points_rows, state_error)
+from ..filters.unscented_rows import (correct_rows, correction_error,
+                                      measurement_moments_rows, predicted_moments_rows,
+                                      predicted_state_error, sigma_points_rows, state_error)
 
 _INPUT_NAMES = tuple(p.name for p in signals.AHRS_INPUTS)
 _DIAGONAL = np.arange(6)

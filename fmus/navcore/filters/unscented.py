@@ -71,11 +71,10 @@ import numpy as np
 from scipy.linalg import lapack
 
 from navcore.errors import InputError, ParameterError
-# (sigma_points_rows: the AHRS batch imports it from here with the others)
 from navcore.filters.unscented_rows import (correct_rows, correction_error, eigen_sqrt,
                                             measurement_moments_rows, points_from_sqrt_rows,
                                             predicted_moments_rows, predicted_state_error,
-                                            sigma_points_rows, state_error)
+                                            state_error)
 
 
 # ---------------------------------------------------------------------------------------

@@ -223,10 +223,11 @@ def correct_rows(x: np.ndarray, P: np.ndarray, z: np.ndarray, z_pred: np.ndarray
     _cholesky_solves(np.ascontiguousarray(S), np.ascontiguousarray(Pxz), v, status, K, u,
                      log_det, np.empty((m, m), order="F"), np.empty((m, n), order="F"),
                      np.empty((m, 1), order="F"))
-    nis, log_likelihood = np.zeros(runs), np.zeros(runs)
-    for b in np.flatnonzero(status == 0).tolist():
-        nis[b] = float(u[b] @ u[b])
-        log_likelihood[b] = gaussian_log_likelihood(nis[b], log_det[b], m)
+    # |u|^2 of every filter: numpy's stacked (1, m) x (m, 1) products are each slice's 1-D
+    # dot, one filter's float(u @ u); the log-likelihood's arithmetic is elementwise
+    corrected = status == 0
+    nis = np.where(corrected, np.matmul(u[:, None, :], u[:, :, None])[:, 0, 0], 0.0)
+    log_likelihood = np.where(corrected, gaussian_log_likelihood(nis, log_det, m), 0.0)
     # a filter not corrected has K = 0 and may have a v that is not finite
     used = np.where(status[:, None] == 0, v, 0.0) if status.any() else v
     x = x + (K @ used[:, :, None])[:, :, 0]
