@@ -96,9 +96,17 @@ def capture(obj: Any, where: str = "") -> Dict[str, Any]:
     for name in state:
         # one lookup: a field may be a property that computes its value
         value = getattr(obj, name, _NOT_SET)
-        if value is _NOT_SET:
+        kind = type(value)
+        # capture_value's first two cases, without naming the field (a latency history
+        # captures its engine after every fix)
+        if kind in _PLAIN_TYPES:
+            tree[name] = value
+        elif kind is np.ndarray and value.dtype in _NATIVE_DTYPES:
+            tree[name] = np.array(value, copy=True)
+        elif value is _NOT_SET:
             raise StateError(f"{where}.{name}: declared state field is not set")
-        tree[name] = capture_value(value, f"{where}.{name}")
+        else:
+            tree[name] = capture_value(value, f"{where}.{name}")
     return tree
 
 
@@ -136,7 +144,8 @@ def capture_value(value: Any, where: str) -> Any:
         return collections.deque((capture_value(v, f"{where}[{i}]") for i, v in enumerate(value)),
                                  maxlen=value.maxlen)
     if isinstance(value, (list, tuple)):
-        items = [capture_value(v, f"{where}[{i}]") for i, v in enumerate(value)]
+        items = [v if type(v) in _PLAIN_TYPES else capture_value(v, f"{where}[{i}]")
+                 for i, v in enumerate(value)]
         return items if isinstance(value, list) else tuple(items)
     if isinstance(value, dict):
         for key in value:
