@@ -60,10 +60,10 @@ class NisMonitor:
             window.popleft()
         if t - self.first_time < self.span or len(window) < MIN_UPDATES:
             return None
-        ratios = sorted(w[1] for w in window)
-        above = sum(r > 1.0 for r in ratios)
-        if not 2 * above > len(ratios):
+        above = sum(1 for _, r in window if r > 1.0)
+        if not 2 * above > len(window):
             return None
+        ratios = sorted(r for _, r in window)
         self.warned = True
         median = ratios[len(ratios) // 2]
         window.clear()
