@@ -1,8 +1,9 @@
-"""FMU slave 'CtfaUkf': a thin FMI shell over navcore.components.registry.CtfaUkf (see fmushell)."""
+"""FMU slave 'CtfaUkf': a thin FMI shell over
+navcore.components.ukf_components.CtfaUkf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import ukf_components as components
 
 
 class CtfaUkf(Fmi2Slave):

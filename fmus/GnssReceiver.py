@@ -1,10 +1,10 @@
 """FMU slave 'GnssReceiver': a thin FMI shell over
-navcore.components.registry.GnssReceiver (see fmushell)."""
+navcore.components.sensor_components.GnssReceiver (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import sensor_components as components
 
 
 class GnssReceiver(Fmi2Slave):

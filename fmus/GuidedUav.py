@@ -1,10 +1,10 @@
 """FMU slave 'GuidedUav': a thin FMI shell over
-navcore.components.registry.GuidedUav (see fmushell)."""
+navcore.components.guided_uav.GuidedUav (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import guided_uav as components
 
 
 class GuidedUav(Fmi2Slave):

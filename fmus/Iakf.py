@@ -1,8 +1,9 @@
-"""FMU slave 'Iakf': a thin FMI shell over navcore.components.registry.Iakf (see fmushell)."""
+"""FMU slave 'Iakf': a thin FMI shell over
+navcore.components.kf_components.Iakf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import kf_components as components
 
 
 class Iakf(Fmi2Slave):

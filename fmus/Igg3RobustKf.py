@@ -1,10 +1,10 @@
 """FMU slave 'Igg3RobustKf': a thin FMI shell over
-navcore.components.registry.Igg3RobustKf (see fmushell)."""
+navcore.components.kf_components.Igg3RobustKf (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import kf_components as components
 
 
 class Igg3RobustKf(Fmi2Slave):

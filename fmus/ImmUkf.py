@@ -1,8 +1,9 @@
-"""FMU slave 'ImmUkf': a thin FMI shell over navcore.components.registry.ImmUkf (see fmushell)."""
+"""FMU slave 'ImmUkf': a thin FMI shell over
+navcore.components.ukf_components.ImmUkf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import ukf_components as components
 
 
 class ImmUkf(Fmi2Slave):

@@ -4,7 +4,7 @@ navcore.components.replay.ImuGnssReplay (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import replay as components
 
 
 class ImuGnssReplay(Fmi2Slave):

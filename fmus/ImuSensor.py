@@ -1,10 +1,10 @@
 """FMU slave 'ImuSensor': a thin FMI shell over
-navcore.components.registry.ImuSensor (see fmushell)."""
+navcore.components.imu_sensor.ImuSensor (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import imu_sensor as components
 
 
 class ImuSensor(Fmi2Slave):

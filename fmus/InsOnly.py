@@ -1,8 +1,9 @@
-"""FMU slave 'InsOnly': a thin FMI shell over navcore.components.registry.InsOnly (see fmushell)."""
+"""FMU slave 'InsOnly': a thin FMI shell over
+navcore.components.kf_components.InsOnly (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import kf_components as components
 
 
 class InsOnly(Fmi2Slave):

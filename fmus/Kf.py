@@ -1,8 +1,9 @@
-"""FMU slave 'Kf': a thin FMI shell over navcore.components.registry.Kf (see fmushell)."""
+"""FMU slave 'Kf': a thin FMI shell over
+navcore.components.kf_components.Kf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import kf_components as components
 
 
 class Kf(Fmi2Slave):

@@ -1,10 +1,10 @@
 """FMU slave 'NewtonRobustKf': a thin FMI shell over
-navcore.components.registry.NewtonRobustKf (see fmushell)."""
+navcore.components.kf_components.NewtonRobustKf (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import kf_components as components
 
 
 class NewtonRobustKf(Fmi2Slave):

@@ -1,10 +1,10 @@
 """FMU slave 'SageHusaFading': a thin FMI shell over
-navcore.components.registry.SageHusaFading (see fmushell)."""
+navcore.components.kf_components.SageHusaFading (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import kf_components as components
 
 
 class SageHusaFading(Fmi2Slave):

@@ -1,10 +1,10 @@
 """FMU slave 'TrajectoryImu': a thin FMI shell over
-navcore.components.registry.TrajectoryImu (see fmushell)."""
+navcore.components.sensor_components.TrajectoryImu (see fmushell)."""
 
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import sensor_components as components
 
 
 class TrajectoryImu(Fmi2Slave):

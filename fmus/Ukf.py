@@ -1,8 +1,9 @@
-"""FMU slave 'Ukf': a thin FMI shell over navcore.components.registry.Ukf (see fmushell)."""
+"""FMU slave 'Ukf': a thin FMI shell over
+navcore.components.ukf_components.Ukf (see fmushell)."""
 from pythonfmu import Fmi2Slave
 
 import fmushell
-from navcore.components import registry as components
+from navcore.components import ukf_components as components
 
 
 class Ukf(Fmi2Slave):
