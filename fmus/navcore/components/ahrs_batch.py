@@ -159,6 +159,7 @@ class AhrsFilterBatch(ComponentBatch):
         self.started = np.zeros(runs, dtype=bool)
         self.last_update = np.zeros(runs)
         self.nav_time = np.full(runs, float(start_time))
+        self._everyone = np.ones(runs, dtype=bool)
         alive = [b for b in range(runs) if b not in self._failures]
         self._blocks = {}            # rows of runs -> their stacked fuzzy inferences
         self._native = bool(alive) and self._stands_for(alive)
@@ -226,7 +227,6 @@ class AhrsFilterBatch(ComponentBatch):
             np.zeros((self.runs, 2)), window,
             np.array([1.0 if a is None else a.r_scale_min for a in adaptives]),
             np.array([1.0 if a is None else a.r_scale_max for a in adaptives]))
-        self._adaptive_rows = (window > 0).nonzero()[0]
 
     # -- the runs' own objects and the batch's stacks ------------------------------------
     def _adopt(self, b: int) -> None:
@@ -279,14 +279,11 @@ class AhrsFilterBatch(ComponentBatch):
             setattr(self, name, getattr(self, name)[rows])
         self.windows = FuzzyWindows(*(values[rows] for values in self.windows))
         self._blocks = {}                      # keyed by the runs' rows, which moved
-        self._adaptive_rows = (self.windows.window > 0).nonzero()[0]
+        self._everyone = np.ones(len(rows), dtype=bool)
 
     def _alive(self) -> np.ndarray:
         if not self._failures:                 # the common case: one array, made once
-            everyone = self.__dict__.get("_everyone")
-            if everyone is None or len(everyone) != self.runs:
-                everyone = self._everyone = np.ones(self.runs, dtype=bool)
-            return everyone
+            return self._everyone
         alive = np.ones(self.runs, dtype=bool)
         alive[list(self._failures)] = False
         return alive

@@ -112,18 +112,6 @@ def accumulate_rows(rows, imu_time, dt, dtheta, mag_time, nav_time, dq, interval
 
 
 @jitable
-def _euler_terms(w, x, y, z):
-    """ZYX roll and yaw (not yet folded into (-pi, pi]) of the C_bn of quaternion (w, x, y,
-    z) (Groves eq. 2.38 via eq. 2.34), normalised first, and the terms of its pitch: the
-    pitch is the atan2 of the third and of the hypot of the last two."""
-    n = w * w + x * x + y * y + z * z
-    a = 2.0 * (w * x + y * z)
-    b = n - 2.0 * (x * x + y * y)
-    return (math.atan2(a, b), math.atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z)),
-            2.0 * (w * y - z * x), a, b)
-
-
-@jitable
 def _state_quat(x0, x1, x2, x3, x4, x5, T, dq):
     """:meth:`UkfAhrsEngine.current_quat` of the state ``x0 .. x5`` (MRP, gyro bias), the
     pending interval ``T`` and its gyro quaternion ``dq`` (a float tuple)."""
@@ -134,17 +122,16 @@ def _state_quat(x0, x1, x2, x3, x4, x5, T, dq):
 
 
 @jitable
-def _folded_yaw(yaw):
-    """The yaw of :func:`_euler_terms` folded into (-pi, pi]."""
-    return math.pi if yaw <= -math.pi else yaw
-
-
-@jitable
 def _euler(w, x, y, z):
-    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z), yaw in
-    (-pi, pi] (Python's ``hypot`` in kernels too: a C one rounds otherwise)."""
-    roll, yaw, sine, a, b = _euler_terms(w, x, y, z)
-    return roll, math.atan2(sine, hypot(a, b)), _folded_yaw(yaw)
+    """ZYX Euler angles (roll, pitch, yaw) of the C_bn of quaternion (w, x, y, z) (Groves
+    eq. 2.38 via eq. 2.34), normalised first, yaw folded into (-pi, pi] (Python's ``hypot``
+    in kernels too: a C one rounds otherwise)."""
+    n = w * w + x * x + y * y + z * z
+    a = 2.0 * (w * x + y * z)
+    b = n - 2.0 * (x * x + y * y)
+    yaw = math.atan2(2.0 * (w * z + x * y), n - 2.0 * (y * y + z * z))
+    return (math.atan2(a, b), math.atan2(2.0 * (w * y - z * x), hypot(a, b)),
+            math.pi if yaw <= -math.pi else yaw)
 
 
 def quat_euler(q):
