@@ -353,6 +353,7 @@ _NIS_AT_TARGET = ("with the NIS at lambda = 1 equal to the target every bisectio
                   "log(1e6) / 2^60 = 1.2e-17, whose exp is 1.0, the value returned early")
 _SAME_INTERVAL = "a gap equal to the interval sets the interval to the value it has"
 _ADAPTIVE = "navcore.filters.adaptive_filters.x"
+_ROBUST = "navcore.filters.robust_filters.x"
 _LEVEL_CHECK_ONLY = ("the call only checks the level alpha (its quantile is discarded); "
                      "the default dof 1 is as valid as m")
 _UNIT_Y = "Y v with Y = 1.0 is v to the last bit"
@@ -543,24 +544,24 @@ EQUIVALENT.update({
         _UNIT_Y),
     _ADAPTIVE + "ǁIakfEngineǁupdate__mutmut_42": (
         "v_used = v if Y == 2.0 else Y * v                        # paper 001 eq. 13", _UNIT_Y),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_17": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ__init____mutmut_17": (
         "self.history = robust_laws.ObservationHistory(maxlen=self.newton_order + 2)",
         _NEWEST_SAMPLES),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_19": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ__init____mutmut_19": (
         "self.sample_variances = deque(maxlen=None)", _TRIMMED),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_21": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ__init____mutmut_21": (
         "self.sample_variances = deque(maxlen=self.newton_order + 2)", _TRIMMED),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_26": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ__init____mutmut_26": (
         "self.history_epoch = None", _FIRST_EPOCH),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ__init____mutmut_27": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ__init____mutmut_27": (
         "self.history_epoch = 1", _FIRST_EPOCH),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_12": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_12": (
         "weights = np.array([math.comb(p + 1, j + 1) for j in range(p + 1)], dtype=None)",
         _SMALL_BINOMIALS),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_14": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_14": (
         "weights = np.array([math.comb(p + 1, j + 1) for j in range(p + 1)], )",
         _SMALL_BINOMIALS),
-    _ADAPTIVE + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_30": (
+    _ROBUST + "ǁNewtonRobustKfEngineǁ_extrapolated_variance__mutmut_30": (
         "newest_first = variances[::-1][:p + 2]", _ALL_VARIANCES),
     # UKF engines
     _UNSCENTED + "__sqrt_symmetric__mutmut_4": (

@@ -59,6 +59,7 @@ MODULES.update({
     "navcore.filters.recovery": ["tests/test_recovery.py",
                                  "tests/test_recovery_guard_by_hand.py"],
     "navcore.filters.adaptive_filters": ["tests/test_adaptive_engines_by_hand.py"],
+    "navcore.filters.robust_filters": ["tests/test_adaptive_engines_by_hand.py"],
 })
 
 # UKF engines

@@ -21,9 +21,10 @@ import pytest
 
 from navcore.core import state
 from navcore.core.component import ParameterError
-from navcore.filters.adaptive_filters import (UNUSABLE_VARIANCE_FACTOR, IakfEngine,
-    Igg3RobustKfEngine, InsOnlyEngine, NewtonRobustKfEngine, SageHusaFadingEngine,
-    masked_update)
+from navcore.filters.adaptive_filters import (IakfEngine, InsOnlyEngine, SageHusaFadingEngine,
+                                              masked_update)
+from navcore.filters.robust_filters import (UNUSABLE_VARIANCE_FACTOR, Igg3RobustKfEngine,
+                                            NewtonRobustKfEngine)
 from navcore.filters.innovation_stats import chi2_gate
 from navcore.filters.recovery import bounded_r, inflate_navigation, inflation_factor
 from navcore.ins.error_model import N_STATES

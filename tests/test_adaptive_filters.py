@@ -15,8 +15,8 @@ import pytest
 
 from navcore.components import registry as components
 from navcore.core import signals
-from navcore.filters.adaptive_filters import (UNUSABLE_VARIANCE_FACTOR, NewtonRobustKfEngine,
-    masked_update)
+from navcore.filters.adaptive_filters import masked_update
+from navcore.filters.robust_filters import UNUSABLE_VARIANCE_FACTOR, NewtonRobustKfEngine
 from navcore.core.component import ParameterError
 from navcore.filters.innovation_stats import CHI2_THRESHOLD_PAPER_004
 from navcore.filters.ins_gnss_kf import KfConfig, KfEngine

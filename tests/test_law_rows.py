@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from navcore.core import state
-from navcore.filters.adaptive_filters import (IakfEngine, NewtonRobustKfEngine,
-    SageHusaFadingEngine)
+from navcore.filters.adaptive_filters import IakfEngine, SageHusaFadingEngine
+from navcore.filters.robust_filters import NewtonRobustKfEngine
 from navcore.filters.innovation_stats import cholesky_nis_rows, dot_rows, nis_rows, trace_rows
 
 from test_kf_engine_by_hand import DT, config, increments, strapdown

@@ -9,8 +9,9 @@ the validated values to the engine, which has no defaults of its own.
 from __future__ import annotations
 
 from ..core import signals
-from ..filters.adaptive_filters import (REPLACEMENT_VARIANCES, IakfEngine, Igg3RobustKfEngine,
-    InsOnlyEngine, NewtonRobustKfEngine, SageHusaFadingEngine)
+from ..filters.adaptive_filters import IakfEngine, InsOnlyEngine, SageHusaFadingEngine
+from ..filters.robust_filters import (REPLACEMENT_VARIANCES, Igg3RobustKfEngine,
+                                      NewtonRobustKfEngine)
 from ..filters.adaptive_laws import DEFAULT_R_FLOOR_FRACTION
 from ..core.component import Limits, integer, real, string
 from .filter_component import InsGnssFilter
