@@ -231,7 +231,8 @@ def test_pythonfmu_loader_leaves_script_globals_fully_referenced(cases):
             s.instantiate()
             slaves.append(s)
         gc.collect()
-        d = sys.modules["GnssReceiver"].__dict__
+        module = open({str(unzipped / "resources" / "slavemodule.txt")!r}).read().strip()
+        d = sys.modules[module].__dict__
         print(sys.getrefcount(d) - 1, len(gc.get_referrers(d)))
     """)
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

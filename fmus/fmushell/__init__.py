@@ -25,6 +25,8 @@ does the FMI side once for all of them, one concern per module:
   A bug's traceback follows in a second message (category ``traceback``).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.
+* keeps the build's packages, which carry names private to the build, importable from a
+  folder that exists (:mod:`fmushell.private_paths`);
 * works around two defects of pythonfmu 0.7's native binary that corrupted the heap at
   process exit: its loader's extra ``Py_DECREF`` of the script's globals and its interpreter
   teardown running after the C++ static destructors (:mod:`fmushell.pythonfmu_fixes`).
@@ -47,7 +49,9 @@ pythonfmu's own library nothing may raise, and the refusal is reported as
 """
 from __future__ import annotations
 
+from . import private_paths
 from .refusals import FmiCallRefused, refusals_return_error
 from .shell import bind_methods, do_step, setup
 
-__all__ = ["setup", "do_step", "bind_methods", "FmiCallRefused", "refusals_return_error"]
+__all__ = ["private_paths", "setup", "do_step", "bind_methods", "FmiCallRefused",
+           "refusals_return_error"]

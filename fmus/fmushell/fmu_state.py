@@ -6,6 +6,7 @@ identity (model name and the hash of its Python sources).
 """
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from pythonfmu.enums import Fmi2Status
@@ -59,10 +60,20 @@ def fmu_identity(slave_class):
         # the file the class's own __init__ was compiled from (every FMU script defines one):
         # sys.modules may still hold a module of the same name loaded from another FMU's
         # folder, since deleted (an FMU loaded in this process before this one was built)
-        script = slave_class.__init__.__code__.co_filename
-        identity = (slave_class.__name__, state_format.build_hash(Path(script)))
+        script = Path(slave_class.__init__.__code__.co_filename)
+        identity = (slave_class.__name__, _build_of(script))
         _IDENTITIES[slave_class] = identity
     return identity
+
+
+def _build_of(script: Path) -> str:
+    """The build hash of the FMU whose slave script is ``script``: the one its build recorded
+    (a built FMU's packages have private names, so their folders are not the ones hashed), else
+    the hash of the sources beside the script (a slave run from the source tree)."""
+    recorded = script.parent / state_format.BUILD_FILE
+    if recorded.is_file():
+        return json.loads(recorded.read_text(encoding="utf-8"))["build"]
+    return state_format.build_hash(script)
 
 
 def get_fmu_state(slave):

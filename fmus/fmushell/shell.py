@@ -14,12 +14,14 @@ from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, Real, St
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
+from navcore import __version__ as navcore_version
 from navcore.errors import NavcoreError, RefusedCall, numerical_failure
 
 from .fmu_state import (fmu_identity, fmu_state_from_bytes, fmu_state_to_bytes,
                         get_fmu_state, set_fmu_state)
 from .log_categories import LOG_CATEGORIES, log
 from .model_description import to_xml
+from .private_paths import adopt_folder
 from .pythonfmu_fixes import balance_loader_decref, finalize_python_at_exit
 from .refusals import FmiCallRefused, refusals_return_error, refuse
 from .resource_files import resolved_file_parameters
@@ -36,7 +38,7 @@ def setup(slave, component_class):
     start, stop, step = cls.default_experiment
     slave.default_experiment = DefaultExperiment(start_time=start, stop_time=stop, step_size=step)
     slave.author = "navfmu"
-    slave.version = "0.1.0"
+    slave.version = navcore_version
     slave._values = {}
     slave._units = {}
     slave._input_names = tuple(p.name for p in cls.inputs)
@@ -54,6 +56,8 @@ def setup(slave, component_class):
     slave._causality = {}
     # the FMU's identity hashes its sources: read them now, while the folder pythonfmu loaded
     # them from exists (a host may delete it once the first instance is freed)
+    if getattr(slave, "resources", None):
+        adopt_folder(slave.resources, sys.modules[type(slave).__module__].__dict__)
     fmu_identity(type(slave))
     finalize_python_at_exit(slave)
     for port in cls.parameters:

@@ -18,3 +18,6 @@ Wings, lowest first; a wing imports only the ones before it (``tests/test_layout
 
 ``errors`` is the one error hierarchy, for navcore and the master.
 """
+
+#: navfmu's version: the distribution's (pyproject.toml reads it here) and every FMU's
+__version__ = "0.1.0"

@@ -2,11 +2,12 @@
 
 An FMU is stale when it is missing, has no platform binaries, or when its build stamp
 differs from the one recorded beside it in ``fmus/dist/<Model>.fmu.sha256``: the hash of its
-Python inputs (its slave script and every file of the ``fmushell`` and ``navcore`` packages) and
+Python inputs (its slave script and every file of the ``fmushell`` and ``navcore`` packages),
 which Linux library it carries (the patched pythonfmu library of
 :mod:`orchestrator.building.native_library` with the hash of its sources, or the wheel's when that
-cannot be built here).  Each FMU is written to a temporary name and renamed, so an interrupted build
-never leaves a broken ``.fmu`` behind.
+cannot be built here) and how its code is packed (under names private to the build:
+:mod:`orchestrator.building.private_names`).  Each FMU is written to a temporary name and
+renamed, so an interrupted build never leaves a broken ``.fmu`` behind.
 :func:`ensure_fmus` builds those a system model uses before it runs.
 """
 from __future__ import annotations
@@ -18,9 +19,10 @@ import tempfile
 import zipfile
 from pathlib import Path
 
+from navcore import __version__ as navfmu_version
 from navcore.core.state_format import build_hash
 
-from . import native_library
+from . import native_library, private_names
 from ..errors import NavfmuError
 from ..results.run_results import atomic_write
 
@@ -44,10 +46,15 @@ def source_hash(script: Path) -> str:
     return build_hash(script, SHELL, LIBRARY)
 
 
+#: how the Python code is packed into an FMU (a change rebuilds every FMU)
+PACKING = "private names 1"
+
+
 def build_stamp(script: Path, patched: bool) -> str:
-    """What ``<Model>.fmu.sha256`` records: the Python sources' hash and the Linux library."""
+    """What ``<Model>.fmu.sha256`` records: the Python sources' hash, the Linux library and how
+    the code is packed."""
     library = f"patched {native_library.sources_hash()}" if patched else "wheel"
-    return f"{source_hash(script)}\nlinux64 library: {library}"
+    return f"{source_hash(script)}\nlinux64 library: {library}\npacking: {PACKING}"
 
 
 def fmu_path(name: str, dist: Path = DIST) -> Path:
@@ -96,6 +103,7 @@ def build_one(script: Path, dist: Path = DIST, library: Path = None) -> Path:
                                   "(its installation lacks the FMI wrapper libraries)")
         if library is not None:
             native_library.replace_in_fmu(built, script.stem, library)
+        private_names.make_private(built, script.stem, source_hash(script), navfmu_version)
         with open(built, "rb") as src:  # atomic_write: the user's umask, not mkstemp's 0600
             atomic_write(target, lambda f: shutil.copyfileobj(src, f), binary=True)
     target.with_suffix(".fmu.sha256").write_text(build_stamp(script, library is not None) + "\n")

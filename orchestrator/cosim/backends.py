@@ -93,6 +93,9 @@ class Instance(ABC):
     name: str
     #: what the instance runs, for messages (FMU path or class name)
     source: str
+    #: which code runs, for the results (an FMU's file, content hash and build:
+    #: :mod:`orchestrator.cosim.fmu_builds`; a Python component's class)
+    build_info: Dict[str, Any] = {}
     variables: Dict[str, VarInfo]
 
     def __init__(self) -> None:

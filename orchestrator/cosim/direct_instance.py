@@ -8,6 +8,7 @@ from typing import Any, Dict, Mapping, Optional, Sequence
 
 import numpy as np
 
+from navcore import __version__ as navfmu_version
 from navcore.errors import NavcoreError, numerical_failure
 
 from .backends import Instance, VarInfo, coerce
@@ -73,6 +74,9 @@ class DirectInstance(Instance):
         cls = type(component)
         self.model_name = getattr(cls, "model_name", "") or cls.__name__
         self.source = source or f"Python component {cls.__module__}.{cls.__qualname__}"
+        self.build_info = {"model": self.model_name,
+                           "python_class": f"{cls.__module__}.{cls.__qualname__}",
+                           "navfmu_version": navfmu_version}
         self.variables = {}
         ref = itertools.count()
         for causality, ports in (("parameter", getattr(cls, "parameters", ())),

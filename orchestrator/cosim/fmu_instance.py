@@ -12,6 +12,7 @@ from typing import Any, Dict, Mapping, Optional, Tuple
 
 import numpy as np
 
+from . import fmu_builds
 from .backends import Instance, VarInfo, coerce
 from ..errors import NavfmuError, SimulationError
 
@@ -120,6 +121,7 @@ class FmuInstance(Instance):
 
         self._unzipdir = str(extract(str(self.path)))
         self._finalizer = weakref.finalize(self, _cleanup_files, self._unzipdir)
+        self.build_info = fmu_builds.build_info(self.path, md, Path(self._unzipdir))
         self._env_id = next(_ENV_IDS)
         _LOG_SINKS[self._env_id] = self.log
         _LOG_SINKS_BY_NAME[name.encode("utf-8")] = self.log

@@ -420,6 +420,8 @@ class Simulation:
         results = self._results(start, stop, n_steps, recording.size if sink is None else 0,
                                 recording.buffers, rec_index, position, timing, loop_ns)
         results.metadata["warnings"] = warnings_reported
+        results.metadata["builds"] = {d.spec.name: inst.build_info
+                                      for d, inst in zip(self.components, instances)}
         if sink is not None:
             sink.close(results)
         return results

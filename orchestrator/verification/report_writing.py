@@ -27,10 +27,22 @@ def _cell(text: str) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def _build_line(build: Dict[str, Any]) -> str:
+    """Which code was verified: the FMU's content hash, its tool and its navfmu build."""
+    line = (f"sha256 `{build.get('fmu_sha256', '?')}`, GUID `{build.get('guid', '?')}`, "
+            f"made by {build.get('generation_tool') or 'an unnamed tool'}")
+    if "navfmu_build" in build:
+        line += (f"; navfmu {build['navfmu_version']} build `{build['navfmu_build'][:16]}`"
+                 + (", its code changed after that build" if build["changed_after_build"]
+                    else ""))
+    return line
+
+
 def markdown(summary: Dict[str, Any], checks: List[Check]) -> str:
     n = counts(checks)
     lines = [f"# navfmu verify: {summary['model_name']}", "",
              f"- FMU: `{summary['fmu']}`",
+             f"- build: {_build_line(summary.get('build') or {})}",
              f"- role: {ROLE_TITLES[summary['role']]} (`{summary['role']}`"
              + (", forced with --role)" if summary.get("role_forced") else ", detected)"),
              f"- scenario(s): {', '.join(summary['scenarios'])}; seeds per case: "

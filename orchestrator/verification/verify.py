@@ -13,7 +13,10 @@ import tempfile
 from pathlib import Path
 from typing import Any, Callable, Dict, Optional, Sequence
 
+from fmpy import read_model_description
+
 from ..building import build as fmu_build
+from ..cosim import fmu_builds
 from ..results import outputs
 from ..running import scenarios
 from ..errors import NavfmuError
@@ -71,7 +74,9 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
                    "role": found_role, "role_forced": role is not None,
                    "scenarios": [p.parent.name for p in setting.scenario_paths],
                    "runs": runs, "parameters": setting.user_sets,
-                   "datasheet": setting.datasheet, "executor": executor.mode}
+                   "datasheet": setting.datasheet, "executor": executor.mode,
+                   "build": fmu_builds.build_info(facts.path, read_model_description(
+                       str(facts.path), validate=False))}
         report = write_report(out, summary, checks, figures, junit)
     n = counts(checks)
     summary.update(checks=checks, counts=n, report=report, exit_status=1 if n["fail"] else 0)

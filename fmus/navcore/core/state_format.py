@@ -65,6 +65,10 @@ _ARRAY_DTYPES = {d.str: d for d in ARRAY_DTYPES}
 
 Identity = Tuple[str, str]  # (model name, build hash)
 
+#: the build-identity file in a built FMU's resources (written by the build, which gives the
+#: FMU's packages names private to the build): model, version, build hash, private names
+BUILD_FILE = "navfmu_build.json"
+
 
 def build_hash(script: Path, shell: str = "fmushell", library: str = "navcore") -> str:
     """SHA-256 of an FMU's Python sources: its script and every ``.py`` of the shell and of
@@ -77,6 +81,17 @@ def build_hash(script: Path, shell: str = "fmushell", library: str = "navcore") 
     for f in files:
         h.update(f.relative_to(script.parent).as_posix().encode())
         h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def packed_content_hash(files) -> str:
+    """SHA-256 of a built FMU's packed Python packages: ``files`` are (path relative to the
+    resources folder, bytes) of every ``.py`` file in the packages.  The build records it
+    (:data:`BUILD_FILE`); the FMU and the master compute it again to see whether the code was
+    changed after the build."""
+    h = hashlib.sha256()
+    for name, data in sorted(files):
+        h.update(name.encode() + b"\0" + hashlib.sha256(data).digest())
     return h.hexdigest()
 
 

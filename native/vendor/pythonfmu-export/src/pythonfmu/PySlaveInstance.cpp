@@ -61,7 +61,16 @@ PyObject* findClass(const std::string& resources, const std::string& moduleName)
 
     if (pCode != nullptr) {
         PyObject* pResult = PyEval_EvalCode(pCode, pGlobals, pLocals);
-        Py_XDECREF(pResult);
+        if (pResult == nullptr) {
+            // navfmu patch: the script raised (an FMU that refuses to load here): keep its
+            // exception pending for the caller to report (upstream went on and replaced it
+            // with an AttributeError about an empty class name)
+            Py_DECREF(pCode);
+            Py_DECREF(pLocals);
+            Py_DECREF(pyModule);
+            return nullptr;
+        }
+        Py_DECREF(pResult);
     } else {
         PyErr_Print(); // Handle compilation error
         Py_Finalize();
