@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 import shutil
+import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import simulate_fmu
+from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import component_xml, ssd_text
@@ -171,3 +173,33 @@ def test_exported_fmu_claims_only_its_platforms_and_reports_errors_with_logging_
                      start_values={"gnss.fix_interval": -1.0},
                      logger=lambda c, name, status, cat, msg: messages.append((status, msg)))
     assert [s for s, m in messages if b"'fix_interval' = -1.0" in m] == [3]
+
+
+@pytest.mark.parametrize("step_hints", [True, False])
+def test_archive_holds_no_string_value_and_step_hints_only_when_asked(built, tmp_path,
+                                                                      step_hints):
+    from orchestrator.model.ssp_archive import load_model
+    from orchestrator.packaging.package import package
+
+    folder = Path(__file__).parents[1] / "models" / "aircraft_500s"
+    archive = package(folder, tmp_path / "a.ssp", step_hints=step_hints)
+    with zipfile.ZipFile(archive) as z:
+        texts = {n: z.read(n).decode() for n in z.namelist() if n.endswith((".ssd", ".ssv"))}
+    for name, text in texts.items():
+        root = ET.fromstring(text)   # still well-formed
+        assert not [e for e in root.iter() if e.tag.endswith("}String")], name
+    ssd = ET.fromstring(texts["SystemStructure.ssd"])
+    hints = [e for e in ssd.iter() if e.tag.endswith("}StepSizeHint")]
+    assert len(hints) == (1 if step_hints else 0)
+    model, original = load_model(archive), load_model(folder)
+    assert {c.name: c.step_hint for c in model.components} == (
+        {c.name: c.step_hint for c in original.components} if step_hints
+        else {c.name: None for c in original.components})
+    # the Strings the folder binds are the FMU copies' start values
+    strings = {(c.name, n): v for c in original.components
+               for n, (t, v) in c.parameters.items() if t == "String"}
+    assert strings
+    for (component, name), value in strings.items():
+        spec = next(c for c in model.components if c.name == component)
+        start = {v.name: v.start for v in read_model_description(str(spec.source)).modelVariables}
+        assert start[name] == value

@@ -11,7 +11,8 @@ does the FMI side once for all of them, one concern per module:
 * registers every declared parameter, input and output with legal causality, variability and
   initial (Integer/Boolean ``discrete``; parameters ``fixed`` with ``initial="exact"``;
   outputs ``calculated`` and listed as InitialUnknowns; :mod:`fmushell.shell`);
-* writes SI units and their UnitDefinitions into the model description (pythonfmu does not;
+* writes SI units and their UnitDefinitions into the model description, and the Outputs' and
+  InitialUnknowns' dependencies as the FMU behaves (pythonfmu does neither;
   :mod:`fmushell.model_description`);
 * saves the full internal state (the registered values and the component's declared state,
   :mod:`navcore.core.state`) behind ``canGetAndSetFMUstate`` / ``canSerializeFMUstate``, and

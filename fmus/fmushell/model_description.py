@@ -1,5 +1,21 @@
-"""The FMU's model description: SI units with their UnitDefinitions, legal attributes and the
-FMI 2.0 order of the elements (pythonfmu's default fails ``fmpy validate``)."""
+"""The FMU's model description: SI units with their UnitDefinitions, legal attributes, the
+model structure's dependencies and the FMI 2.0 order of the elements (pythonfmu's default
+fails ``fmpy validate`` and declares no dependency, which an importer reads as "every output
+depends on every input": an algebraic loop through every closed loop of components).
+
+Dependencies, as the shell behaves (``tests/test_model_structure.py`` checks them against it):
+
+* ``Outputs``: none.  An output changes only in doStep (the component computes it there from
+  the inputs set before the step), never because an input was set after the step, so no
+  output depends on an input at a communication point: every output declares
+  ``dependencies=""``.
+* ``InitialUnknowns`` (every output): the knowns of initialization mode its value at the end
+  of it may depend on: every parameter (a component computes its start outputs from its
+  parameters; declared for all of them, not traced one by one) and the inputs its component
+  class names in ``initial_dependencies`` (those :meth:`Component.initial_inputs` reads).
+
+``dependenciesKind`` is not written: every dependence is nonlinear ("dependent", the default
+when the attribute is absent)."""
 from __future__ import annotations
 
 from xml.etree.ElementTree import Element, SubElement
@@ -47,8 +63,7 @@ def to_xml(slave, model_options=None):
     cosim.set("canGetAndSetFMUstate", "true")
     cosim.set("canSerializeFMUstate", "true")
     used_units = []
-    output_indices = []
-    for index, sv in enumerate(root.find("ModelVariables"), start=1):
+    for sv in root.find("ModelVariables"):
         name = sv.get("name")
         child = sv[0] if len(sv) else None
         unit = slave._units.get(name, "")
@@ -58,8 +73,6 @@ def to_xml(slave, model_options=None):
             child.set("unit", unit)
             if unit not in used_units:
                 used_units.append(unit)
-        if sv.get("causality") == "output":
-            output_indices.append(index)
     if used_units:
         unit_defs = Element("UnitDefinitions")
         for unit in used_units:
@@ -71,15 +84,8 @@ def to_xml(slave, model_options=None):
                     attrib["factor"] = repr(factor)
                 SubElement(u, "BaseUnit", attrib)
         root.append(unit_defs)
-    structure = root.find("ModelStructure")
-    if not getattr(slave.component_class, "outputs_depend_on_inputs", True):
-        # outputs at t computed from inputs at earlier times only: no direct feedthrough
-        for unknown in structure.iter("Unknown"):
-            unknown.set("dependencies", "")
-    if output_indices and structure.find("InitialUnknowns") is None:
-        initial = SubElement(structure, "InitialUnknowns")
-        for index in output_indices:
-            SubElement(initial, "Unknown", index=str(index))
+    _model_structure(root.find("ModelStructure"), root.find("ModelVariables"),
+                     slave.component_class)
     # put the children in the order the FMI 2.0 schema prescribes
     children = list(root)
     for c in children:
@@ -87,3 +93,29 @@ def to_xml(slave, model_options=None):
     children.sort(key=lambda e: _MD_ORDER.index(e.tag))
     root.extend(children)
     return root
+
+
+def _model_structure(structure, variables, component_class):
+    """Write the Outputs' and the InitialUnknowns' dependencies (module docstring) into
+    ``structure``, replacing what pythonfmu wrote."""
+    index = {sv.get("name"): i for i, sv in enumerate(variables, start=1)}
+    declared = component_class.initial_dependencies
+    inputs = {p.name for p in component_class.inputs}
+    outputs = sorted(index[p.name] for p in component_class.outputs)
+    if not (set(declared) <= {p.name for p in component_class.outputs}
+            and all(set(names) <= inputs for names in declared.values())):
+        raise ValueError(f"{component_class.model_name}: initial_dependencies names an "
+                         "output or an input the component does not declare")
+    parameters = [index[p.name] for p in component_class.parameters]
+    initial = {index[name]: [index[n] for n in names] for name, names in declared.items()}
+    for child in list(structure):
+        structure.remove(child)
+    if not outputs:
+        return
+    listed = SubElement(structure, "Outputs")
+    for i in outputs:
+        SubElement(listed, "Unknown", index=str(i), dependencies="")
+    listed = SubElement(structure, "InitialUnknowns")
+    for i in outputs:
+        knowns = sorted(parameters + initial.get(i, []))
+        SubElement(listed, "Unknown", index=str(i), dependencies=" ".join(map(str, knowns)))

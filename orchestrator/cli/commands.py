@@ -435,8 +435,9 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, sche
     ctx.exit(summary["exit_status"])
 
 
-def _write_system(scenario, out, module_name):
-    """Build the model's stale FMUs, then write it with ``orchestrator.packaging.<module_name>``."""
+def _write_system(scenario, out, module_name, **options):
+    """Build the model's stale FMUs, then write it with ``orchestrator.packaging.<module_name>``
+    (``options``: its keyword arguments)."""
     import importlib
 
     from ..running import scenarios
@@ -445,15 +446,18 @@ def _write_system(scenario, out, module_name):
     check_writable(out, "--out")
     scenarios.ensure_fmus(scenarios.load_scenario(scenario), log=lambda m: click.echo(m, err=True))
     writer = importlib.import_module(f"..packaging.{module_name}", __package__)
-    click.echo(f"wrote {getattr(writer, module_name)(scenario, out)}")
+    click.echo(f"wrote {getattr(writer, module_name)(scenario, out, **options)}")
 
 
-def _system_command(name, what, doc):
-    """``navfmu <name> SCENARIO --out FILE``: write the model as ``what``."""
-    def command(scenario, out):
-        _write_system(scenario, out, name)
+def _system_command(name, what, doc, options=()):
+    """``navfmu <name> SCENARIO --out FILE``: write the model as ``what``; ``options``: click
+    options of this command, passed on to its writer."""
+    def command(scenario, out, **kwargs):
+        _write_system(scenario, out, name, **kwargs)
 
     command.__doc__ = doc
+    for option in options:
+        command = option(command)
     command = click.option("--out", required=True, type=click.Path(dir_okay=False),
                            callback=nonempty_path,
                            help=f"The {what} to write.")(command)
@@ -463,7 +467,14 @@ def _system_command(name, what, doc):
 
 package = _system_command("package", "SSP archive (.ssp)",
                           "Write SCENARIO as one self-contained SSP archive (FMUs under "
-                          "resources/).")
+                          "resources/).",
+                          options=[click.option(
+                              "--step-hints/--no-step-hints", default=True,
+                              help="Keep the components' osp:StepSizeHint (default: libcosim "
+                                   "and navfmu run honour them) or leave them out, for SSP "
+                                   "readers that refuse annotations on a component "
+                                   "(OMSimulator); then every component steps at the base "
+                                   "step.")])
 export = _system_command("export", "FMU (.fmu)",
                          "Write SCENARIO as one co-simulation FMU (fmpy's container, Jacobi at "
                          "the base step).")

@@ -7,9 +7,12 @@ component's FMU under ``resources/<file name>``: a copy whose model description 
 scenario's parameter values as start values, with the files a String parameter names
 (:mod:`orchestrator.packaging.fmu_copies`).  Each Component's ``source`` is rewritten to
 ``resources/<file name>`` (two different copies with the same file name get ``_2``,
-``_3``... suffixes), and every Component carries ``type``.  libcosim and our
-:func:`orchestrator.model.ssp.load_model` read it unchanged.  The archive is written to a
-temporary name and renamed.
+``_3``... suffixes), and every Component carries ``type``.  String parameter values are
+left out of the archive's parameter sets (the FMU copies start from them) and, with
+``step_hints=False``, the Components' step hints too, so strict SSP readers (OMSimulator)
+import it (:mod:`orchestrator.packaging.strict_ssp`).  libcosim and our
+:func:`orchestrator.model.ssp.load_model` read it unchanged, with the folder's numbers (with
+the step hints).  The archive is written to a temporary name and renamed.
 """
 from __future__ import annotations
 
@@ -24,6 +27,7 @@ from ..results.run_results import atomic_write
 from ..model.ssp import FMU_TYPE
 from ..model.ssp_archive import load_model
 from .fmu_copies import FmuCopy, component_copies, fmu_bytes
+from .strict_ssp import without_component_annotations, without_string_values
 
 RESOURCES = "resources"
 
@@ -77,8 +81,9 @@ def _folder_files(ssd: Path):
             yield rel.as_posix(), path
 
 
-def package(model_dir, out) -> Path:
-    """Write ``model_dir`` (a model folder or its .ssd) as the archive ``out``; returns it."""
+def package(model_dir, out, step_hints: bool = True) -> Path:
+    """Write ``model_dir`` (a model folder or its .ssd) as the archive ``out``; returns it.
+    ``step_hints=False`` leaves the Components' ``osp:StepSizeHint`` out (module docstring)."""
     model = load_model(model_dir)
     if model.archive is not None:
         raise NavfmuError(f"{model_dir} is already an SSP archive")
@@ -89,7 +94,9 @@ def package(model_dir, out) -> Path:
     copies = component_copies(model)
     sources = _resource_names(copies)
     ssd = model.path
-    ssd_text = _rewrite_ssd(ssd.read_text(encoding="utf-8"), sources)
+    ssd_text = without_string_values(_rewrite_ssd(ssd.read_text(encoding="utf-8"), sources))
+    if not step_hints:
+        ssd_text = without_component_annotations(ssd_text)
     files = list(_folder_files(ssd))
     fmus = {sources[name]: fmu_bytes(copy, name) for name, copy in copies.items()}
 
@@ -97,7 +104,10 @@ def package(model_dir, out) -> Path:
         with zipfile.ZipFile(f, "w", compression=zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("SystemStructure.ssd", ssd_text)
             for arcname, path in files:
-                zf.write(path, arcname)
+                if path.suffix == ".ssv":
+                    zf.writestr(arcname, without_string_values(path.read_text(encoding="utf-8")))
+                else:
+                    zf.write(path, arcname)
             for arcname, data in fmus.items():
                 zf.writestr(arcname, data)
 

@@ -121,8 +121,6 @@ class GuidedUav(Component):
     parameters = _PARAMETERS
     inputs = NAV_INPUTS
     outputs = signals.TRUTH + RATES + MISSION
-    #: outputs at t are independent of inputs at t (model description: no dependencies)
-    outputs_depend_on_inputs = False
     default_experiment = (0.0, 600.0, 0.01)
     state_fields = ("uav", "turbulence", "gust_ned", "leg", "n_reached", "miss", "n", "out")
     derived_fields = ("dt", "route", "plane", "guidance", "start_time")

@@ -105,6 +105,9 @@ class ImuSensor(ImuMeasurement, Component):
     )
     inputs = signals.TRUTH + RATES
     outputs = signals.IMU + signals.MAG
+    #: the start sample (:meth:`initial_inputs`) sets the magnetometer; whether the inputs
+    #: are a sample at all reads every one of them
+    initial_dependencies = {name: TRUTH_AND_RATE_NAMES for name in signals.MAG_NAMES}
     default_experiment = (0.0, 500.0, 0.01)
     state_fields = ("errors", "magnetometer", "ins", "started", "last_time", "last_rates",
                     "out")

@@ -153,9 +153,11 @@ class Component(ABC):
     #: String parameters that name a file or folder (an FMU resolves a relative one against
     #: its resources folder first, where ``navfmu package`` puts the files a scenario names)
     file_parameters: ClassVar[Tuple[str, ...]] = ()
-    #: False for a component whose outputs at t never depend on its inputs at t (the model
-    #: description then declares no output dependency: an algebraic loop breaks there)
-    outputs_depend_on_inputs: ClassVar[bool] = True
+    #: the inputs :meth:`initial_inputs` reads, by the outputs they set: output name -> input
+    #: names (the other outputs at the end of initialization mode depend on the parameters
+    #: only).  The model description's InitialUnknowns declare these dependencies; no output
+    #: depends on an input between two steps (a component computes its outputs in ``step``).
+    initial_dependencies: ClassVar[Dict[str, Tuple[str, ...]]] = {}
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
