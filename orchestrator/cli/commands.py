@@ -196,12 +196,12 @@ def convert_kf_gins(imu_file, gnss_file, rest, force, config):
         from .kf_gins_config import read_config
 
         settings = read_config(config)        # a bad configuration is refused first
-    click.echo(conv.describe(conv.convert_kf_gins(imu_file, gnss_file, truth, dst,
-                                                  force=force), dst))
+    log = conv.convert_kf_gins(imu_file, gnss_file, truth, dst, force=force)
+    click.echo(conv.describe(log, dst))
     if settings is not None:
-        from .kf_gins_config import write_filter_ssv
+        from .kf_gins_config import with_gnss_velocity, write_filter_ssv
 
-        click.echo(write_filter_ssv(settings, dst))
+        click.echo(write_filter_ssv(with_gnss_velocity(settings, log.gnss), dst))
 
 
 @cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "

@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
+from navcore.sensors.log_time import absolute_text
 from navcore.sensors.log_converters import read_gnss_ins_sim, read_kf_gins
 from navcore.sensors.sensorlog import LogError, SensorLog, write_log
 
@@ -56,8 +57,10 @@ def convert_kf_gins(imu_file, gnss_file, truth_file: Optional[Path], destination
 def describe(log: SensorLog, destination) -> str:
     """One line saying what was written."""
     n_valid = int(log.gnss["valid"].sum())
+    span = (f"[{absolute_text(log.start_time, log.time_origin)}, "
+            f"{absolute_text(log.stop_time, log.time_origin)}]")
     return (f"wrote {destination}/: {len(log.imu['time'])} IMU intervals of "
-            f"{log.imu_period:g} s over [{log.start_time:.9g}, {log.stop_time:.9g}] s, "
+            f"{log.imu_period:g} s over {span} s, "
             f"{len(log.gnss['time'])} GNSS lines ({n_valid} valid)"
             + (f", {len(log.truth['time'])} truth samples" if log.truth is not None
                else ", no truth"))

@@ -15,8 +15,10 @@ every title must be one of the file's columns below, with exactly that unit.
     ``time [s]`` time the fix was taken, ``lat [rad]``, ``lon [rad]``, ``h [m]`` (above the
     WGS-84 ellipsoid), ``valid`` (1 usable, 0 during an outage); optional, all three or
     none: ``vn/ve/vd [m/s]`` NED velocity; optional: ``std_n/e/d [m]`` the receiver's own
-    1-sigma of the position (a filter with ``r_from_receiver`` takes it as R), ``outlier``
-    (1 where an outlier was injected, for evaluation only).
+    1-sigma of the position (a filter with ``r_from_receiver`` takes it as R);
+    optional, all three or none, only with the velocity: ``std_vn/ve/vd [m/s]`` the
+    receiver's 1-sigma of the velocity (kept from KF-GINS and RTKLIB files); optional:
+    ``outlier`` (1 where an outlier was injected, for evaluation only).
 ``truth.csv`` (optional; reference trajectory for the metrics)
     ``time [s]``, ``lat [rad]``, ``lon [rad]``, ``h [m]``, ``vn/ve/vd [m/s]``,
     ``roll/pitch/yaw [rad]`` (ZYX Euler angles).
@@ -78,13 +80,15 @@ IMU_COLUMNS = {"time": "s", "dt": "s", **{f"dtheta_{a}": "rad" for a in _AXES},
                **{f"dvel_{a}": "m/s" for a in _AXES}}
 GNSS_COLUMNS = {"time": "s", "lat": "rad", "lon": "rad", "h": "m",
                 **{f"v{a}": "m/s" for a in _NED}, "valid": "",
-                **{f"std_{a}": "m" for a in _NED}, "outlier": ""}
+                **{f"std_{a}": "m" for a in _NED}, **{f"std_v{a}": "m/s" for a in _NED},
+                "outlier": ""}
 TRUTH_COLUMNS = {"time": "s", "lat": "rad", "lon": "rad", "h": "m",
                  **{f"v{a}": "m/s" for a in _NED}, "roll": "rad", "pitch": "rad", "yaw": "rad"}
 COLUMNS = {IMU_FILE: IMU_COLUMNS, GNSS_FILE: GNSS_COLUMNS, TRUTH_FILE: TRUTH_COLUMNS}
 #: columns a file may leave out, as groups that come all together or not at all
 OPTIONAL_GROUPS = {IMU_FILE: (), TRUTH_FILE: (),
-                   GNSS_FILE: (("vn", "ve", "vd"), ("std_n", "std_e", "std_d"), ("outlier",))}
+                   GNSS_FILE: (("vn", "ve", "vd"), ("std_n", "std_e", "std_d"),
+                               ("std_vn", "std_ve", "std_vd"), ("outlier",))}
 FLAGS = ("valid", "outlier")
 
 
@@ -229,6 +233,9 @@ def _check_columns(path, present) -> None:
         if have and len(have) != len(group):
             raise LogError(f"{path}, line 1: columns {', '.join(group)} come together; "
                            f"missing '{[c for c in group if c not in present][0]}'")
+    if "std_vn" in present and "vn" not in present:
+        raise LogError(f"{path}, line 1: columns std_vn, std_ve, std_vd (velocity sigmas) "
+                       "without the velocity vn, ve, vd")
 
 
 def _line(data, k) -> int:
