@@ -49,6 +49,7 @@ import numpy as np
 from navcore.ins.constants import UG
 
 from ..errors import NavfmuError
+from .cli_options import read_yaml_mapping
 
 #: 1 mGal [m/s^2]
 MGAL = 1e-5
@@ -69,17 +70,8 @@ def _numbers(path, config, key, n=3) -> List[float]:
 def read_config(path) -> Dict[str, Any]:
     """The parameters of a KF-GINS YAML file (module docstring): ``parameters`` (name ->
     value), ``start``/``stop`` (or None) and ``notes`` (what was left out)."""
-    import yaml
-
     path = Path(path)
-    try:
-        config = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise NavfmuError(f"{path}: cannot be read: {exc}") from None
-    except yaml.YAMLError as exc:
-        raise NavfmuError(f"{path}: not YAML: {str(exc).splitlines()[0]}") from None
-    if not isinstance(config, dict):
-        raise NavfmuError(f"{path}: expected a mapping of KF-GINS keys (initpos, imunoise, ...)")
+    config = read_yaml_mapping(path, "KF-GINS keys (initpos, imunoise, ...)")
     noise = config.get("imunoise")
     if not isinstance(noise, dict):
         raise NavfmuError(f"{path}: key 'imunoise': expected a mapping (arw, vrw, gbstd, abstd, "

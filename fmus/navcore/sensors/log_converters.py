@@ -109,10 +109,13 @@ def plain_text_fields(path, names: Sequence[str], *layouts: Sequence[str]):
 def trapezoid_increments(time, rates):
     """Increments over ``[t_{k-1}, t_k]`` (n-1 rows) of rates sampled at the instants ``time``
     (n,), ``rates`` (n, m): ``dt (w_{k-1} + w_k) / 2`` (module docstring)."""
-    time = np.asarray(time, dtype=float)
+    return trapezoid_over(np.diff(np.asarray(time, dtype=float)), rates)
+
+
+def trapezoid_over(dt, rates):
+    """:func:`trapezoid_increments` of the intervals ``dt`` (n-1,) between the samples."""
     rates = np.asarray(rates, dtype=float)
-    dt = np.diff(time)
-    return 0.5 * dt[:, None] * (rates[:-1] + rates[1:])
+    return 0.5 * np.asarray(dt, dtype=float)[:, None] * (rates[:-1] + rates[1:])
 
 
 # -- gnss-ins-sim ----------------------------------------------------------------------------
