@@ -43,7 +43,7 @@ import numpy as np
 from ..errors import LogError
 from ..ins.constants import DEG as _D2R
 from .log_time import exact_times
-from .sensorlog import read_lines
+from .sensorlog import parse_numbers, read_lines
 
 #: RTKLIB's solution quality flags (Q)
 QUALITY = {1: "fix", 2: "float", 3: "sbas", 4: "dgps", 5: "single", 6: "ppp"}
@@ -179,18 +179,9 @@ def _table(path, lines, columns, first):
                            f"{2 + len(columns)} (date and time, or week and seconds, then "
                            f"{' '.join(columns)})")
         stamps.append(_epoch_seconds(path, number, fields[0], fields[1]))
-        try:
-            rows.append([float(x) for x in fields[2:]])
-        except ValueError:
-            raise LogError(f"{path}, line {number}: a value is not a number") from None
+        rows.append(parse_numbers(path, number, fields[2:], columns))
         numbers.append(number)
-    values = np.array(rows, dtype=np.float64)
-    bad = np.argwhere(~np.isfinite(values))
-    if bad.size:
-        k, j = bad[0]
-        raise LogError(f"{path}, line {numbers[k]}: column '{columns[j]}' is {values[k, j]} "
-                       "(values must be finite)")
-    return stamps, values, np.array(numbers)
+    return stamps, np.array(rows, dtype=np.float64), np.array(numbers)
 
 
 def _signed_square(s):
@@ -215,8 +206,9 @@ def _ned_from_ecef(lat, lon) -> np.ndarray:
     import pymap3d
 
     unit = np.eye(3)
-    columns = [np.stack(pymap3d.ecef2nedv(*unit[i], lat, lon, deg=False), -1)
-               for i in range(3)]
+    columns = [np.stack([np.reshape(c, -1) for c in
+                         pymap3d.ecef2nedv(*unit[i], lat, lon, deg=False)], -1)
+               for i in range(3)]         # (pymap3d returns scalars for one epoch)
     return np.stack(columns, -1)
 
 
@@ -225,7 +217,7 @@ def _geodetic(col) -> Dict[str, np.ndarray]:
     import pymap3d
 
     lat, lon, h = pymap3d.ecef2geodetic(*(col[n] for n in _XYZ), deg=False)
-    lat, lon, h = (np.asarray(a, dtype=np.float64) for a in (lat, lon, h))
+    lat, lon, h = (np.asarray(a, dtype=np.float64).reshape(-1) for a in (lat, lon, h))
     out = {"lat": lat, "lon": lon, "h": h}
     out.update(zip(("std_n", "std_e", "std_d"), _ned_sigmas(lat, lon, col, _XYZ_COV)))
     if _XYZ_VEL[0] in col:
