@@ -6,6 +6,7 @@ as parameters."""
 from __future__ import annotations
 
 import math
+import re
 import shutil
 
 import numpy as np
@@ -63,9 +64,16 @@ def _kf_gins_files(tmp_path, velocity):
         d = 180.0 / math.pi
         np.savetxt(tmp_path / "gnss.txt", np.column_stack(
             [g["time"], g["lat"] * d, g["lon"] * d, g["h"], g["vn"], g["ve"], g["vd"],
-             g["std_n"], g["std_e"], g["std_d"], np.full((len(g["time"]), 3), 0.01)]),
+             g["std_n"], g["std_e"], g["std_d"], *_velocity_sigmas(len(g["time"]))]),
             fmt="%.17g")
     return log
+
+
+def _velocity_sigmas(n):
+    """Per-axis velocity sigmas, distinct per axis (a swap shows) and varying per fix:
+    medians 0.011, 0.023, 0.047 m/s."""
+    wobble = 1.0 + 0.2 * np.sin(np.arange(n))
+    return [s * wobble / np.median(wobble) for s in (0.011, 0.023, 0.047)]
 
 
 def test_thirteen_column_gnss_file_keeps_the_velocity(tmp_path):
@@ -74,6 +82,8 @@ def test_thirteen_column_gnss_file_keeps_the_velocity(tmp_path):
     assert back.has_gnss_velocity
     for k in ("vn", "ve", "vd", "std_n", "std_d", "h"):
         assert np.allclose(back.gnss[k], log.gnss[k], rtol=1e-15, atol=0), k
+    for k, s in zip(("std_vn", "std_ve", "std_vd"), _velocity_sigmas(len(log.gnss["time"]))):
+        assert np.array_equal(back.gnss[k], s), k
     (tmp_path / "gnss.txt").write_text("456300.1 30 114 20 1 2 3 4 5 6 7\n")
     with pytest.raises(Exception, match=r"gnss.txt, line 1: 11 values, expected 7 \(time, "
                        r"lat, lon, h, std_n, std_e, std_d\) or 13 \(time, lat, lon, h, vn"):
@@ -173,3 +183,69 @@ def test_receiver_sigmas_missing_is_an_input_error():
     with pytest.raises(InputError, match=r"input 'gnss_std_n' = 0.0 m for the fix at "
                        r"gnss_time = 0.01 s with parameter 'r_from_receiver' = true"):
         kf.step(0.0, 0.01, inputs)
+
+
+def _stamped_kf_gins(folder, t0: str, rate=200, seconds=3):
+    """KF-GINS files of ``seconds`` at ``rate`` Hz stamped from the decimal ``t0`` as a
+    logger writes them (``%.3f``), a fix each second with sigmas distinct per axis."""
+    base = float(t0)
+    with open(folder / "imu.txt", "w") as f:
+        for k in range(rate * seconds + 1):
+            f.write(f"{base + k / rate:.3f} 1e-5 -2e-5 3e-5 1e-4 -2e-4 {-9.8 / rate!r}\n")
+    with open(folder / "gnss.txt", "w") as f:
+        for k in range(1, seconds + 1):
+            f.write(f"{base + k:.3f} 30.5 114.25 20.0 0.02 0.03 0.05\n")
+    return folder / "imu.txt", folder / "gnss.txt"
+
+
+@pytest.mark.parametrize("t0", ["408640.970", "1700000000.970"])
+def test_a_200_hz_log_in_gps_or_unix_seconds_replays_every_interval(tmp_path, t0):
+    """The failing case: 200 Hz in GPS seconds of the week and in UNIX time.  Each dt was
+    the float difference of two parsed stamps (9e-8 s off at 1.7e9 s), so the intervals no
+    longer tiled the stamps and the filter refused them; now every stamp and dt is the
+    exact decimal: dt is 0.005 s to the last bit, the written stamps are the input's text,
+    and the replay integrates every interval."""
+    imu_file, gnss_file = _stamped_kf_gins(tmp_path, t0)
+    log = read_kf_gins(imu_file, gnss_file)
+    assert log.time_origin == float(t0.split(".")[0])
+    assert np.all(log.imu["dt"] == 0.005), np.unique(log.imu["dt"])
+    write_log(tmp_path / "log", log)
+    stamps = [line.split(",")[0] for line in
+              (tmp_path / "log" / "imu.csv").read_text().splitlines()[1:4]]
+    whole = t0.split(".")[0]
+    assert stamps == [f"{whole}.975", f"{whole}.98", f"{whole}.985"]
+    gnss = (tmp_path / "log" / "gnss.csv").read_text().splitlines()
+    assert [line.split(",")[0] for line in gnss[1:3]] == [f"{int(whole) + 1}.97",
+                                                           f"{int(whole) + 2}.97"]
+    model = scenarios.load_scenario(GIS_MODEL)
+    run = scenarios.simulate_scenario(
+        model, backend="direct", replay=tmp_path / "log", log=None,
+        parameters={"filter.init_lat": math.radians(30.5), "filter.init_lon":
+                    math.radians(114.25), "filter.init_h": 20.0, "filter.init_vn": 0.0,
+                    "filter.init_ve": 0.0, "filter.init_vd": 0.0})
+    nav_time = run.results.column("filter", "nav_time")
+    assert nav_time[-1] == pytest.approx(0.97 + 3.0, abs=1e-9)
+    assert len(np.unique(nav_time[nav_time > 0.97])) == 600     # every interval, once
+
+
+def test_config_with_a_thirteen_column_file_uses_its_velocity(tmp_path, navfmu_cli):
+    """--config on a 13-column GNSS file: the log keeps the velocity and its sigmas (per axis,
+    distinct), the .ssv measures position and velocity with R_vel the median sigma per axis;
+    the start time 408640.97 is printed exact (it was '%g': 408641)."""
+    _kf_gins_files(tmp_path, velocity=True)
+    (tmp_path / "kf-gins.yaml").write_text(CONFIG.replace("starttime: 456300",
+                                                          "starttime: 408640.97"))
+    code, out, err = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt",
+                                tmp_path / "gnss.txt", tmp_path / "log", "--config",
+                                tmp_path / "kf-gins.yaml")
+    assert code == 0, err
+    assert re.search(r"--start 408640\.97(?![0-9])", out), out
+    values = {k: v for k, (_, v) in _read_ssv(tmp_path / "log" / "filter.ssv").items()}
+    assert values["measurement"] == "position_velocity" and values["r_from_receiver"] is True
+    assert [values[f"r_vel_{a}"] for a in "ned"] == pytest.approx([0.011, 0.023, 0.047],
+                                                                  rel=1e-12)
+    log = read_log(tmp_path / "log")
+    assert log.has_gnss_velocity
+    assert [float(np.median(log.gnss[f"std_v{a}"])) for a in "ned"] == pytest.approx(
+        [0.011, 0.023, 0.047], rel=1e-12)
+    assert "408640.97" in (tmp_path / "log" / "filter.ssv").read_text()

@@ -1,5 +1,6 @@
 """The command line's option values read into what the facade functions take: a metric
-window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list."""
+window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list, a
+YAML configuration file."""
 from __future__ import annotations
 
 import math
@@ -86,3 +87,20 @@ def parse_named_sets(items):
 
 __all__ = ["DEFAULT_OUT", "nonempty_path", "filter_names", "parse_window", "parse_sets",
            "parse_named_sets"]
+
+
+def read_yaml_mapping(path, keys: str) -> dict:
+    """A command's YAML configuration file as a mapping; a file that cannot be read, is not
+    YAML or is not a mapping (of ``keys``, named in the error) is an error naming it."""
+    import yaml
+
+    path = Path(path)
+    try:
+        config = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise NavfmuError(f"{path}: cannot be read: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise NavfmuError(f"{path}: not YAML: {str(exc).splitlines()[0]}") from None
+    if not isinstance(config, dict):
+        raise NavfmuError(f"{path}: expected a mapping of {keys}")
+    return config

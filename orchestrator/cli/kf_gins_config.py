@@ -21,6 +21,8 @@ KF-GINS key            filter parameter
 ``imunoise.abstd``     ``q_accel_bias_instability_ug`` (mGal -> ug)
 ``imunoise.corrtime``  ``q_gyro_bias_tau_s``, ``q_accel_bias_tau_s`` (h -> s)
 ``antlever``           ``lever_arm_x/y/z`` [m], body forward-right-down
+(GNSS file)           ``r_from_receiver`` = true; ``measurement`` = ``position`` (7 columns) or
+                       ``position_velocity`` with ``r_vel_n/e/d`` [m/s] (13 columns)
 ``starttime``          not a filter parameter: the replay's ``--start`` (stated in the
                        ``.ssv`` and printed), with ``endtime`` (-1: the end) as ``--stop``
 =====================  ========================================================================
@@ -30,9 +32,12 @@ states (``gsstd``, ``asstd``, ``initgyrscale``, ``initaccscale``: the filters ha
 no scale factors) and a non-zero initial bias (``initgyrbias``, ``initaccbias``: the filters
 start with zero bias).  Per-axis values become the largest of the three (a conservative
 sigma).  KF-GINS weights each fix with the receiver's own sigmas: the ``.ssv`` sets
-``r_from_receiver`` (the log's per-epoch ``std_n/e/d`` as R) and ``measurement`` =
-``position`` (its GNSS file has positions only; a 13-column file has velocity too, whose
-sigmas the sensor-log format does not keep).
+``r_from_receiver`` (the log's per-epoch ``std_n/e/d`` as R).  With a 7-column GNSS file
+(positions only) ``measurement`` = ``position``; a 13-column file has the velocity and its
+sigmas too (kept in the log as ``vn/ve/vd`` and ``std_vn/ve/vd``): the ``.ssv`` then sets
+``measurement`` = ``position_velocity`` and ``r_vel_n/e/d`` [m/s] to the median of the file's
+velocity sigmas per axis (:func:`with_gnss_velocity`: the filters take per-fix sigmas for the
+position only, so the velocity's R is one value per axis).
 """
 from __future__ import annotations
 
@@ -40,9 +45,11 @@ import math
 from pathlib import Path
 from typing import Any, Dict, List
 
+import numpy as np
 from navcore.ins.constants import UG
 
 from ..errors import NavfmuError
+from .cli_options import read_yaml_mapping
 
 #: 1 mGal [m/s^2]
 MGAL = 1e-5
@@ -63,17 +70,8 @@ def _numbers(path, config, key, n=3) -> List[float]:
 def read_config(path) -> Dict[str, Any]:
     """The parameters of a KF-GINS YAML file (module docstring): ``parameters`` (name ->
     value), ``start``/``stop`` (or None) and ``notes`` (what was left out)."""
-    import yaml
-
     path = Path(path)
-    try:
-        config = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise NavfmuError(f"{path}: cannot be read: {exc}") from None
-    except yaml.YAMLError as exc:
-        raise NavfmuError(f"{path}: not YAML: {str(exc).splitlines()[0]}") from None
-    if not isinstance(config, dict):
-        raise NavfmuError(f"{path}: expected a mapping of KF-GINS keys (initpos, imunoise, ...)")
+    config = read_yaml_mapping(path, "KF-GINS keys (initpos, imunoise, ...)")
     noise = config.get("imunoise")
     if not isinstance(noise, dict):
         raise NavfmuError(f"{path}: key 'imunoise': expected a mapping (arw, vrw, gbstd, abstd, "
@@ -118,6 +116,29 @@ def read_config(path) -> Dict[str, Any]:
             "stop": None if stop is None or stop < 0 else float(stop)}
 
 
+def with_gnss_velocity(settings, gnss) -> Dict[str, Any]:
+    """``settings`` for a log whose GNSS table ``gnss`` has the velocity and its sigmas:
+    ``measurement`` = ``position_velocity``, ``r_vel_n/e/d`` the median ``std_vn/ve/vd``
+    (module docstring); unchanged without them."""
+    if "std_vn" not in gnss:
+        return settings
+    valid = gnss["valid"] == 1
+    r_vel = {f"r_vel_{a}": float(np.median(gnss[f"std_v{a}"][valid])) for a in "ned"}
+    return {**settings, "parameters": {**settings["parameters"],
+                                       "measurement": "position_velocity", **r_vel}}
+
+
+def seconds_text(t) -> str:
+    """A time as the shortest text that reads back as the same float (``408640.97``, never
+    the ``%g`` rounding ``408641``), a whole number without ``.0``."""
+    text = repr(float(t))
+    return text[:-2] if text.endswith(".0") else text
+
+
+def _or_none(t) -> str:
+    return "none" if t is None else seconds_text(t)
+
+
 def write_filter_ssv(settings, destination) -> str:
     """Write ``destination/filter.ssv`` from :func:`read_config`'s ``settings``; one line
     saying what was written and how to replay with it."""
@@ -128,15 +149,15 @@ def write_filter_ssv(settings, destination) -> str:
                  else "Real", v] for k, v in settings["parameters"].items()}
     text = ssv_text("filter", {}, typed)
     head, rest = text.split("\n", 1)
-    body = (f"from {settings['source']}; KF-GINS starttime {settings['start']} s and endtime "
-            f"{settings['stop']} s: the replay's start and stop options"
+    body = (f"from {settings['source']}; KF-GINS starttime {_or_none(settings['start'])} s and "
+            f"endtime {_or_none(settings['stop'])} s: the replay's start and stop options"
             + (f"; not representable: {'; '.join(settings['notes'])}"
                if settings["notes"] else ""))
     comment = f"<!-- {body.replace('--', '- -')} -->"     # a comment holds no double hyphen
     ssv = Path(destination) / SSV_NAME
     atomic_write(ssv, lambda f: f.write(head + "\n" + comment + "\n" + rest))
-    start = "" if settings["start"] is None else f" --start {settings['start']:g}"
-    stop = "" if settings["stop"] is None else f" --stop {settings['stop']:g}"
+    start = "" if settings["start"] is None else f" --start {seconds_text(settings['start'])}"
+    stop = "" if settings["stop"] is None else f" --stop {seconds_text(settings['stop'])}"
     left = (f"; left out: {'; '.join(settings['notes'])}" if settings["notes"] else "")
     return (f"wrote {ssv}: the filter's initial state, noise and lever arm; bind it to the "
             f"filter and replay with --replay {destination}{start}{stop}{left}")

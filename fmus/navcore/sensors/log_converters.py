@@ -14,8 +14,8 @@ the IMU file ``time [s], dtheta_x/y/z [rad], dvel_x/y/z [m/s]`` (increments over
 ending at ``time``, body forward-right-down), the GNSS file ``time [s], lat [deg], lon [deg],
 h [m], std_n/e/d [m]`` (7 columns: positions only) or ``time, lat, lon, h, vn/ve/vd [m/s],
 std_n/e/d, std_vn/ve/vd [m/s]`` (13 columns, with velocity: KF-GINS's loader reads the
-position sigmas from columns 8-10 of such a file; the velocity sigmas have no column in the
-sensor-log format and are not kept), every line a valid fix, and writes its solution and
+position sigmas from columns 8-10 of such a file; the velocity and its sigmas are kept as
+``vn/ve/vd`` and ``std_vn/ve/vd``), every line a valid fix, and writes its solution and
 reference as ``.nav`` text ``week, sow [s], lat [deg], lon [deg], h [m], vn/ve/vd [m/s],
 roll/pitch/yaw [deg]``.
 
@@ -37,6 +37,7 @@ import numpy as np
 
 from ..ins.constants import DEG as _D2R
 from ..ins.rotations import wrap_angle
+from .log_time import exact_intervals, exact_times
 from .sensorlog import (GNSS_FILE, IMU_FILE, TRUTH_FILE, LogError, SensorLog, check_log,
     parse_numbers, parse_rows, read_lines)
 
@@ -71,12 +72,24 @@ def read_plain_text(path, names: Sequence[str], *layouts: Sequence[str]):
     whitespace or commas; ``#`` starts a comment.  Further ``layouts`` (other column lists)
     are accepted too, chosen by the number of values on the first line.  Returns an (n,
     columns) array, the line number of each row and the column names."""
+    rows, numbers, names = plain_text_fields(path, names, *layouts)
+    return parsed(path, rows, numbers, names), numbers, names
+
+
+def parsed(path, rows, numbers, names) -> np.ndarray:
+    """The text ``rows`` (lines ``numbers``) as an (n, columns) array of finite floats."""
+    return np.array([parse_numbers(path, n, r, names) for r, n in zip(rows, numbers)],
+                    dtype=np.float64)
+
+
+def plain_text_fields(path, names: Sequence[str], *layouts: Sequence[str]):
+    """:func:`read_plain_text` as text: the fields of each row (a list of strings; a time
+    is then read exactly, :mod:`navcore.sensors.log_time`), the line numbers, the names."""
     path = Path(path)
     rows, numbers = [], []
     accepted = {len(c): c for c in (names, *layouts)}
     for number, line in enumerate(read_lines(path), start=1):
-        text = line.split("#", 1)[0].replace(",", " ")
-        fields = text.split()
+        fields = line.split("#", 1)[0].replace(",", " ").split()
         if not fields:
             continue
         if not rows and len(fields) in accepted:
@@ -85,21 +98,24 @@ def read_plain_text(path, names: Sequence[str], *layouts: Sequence[str]):
             expected = (f"{len(names)} ({', '.join(names)})" if not layouts or rows else
                         " or ".join(f"{len(c)} ({', '.join(c)})" for c in accepted.values()))
             raise LogError(f"{path}, line {number}: {len(fields)} values, expected {expected}")
-        rows.append(parse_numbers(path, number, fields, names))
+        rows.append(fields)
         numbers.append(number)
     if not rows:
         raise LogError(f"{path}: no samples")
-    return np.array(rows, dtype=np.float64), np.array(numbers), tuple(names)
+    return rows, np.array(numbers), tuple(names)
 
 
 # -- rates to increments ---------------------------------------------------------------------
 def trapezoid_increments(time, rates):
     """Increments over ``[t_{k-1}, t_k]`` (n-1 rows) of rates sampled at the instants ``time``
     (n,), ``rates`` (n, m): ``dt (w_{k-1} + w_k) / 2`` (module docstring)."""
-    time = np.asarray(time, dtype=float)
+    return trapezoid_over(np.diff(np.asarray(time, dtype=float)), rates)
+
+
+def trapezoid_over(dt, rates):
+    """:func:`trapezoid_increments` of the intervals ``dt`` (n-1,) between the samples."""
     rates = np.asarray(rates, dtype=float)
-    dt = np.diff(time)
-    return 0.5 * dt[:, None] * (rates[:-1] + rates[1:])
+    return 0.5 * np.asarray(dt, dtype=float)[:, None] * (rates[:-1] + rates[1:])
 
 
 # -- gnss-ins-sim ----------------------------------------------------------------------------
@@ -187,6 +203,8 @@ KF_GINS_IMU = ("time", "dtheta_x", "dtheta_y", "dtheta_z", "dvel_x", "dvel_y", "
 KF_GINS_GNSS = ("time", "lat", "lon", "h", "std_n", "std_e", "std_d")
 KF_GINS_GNSS_VELOCITY = ("time", "lat", "lon", "h", "vn", "ve", "vd", "std_n", "std_e", "std_d",
                          "std_vn", "std_ve", "std_vd")
+_STD = ("std_n", "std_e", "std_d")
+_STD_V = ("std_vn", "std_ve", "std_vd")
 KF_GINS_NAV = ("week", "sow", "lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 
 
@@ -211,34 +229,42 @@ def _check_kf_gins_pair(imu_file, imu, gnss_file, gnss) -> None:
 def read_kf_gins(imu_file, gnss_file, truth_file=None) -> SensorLog:
     """The log of KF-GINS's IMU and GNSS text files and, optionally, a ``.nav`` reference
     (module docstring).  Times are the seconds of the GPS week; a ``.nav`` file must stay in
-    one week."""
-    raw, raw_lines, _ = read_plain_text(imu_file, KF_GINS_IMU)
-    if len(raw) < 2:
+    one week.  Every time, and each ``dt``, is taken from the decimal text exactly
+    (:mod:`navcore.sensors.log_time`), relative to the log's origin."""
+    rows, raw_lines, _ = plain_text_fields(imu_file, KF_GINS_IMU)
+    if len(rows) < 2:
         raise LogError(f"{imu_file}: at least two lines are needed (the first only marks the "
                        "start)")
-    imu: Dict[str, np.ndarray] = {"time": raw[1:, 0], "dt": np.diff(raw[:, 0])}
+    raw = parsed(imu_file, rows, raw_lines, KF_GINS_IMU)
+    stamps = [r[0] for r in rows]
+    origin, ends = exact_times(imu_file, stamps[1:], raw_lines[1:])
+    imu: Dict[str, np.ndarray] = {"time": ends,
+                                  "dt": exact_intervals(imu_file, stamps, raw_lines)}
     for j, name in enumerate(KF_GINS_IMU[1:], start=1):
         imu[name] = raw[1:, j]
     imu["_line"] = raw_lines[1:]
-    g, g_lines, columns = read_plain_text(gnss_file, KF_GINS_GNSS, KF_GINS_GNSS_VELOCITY)
+    rows, g_lines, columns = plain_text_fields(gnss_file, KF_GINS_GNSS, KF_GINS_GNSS_VELOCITY)
+    g = parsed(gnss_file, rows, g_lines, columns)
     column = {name: g[:, j] for j, name in enumerate(columns)}
-    gnss = {"time": column["time"], "lat": column["lat"] * _D2R, "lon": column["lon"] * _D2R,
+    gnss = {"time": exact_times(gnss_file, [r[0] for r in rows], g_lines, origin)[1],
+            "lat": column["lat"] * _D2R, "lon": column["lon"] * _D2R,
             "valid": np.ones(len(g)), "_line": g_lines,
-            **{k: column[k] for k in ("h", "std_n", "std_e", "std_d", "vn", "ve", "vd")
-               if k in column}}
+            **{k: column[k] for k in ("h", "vn", "ve", "vd", *_STD, *_STD_V) if k in column}}
     _check_kf_gins_pair(imu_file, imu, gnss_file, gnss)
     truth: Optional[Dict[str, np.ndarray]] = None
     if truth_file is not None:
-        nav, nav_lines, _ = read_plain_text(truth_file, KF_GINS_NAV)
+        rows, nav_lines, _ = plain_text_fields(truth_file, KF_GINS_NAV)
+        nav = parsed(truth_file, rows, nav_lines, KF_GINS_NAV)
         weeks = np.flatnonzero(nav[:, 0] != nav[0, 0])
         if weeks.size:
             raise LogError(f"{truth_file}, line {nav_lines[weeks[0]]}: the GPS week changes "
                            f"from {nav[0, 0]:g} to {nav[weeks[0], 0]:g}; split the file at the "
                            "week boundary")
-        truth = {"time": nav[:, 1], "lat": nav[:, 2] * _D2R, "lon": nav[:, 3] * _D2R,
+        truth = {"time": exact_times(truth_file, [r[1] for r in rows], nav_lines, origin)[1],
+                 "lat": nav[:, 2] * _D2R, "lon": nav[:, 3] * _D2R,
                  "h": nav[:, 4], "vn": nav[:, 5], "ve": nav[:, 6], "vd": nav[:, 7],
                  "roll": nav[:, 8] * _D2R, "pitch": nav[:, 9] * _D2R,
                  "yaw": wrap_angle(nav[:, 10] * _D2R), "_line": nav_lines}
-    log = SensorLog(imu, gnss, truth)
+    log = SensorLog(imu, gnss, truth, origin)
     check_log(log, sources={IMU_FILE: imu_file, GNSS_FILE: gnss_file, TRUTH_FILE: truth_file})
     return log

@@ -15,8 +15,10 @@ every title must be one of the file's columns below, with exactly that unit.
     ``time [s]`` time the fix was taken, ``lat [rad]``, ``lon [rad]``, ``h [m]`` (above the
     WGS-84 ellipsoid), ``valid`` (1 usable, 0 during an outage); optional, all three or
     none: ``vn/ve/vd [m/s]`` NED velocity; optional: ``std_n/e/d [m]`` the receiver's own
-    1-sigma of the position (a filter with ``r_from_receiver`` takes it as R), ``outlier``
-    (1 where an outlier was injected, for evaluation only).
+    1-sigma of the position (a filter with ``r_from_receiver`` takes it as R);
+    optional, all three or none, only with the velocity: ``std_vn/ve/vd [m/s]`` the
+    receiver's 1-sigma of the velocity (kept from KF-GINS and RTKLIB files); optional:
+    ``outlier`` (1 where an outlier was injected, for evaluation only).
 ``truth.csv`` (optional; reference trajectory for the metrics)
     ``time [s]``, ``lat [rad]``, ``lon [rad]``, ``h [m]``, ``vn/ve/vd [m/s]``,
     ``roll/pitch/yaw [rad]`` (ZYX Euler angles).
@@ -58,8 +60,9 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from ..errors import LogError
-from .log_time import (DEFAULT_MAX_DT_JITTER, absolute_text, check_intervals, nominal_interval,
-                       relative_seconds, replay_step, time_origin)
+from .log_time import (DEFAULT_MAX_DT_JITTER, MAX_DT_JITTER_LIMIT, absolute_text,
+                       check_intervals, nominal_interval, relative_seconds, replay_step,
+                       time_origin)
 
 #: largest accepted log file [bytes] (about 10 h of 200 Hz IMU data)
 MAX_FILE_BYTES = 1 << 30
@@ -78,13 +81,15 @@ IMU_COLUMNS = {"time": "s", "dt": "s", **{f"dtheta_{a}": "rad" for a in _AXES},
                **{f"dvel_{a}": "m/s" for a in _AXES}}
 GNSS_COLUMNS = {"time": "s", "lat": "rad", "lon": "rad", "h": "m",
                 **{f"v{a}": "m/s" for a in _NED}, "valid": "",
-                **{f"std_{a}": "m" for a in _NED}, "outlier": ""}
+                **{f"std_{a}": "m" for a in _NED}, **{f"std_v{a}": "m/s" for a in _NED},
+                "outlier": ""}
 TRUTH_COLUMNS = {"time": "s", "lat": "rad", "lon": "rad", "h": "m",
                  **{f"v{a}": "m/s" for a in _NED}, "roll": "rad", "pitch": "rad", "yaw": "rad"}
 COLUMNS = {IMU_FILE: IMU_COLUMNS, GNSS_FILE: GNSS_COLUMNS, TRUTH_FILE: TRUTH_COLUMNS}
 #: columns a file may leave out, as groups that come all together or not at all
 OPTIONAL_GROUPS = {IMU_FILE: (), TRUTH_FILE: (),
-                   GNSS_FILE: (("vn", "ve", "vd"), ("std_n", "std_e", "std_d"), ("outlier",))}
+                   GNSS_FILE: (("vn", "ve", "vd"), ("std_n", "std_e", "std_d"),
+                               ("std_vn", "std_ve", "std_vd"), ("outlier",))}
 FLAGS = ("valid", "outlier")
 
 
@@ -229,6 +234,9 @@ def _check_columns(path, present) -> None:
         if have and len(have) != len(group):
             raise LogError(f"{path}, line 1: columns {', '.join(group)} come together; "
                            f"missing '{[c for c in group if c not in present][0]}'")
+    if "std_vn" in present and "vn" not in present:
+        raise LogError(f"{path}, line 1: columns std_vn, std_ve, std_vd (velocity sigmas) "
+                       "without the velocity vn, ve, vd")
 
 
 def _line(data, k) -> int:
@@ -359,23 +367,29 @@ def check_log(log: SensorLog, where="sensor log", sources=None) -> None:
                 continue
             # read_log would refuse the folder written without it
             raise LogError(f"{path}: no data (a sensor log needs {IMU_FILE} and {GNSS_FILE})")
-        columns = [c for c in data if c != "_line"]
-        _check_columns(f"{where}/{name}", set(columns))
-        for column in columns:
-            if column not in COLUMNS[name]:
-                raise LogError(f"{path}: unknown column '{column}'")
-        n = {len(data[c]) for c in columns}
-        if len(n) != 1 or 0 in n:
-            raise LogError(f"{path}: columns of different or zero length {sorted(n)}")
-        for column in columns:
-            values = np.asarray(data[column], dtype=float)
-            bad = np.flatnonzero(~np.isfinite(values))
-            if bad.size:
-                raise LogError(f"{path}, line {_line(data, int(bad[0]))}: column '{column}' "
-                               f"is {values[bad[0]]} (values must be finite)")
-        _CHECKS[name](path, data)
-        data.pop("_line", None)
+        check_table(name, data, path, where)
     check_overlap(log, {name: sources.get(name, f"{where}/{name}") for name in LOG_FILES})
+
+
+def check_table(name, data, path, where="sensor log") -> None:
+    """The rules of the one file ``name`` (:func:`check_log`) on its ``data``; the
+    ``"_line"`` array is removed afterwards."""
+    columns = [c for c in data if c != "_line"]
+    _check_columns(f"{where}/{name}", set(columns))
+    for column in columns:
+        if column not in COLUMNS[name]:
+            raise LogError(f"{path}: unknown column '{column}'")
+    n = {len(data[c]) for c in columns}
+    if len(n) != 1 or 0 in n:
+        raise LogError(f"{path}: columns of different or zero length {sorted(n)}")
+    for column in columns:
+        values = np.asarray(data[column], dtype=float)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise LogError(f"{path}, line {_line(data, int(bad[0]))}: column '{column}' "
+                           f"is {values[bad[0]]} (values must be finite)")
+    _CHECKS[name](path, data)
+    data.pop("_line", None)
 
 
 def _write_table(path: Path, data, origin=0.0) -> None:
@@ -429,6 +443,37 @@ def write_log(folder, log: SensorLog) -> Path:
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return folder
+
+
+def write_log_file(folder, name: str, data, origin: float = 0.0, source=None) -> Path:
+    """Write one file ``name`` of a log (``imu.csv`` or ``gnss.csv``, times relative to
+    ``origin``) into ``folder``, keeping the log's other files: a log converted part by part
+    (the IMU from one tool, the fixes from another).  ``data`` is checked first (errors name
+    ``source``, the file it came from); when ``folder`` already holds the other files, the
+    whole log is read as a replay would (:func:`read_log`: the time spans must overlap)
+    before the file is moved in place, so nothing is half-written.  Returns the file."""
+    folder = Path(folder)
+    check_table(name, data, source or folder / name, str(folder))
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=folder))
+    except OSError as exc:
+        raise LogError(f"cannot write {folder / name}: {exc.strerror or exc}") from None
+    try:
+        _write_table(tmp / name, data, origin)
+        others = [n for n in LOG_FILES if n != name and (folder / n).is_file()]
+        if {IMU_FILE, GNSS_FILE} <= {name, *others}:
+            for other in others:
+                os.symlink((folder / other).resolve(), tmp / other)
+            try:
+                read_log(tmp, MAX_DT_JITTER_LIMIT)    # the interval bound is the replay's
+            except LogError as exc:
+                raise LogError(str(exc).replace(str(tmp), str(folder))) from None
+        os.chmod(tmp / name, 0o666 & ~_umask())
+        os.replace(tmp / name, folder / name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return folder / name
 
 
 def _umask() -> int:
