@@ -6,8 +6,9 @@ refused call raises :class:`FmiCallRefused`: the call returns fmi2Error with its
 at fmi2Error, and the instance stays usable.  pythonfmu's own library (Windows, macOS, no
 compiler) turns a Python exception in *any* call into fmi2Fatal and releases the Python
 instance, so the host's next call on it reads freed memory; there nothing may raise: a refused
-doStep (a refused input among them) returns fmi2Discard, a refused get/set returns fmi2OK with the fmi2Error message in the
-log (a get NaN / 0 / false / "" for the bad references) and the next doStep is refused once, a
+doStep (a refused input among them) returns fmi2Discard, a refused get/set returns fmi2OK with
+the fmi2Error message in the log (a get NaN / 0 / false / "" for the bad references) and the
+next doStep is refused once, a
 refused initialization makes every doStep fmi2Discard.
 """
 from __future__ import annotations

@@ -606,7 +606,8 @@ public:
         });
     }
 
-    std::string DeSerializeFMUstate(const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) override
+    std::string DeSerializeFMUstate(
+        const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) override
     {
         std::string phase;
         py_safe_run([this, &bytes, size, &state, &phase](PyGILState_STATE gilState) {

@@ -59,8 +59,8 @@ namespace allowed = pythonfmu::allowed;
 struct Fmi2Component
 {
 
-    Fmi2Component(std::unique_ptr<pythonfmu::SlaveInstance> slave, std::unique_ptr<Fmi2Logger> logger,
-        std::string name)
+    Fmi2Component(std::unique_ptr<pythonfmu::SlaveInstance> slave,
+        std::unique_ptr<Fmi2Logger> logger, std::string name)
         : lastSuccessfulTime{std::numeric_limits<double>::quiet_NaN()}
         , slave(std::move(slave))
         , logger(std::move(logger))
@@ -129,7 +129,8 @@ fmi2Status guarded(fmi2Component c, const char* call, unsigned allowedPhases, F&
         if (e.instance_failed) {
             component->phase = Phase::error;
             const std::string message = e.what(), prefix = component->name + ": ";
-            component->failure = message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
+            component->failure =
+                message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
         } else {
             component->phase = before;
         }
@@ -152,7 +153,8 @@ void checkArrays(const Fmi2Component& component, const char* call, const fmi2Val
 {
     if (nvr > 0 && (vr == nullptr || value == nullptr)) {
         refuse(component, call, std::string(vr == nullptr ? "the value reference" : "the value") +
-                " array is NULL for " + std::to_string(nvr) + " values (nothing was read or written)");
+                " array is NULL for " + std::to_string(nvr) +
+                " values (nothing was read or written)");
     }
 }
 
@@ -327,7 +329,8 @@ fmi2Status fmi2SetDebugLogging(
     size_t nCategories,
     const fmi2String categories[])
 {
-    return guarded(c, "fmi2SetDebugLogging", allowed::setDebugLogging, [&](Fmi2Component& component) {
+    return guarded(c, "fmi2SetDebugLogging", allowed::setDebugLogging,
+        [&](Fmi2Component& component) {
         // navfmu patch: a NULL category array or entry is refused, not read
         for (size_t i = 0; i < nCategories; ++i) {
             if (categories == nullptr || categories[i] == nullptr) {
@@ -351,7 +354,8 @@ fmi2Status fmi2SetupExperiment(
     fmi2Boolean stopTimeDefined,
     fmi2Real stopTime)
 {
-    return guarded(c, "fmi2SetupExperiment", allowed::setupExperiment, [&](Fmi2Component& component) {
+    return guarded(c, "fmi2SetupExperiment", allowed::setupExperiment,
+        [&](Fmi2Component& component) {
         component.slave->SetupExperiment(
             startTime,
             stopTimeDefined ? std::optional(stopTime) : std::nullopt,
@@ -576,7 +580,8 @@ fmi2Status fmi2SerializedFMUstateSize(
     fmi2FMUstate state,
     size_t* size)
 {
-    return guarded(c, "fmi2SerializedFMUstateSize", allowed::fmuState, [&](Fmi2Component& component) {
+    return guarded(c, "fmi2SerializedFMUstateSize", allowed::fmuState,
+        [&](Fmi2Component& component) {
         if (!registry().statePhase(state)) {
             refuse(component, "fmi2SerializedFMUstateSize", "the FMUstate is unknown or was freed");
         }
@@ -596,7 +601,9 @@ fmi2Status fmi2SerializeFMUstate(
         if (!registry().statePhase(state)) {
             refuse(component, "fmi2SerializeFMUstate", "the FMUstate is unknown or was freed");
         }
-        if (bytes == nullptr && size > 0) refuse(component, "fmi2SerializeFMUstate", "bytes is NULL");
+        if (bytes == nullptr && size > 0) {
+            refuse(component, "fmi2SerializeFMUstate", "bytes is NULL");
+        }
         component.slave->SerializeFMUstate(state, bytes, size);
         return fmi2OK;
     });
@@ -609,8 +616,12 @@ fmi2Status fmi2DeSerializeFMUstate(
     fmi2FMUstate* state)
 {
     return guarded(c, "fmi2DeSerializeFMUstate", allowed::fmuState, [&](Fmi2Component& component) {
-        if (state == nullptr) refuse(component, "fmi2DeSerializeFMUstate", "the FMUstate pointer is NULL");
-        if (bytes == nullptr && size > 0) refuse(component, "fmi2DeSerializeFMUstate", "bytes is NULL");
+        if (state == nullptr) {
+            refuse(component, "fmi2DeSerializeFMUstate", "the FMUstate pointer is NULL");
+        }
+        if (bytes == nullptr && size > 0) {
+            refuse(component, "fmi2DeSerializeFMUstate", "bytes is NULL");
+        }
         fmi2FMUstate made = nullptr;
         const auto phase = component.slave->DeSerializeFMUstate(bytes, size, made);
         registry().addState(made, &component, pythonfmu::phaseNamed(phase));
