@@ -103,11 +103,12 @@ def run_case(dist, fn):
     logs = []
     f, status, values, k_next = fn(dist, logs)
     n_logs = len(logs)
-    # then legal calls: a doStep from where the last successful one ended, twice
-    _imu(f, k_next)
+    # then legal calls: a doStep from where the last successful one ended, twice (the
+    # inputs are refused too after an error that put the instance into the error state)
+    _status(lambda: _imu(f, k_next))
     follow_1, _ = _status(lambda: f.fmu.doStep(k_next * 0.01, 0.01))
     t2 = (k_next + 1) * 0.01 if follow_1 == 0 else k_next * 0.01
-    _imu(f, round(t2 / 0.01))
+    _status(lambda: _imu(f, round(t2 / 0.01)))
     follow_2, _ = _status(lambda: f.fmu.doStep(t2, 0.01))
     get_status, nav = _status(lambda: f.reals(["nav_time", "nav_lat"]).tolist())
     f.close()

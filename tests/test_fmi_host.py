@@ -8,8 +8,9 @@ is refused with a logged message naming the variable or time, and the instance s
 Statuses (fmushell's docstring): with the FMUs' patched pythonfmu library every refused call
 returns fmi2Error and the next legal call works; the hostile-call tests skip, saying why,
 where the FMUs carry pythonfmu's own library (tests/test_native_library.py tests that
-fallback).  A skipped IMU interval is an input error of the filter: fmi2Discard, and every
-later doStep too (a lost sample cannot be recovered).
+fallback).  A skipped IMU interval is an input error of the filter: fmi2Error, and the
+instance is in FMI's error state, so every later doStep is fmi2Error too (a lost sample
+cannot be recovered).
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ from orchestrator.building import build as fmu_build
 from test_fmus import FMU_NAMES, TRAJ_PARAMS, _Fmu
 from test_native_library import require_patched
 
-OK, DISCARD, ERROR, FATAL = 0, 2, 3, 4
+OK, ERROR, FATAL = 0, 3, 4
 LAT = math.radians(40.0)
 
 
@@ -154,7 +155,7 @@ def _survives(case, first_follow):
     """The legal doSteps after the hostile call: ``first_follow`` for the first, then OK
     (or, after a component error, refused again); never fatal, and a get still works."""
     assert case["follow"][0] == first_follow
-    assert case["follow"][1] in (OK, DISCARD)
+    assert case["follow"][1] in (OK, ERROR)
     assert case["get_after"] == OK
 
 
@@ -212,9 +213,10 @@ def test_step_size_not_positive_is_refused(probe):
 
 def test_skipped_imu_interval_is_refused(probe):
     case = probe["skipped_imu_interval"]
-    assert case["status"] == DISCARD
+    assert case["status"] == ERROR
     assert _logged(case, "'imu_time' = 0.03", "nav_time = 0.01", "1 IMU intervals skipped")
-    _survives(case, DISCARD)                        # a lost sample cannot be recovered
+    _survives(case, ERROR)                  # a lost sample cannot be recovered: error state
+    assert any("fmi2DoStep is not allowed in state error" in m for m in case["later_logs"])
 
 
 def test_probe_ran_every_case(probe):

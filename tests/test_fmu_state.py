@@ -217,7 +217,7 @@ def assert_refused_then_usable(victim, attempts, tmp_path):
             fmu.freeFMUstate(handle)
     refusals = [m for s, m in victim.f.records[before:] if s == FMI2_ERROR]
     assert len(refusals) == len(attempts), victim.f.records[before:]
-    assert all("refused the" in m for m in refusals), refusals
+    assert all("refused the" in m or "unknown or was freed" in m for m in refusals), refusals
     assert np.array_equal(victim.run(SPLIT, 40), victim.reference)
     assert not list(tmp_path.iterdir())
     return refusals
@@ -233,8 +233,10 @@ def test_crafted_or_foreign_state_is_refused_without_side_effect(victim, case, t
 
 
 def test_another_fmus_in_memory_state_is_refused(victim, tmp_path):
+    """Another FMU's binary made the handle: it is no live state of this one's (the patched
+    library's registry), refused before the slave sees it."""
     (message,) = assert_refused_then_usable(victim, [lambda: victim.foreign_state], tmp_path)
-    assert "'Iakf'" in message
+    assert message.startswith("kf: fmi2SetFMUstate: the FMUstate is unknown or was freed")
 
 
 def leaf_paths(node, path=()):

@@ -20,9 +20,10 @@ does the FMI side once for all of them, one concern per module:
   never code, and one that is refused leaves the instance as it was (:mod:`fmushell.fmu_state`);
 * never lets a Python exception escape an FMI call (but the refusals of the statuses
   paragraph below, where the binary turns them into fmi2Error): a user error (NaN input)
-  is logged through the FMI logger as one message ``<instance>: <what>`` (the first
-  Error-level message of the instance: a master reports it as the cause) and reported as
-  fmi2Discard from ``do_step``; after such an error every further ``do_step`` is refused too.
+  is one message ``<instance>: <what> (at t = <time> s)`` (the first Error-level message of
+  the instance: a master reports it as the cause), fmi2Error from ``do_step`` with the
+  instance in FMI's error state (the patched library; with pythonfmu's own, logged and
+  fmi2Discard); after such an error every further ``do_step`` is refused too.
   A bug's traceback follows in a second message (category ``traceback``).
 * hands the experiment's stop time (fmi2SetupExperiment) to the component before it
   initializes, so a component can refuse a run it cannot cover.

@@ -35,6 +35,16 @@ class FmuState:
     def __init__(self, identity, tree):
         self.identity, self.tree, self._blob = identity, tree, None
 
+    @property
+    def fmi2_phase(self):
+        """The state of FMI's state machine the instance is in once this state is restored,
+        for a state the patched library deserialized (it records the phase of a state it
+        took itself): ``error`` after a failure, ``stepComplete`` once the component started,
+        else ``instantiated``."""
+        if self.tree.get("failed") is not None:
+            return "error"
+        return "stepComplete" if self.tree.get("component") is not None else "instantiated"
+
     def to_bytes(self):
         if self._blob is None:
             self._blob = state_format.encode(self.tree, self.identity)

@@ -6,8 +6,9 @@ refused call raises :class:`FmiCallRefused`: the call returns fmi2Error with its
 at fmi2Error, and the instance stays usable.  pythonfmu's own library (Windows, macOS, no
 compiler) turns a Python exception in *any* call into fmi2Fatal and releases the Python
 instance, so the host's next call on it reads freed memory; there nothing may raise: a refused
-doStep returns fmi2Discard, a refused get/set returns fmi2OK with the fmi2Error message in the
-log (a get NaN / 0 / false / "" for the bad references) and the next doStep is refused once, a
+doStep (a refused input among them) returns fmi2Discard, a refused get/set returns fmi2OK with
+the fmi2Error message in the log (a get NaN / 0 / false / "" for the bad references) and the
+next doStep is refused once, a
 refused initialization makes every doStep fmi2Discard.
 """
 from __future__ import annotations
@@ -19,9 +20,19 @@ class FmiCallRefused(Exception):
     """A refused FMI call.  The patched pythonfmu library (``native/vendor/pythonfmu-export``)
     recognizes it by ``fmi2_status``, logs its message at fmi2Error, returns fmi2Error and
     keeps the instance; pythonfmu's own library would return fmi2Fatal and drop the
-    instance, so it is raised only where :func:`refusals_return_error` is true."""
+    instance, so it is raised only where :func:`refusals_return_error` is true.
+
+    ``instance_failed`` says that the instance cannot go on (its component failed: an input
+    or parameter it refuses, a diverged state): the library then puts it into FMI's error
+    state, where only fmi2Reset, fmi2SetFMUstate, the get and state calls and
+    fmi2FreeInstance are allowed.  Without it the refused call changed nothing and the
+    instance goes on with a legal call."""
 
     fmi2_status = "error"
+
+    def __init__(self, message, instance_failed=False):
+        super().__init__(message)
+        self.instance_failed = instance_failed
 
 
 def refusals_return_error(slave) -> bool:

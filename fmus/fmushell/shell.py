@@ -195,16 +195,16 @@ def do_step(slave, current_time, step_size):
     except RefusedCall as exc:
         refuse(slave, str(exc), later=False)
         return False
-    except NavcoreError as exc:
-        _fail(slave, f"{exc} (at t = {current_time:.6g} s)")
+    except NavcoreError as exc:   # a refused input (NaN, inf, out of range), a diverged state
+        _fail(slave, f"{exc} (at t = {current_time:.6g} s)", refuse=True)
         return False
     except (ArithmeticError, ValueError) as exc:  # overflow, math domain: a diverged state
         _fail(slave, f"{numerical_failure(exc)} (at t = {current_time:.6g} s)",
-              traceback.format_exc())
+              traceback.format_exc(), refuse=True)
         return False
     except Exception as exc:
         _fail(slave, f"internal error: {exc!r} (at t = {current_time:.6g} s)",
-              traceback.format_exc())
+              traceback.format_exc(), refuse=True)
         return False
     for notice in (component.take_notices() if component.notices else ()):
         slave.log(f"{slave.instance_name}: {notice}", Fmi2Status.warning)
@@ -213,13 +213,15 @@ def do_step(slave, current_time, step_size):
 
 def _fail(slave, message, details=None, refuse=False):
     """Record the instance's first error and log it; with ``refuse``, where the binary allows
-    it, the message is the fmi2Error of the call instead (the traceback is logged before it)."""
+    it, the message is the fmi2Error of the call instead (the traceback is logged before it)
+    and the instance is in FMI's error state; else the call reports fmi2Discard (doStep) or
+    fmi2OK with the message in the log (fmi2ExitInitializationMode)."""
     slave._failed, slave._failure_repeated = message, False
     text = f"{slave.instance_name}: {message}"
     if refuse and refusals_return_error(slave):
         if details:
             slave.log(details, Fmi2Status.error, "traceback")
-        raise FmiCallRefused(text)
+        raise FmiCallRefused(text, instance_failed=True)
     slave.log(text, Fmi2Status.error)
     if details:
         slave.log(details, Fmi2Status.error, "traceback")

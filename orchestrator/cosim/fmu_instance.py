@@ -96,7 +96,8 @@ class FmuInstance(Instance):
         self._fmu = None
         self._unzipdir: Optional[str] = None
         self._state = "new"
-        self._fatal = False
+        #: an FMI call returned Error or Fatal: FMI 2.0 then allows no fmi2Terminate
+        self._failed = False
         self.time = None
         if not self.path.is_file():
             raise NavfmuError(f"component '{name}': FMU file not found: {self.path}")
@@ -187,8 +188,8 @@ class FmuInstance(Instance):
         """The error for a failed FMI call; ``time`` is stored (and shown if ``at``).  Its
         first line is the FMU's own message when it logged one (:meth:`_cause`), the failed
         call follows on the next line; the whole log stays in ``log``."""
-        if status == 4:
-            self._fatal = True
+        if status is not None and status >= 3:
+            self._failed = True
         label = (f" with status {STATUS_LABELS[status]}"
                  if status is not None and 0 <= status < len(STATUS_LABELS) else "")
         when = f" at t = {time:.9g} s" if time is not None and at else ""
@@ -317,12 +318,13 @@ class FmuInstance(Instance):
         return warnings
 
     def terminate(self) -> None:
-        """Terminate (if initialized and not after Fatal), free the instance, delete the
-        extracted files.  Safe to call more than once and after any failure."""
+        """Terminate (if it stepped and no call returned Error or Fatal: FMI 2.0 allows
+        fmi2Terminate only then), free the instance, delete the extracted files.  Safe to
+        call more than once and after any failure."""
         fmu, self._fmu = self._fmu, None
         if fmu is not None:
             try:
-                if self._state in ("initializing", "running") and not self._fatal:
+                if self._state == "running" and not self._failed:
                     fmu.terminate()
             except Exception:  # the instance is freed anyway; its failure is already reported
                 pass

@@ -259,7 +259,7 @@ int main(int argc, char** argv)
             do_step(c, 0.0, h, fmi2True);
             messages.clear();
             report("do_step_after_an_error", do_step(c, 0.0, h, fmi2True));  // one message
-            return do_step(c, 0.0, h, fmi2True);  // refused without a message
+            return do_step(c, 0.0, h, fmi2True);  // refused again, with its message
         });
     }
 

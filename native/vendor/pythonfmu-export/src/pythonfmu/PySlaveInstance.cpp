@@ -130,9 +130,16 @@ PyObject* findClass(const std::string& resources, const std::string& moduleName)
 }
 
 // navfmu patch: a pending exception whose fmi2_status attribute is "error" is a refused FMI
-// call.  Takes it (clearing the error indicator) and returns its message; any other exception
-// stays pending and nullopt is returned.
-std::optional<std::string> take_refused_call()
+// call.  Takes it (clearing the error indicator) and returns its message and whether the
+// instance failed with it (its attribute instance_failed is true); any other exception stays
+// pending and nullopt is returned.
+struct RefusedCall
+{
+    std::string message;
+    bool instanceFailed;
+};
+
+std::optional<RefusedCall> take_refused_call()
 {
     PyObject *type, *value, *traceback;
     PyErr_Fetch(&type, &value, &traceback);
@@ -146,17 +153,21 @@ std::optional<std::string> take_refused_call()
         PyErr_Restore(type, value, traceback);
         return std::nullopt;
     }
-    std::string message = "refused FMI call";
+    RefusedCall call{"refused FMI call", false};
+    PyObject* failed = PyObject_GetAttrString(value, "instance_failed");
+    call.instanceFailed = failed != nullptr && PyObject_IsTrue(failed) == 1;
+    Py_XDECREF(failed);
+    PyErr_Clear();
     PyObject* text = PyObject_Str(value);
     PyObject* bytes = text != nullptr ? PyUnicode_AsEncodedString(text, "utf-8", "replace") : nullptr;
-    if (bytes != nullptr) message = PyBytes_AsString(bytes);
+    if (bytes != nullptr) call.message = PyBytes_AsString(bytes);
     PyErr_Clear();
     Py_XDECREF(bytes);
     Py_XDECREF(text);
     Py_XDECREF(type);
     Py_XDECREF(value);
     Py_XDECREF(traceback);
-    return message;
+    return call;
 }
 
 void py_safe_run(const std::function<void(PyGILState_STATE gilState)>& f)
@@ -544,6 +555,7 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[_set_fmu_state] PyObject_CallMethod", gilState);
             }
+            Py_DECREF(f); // navfmu patch: upstream leaked the method's result
             clearLogBuffer();
         });
     }
@@ -584,7 +596,18 @@ public:
             if (c == nullptr) {
                 handle_py_exception("[SerializeFMUstate] PyBytes_AsString", gilState);
             }
-            for (int i = 0; i < size; i++) {
+            // navfmu patch: a buffer shorter than the state is refused (upstream read past the
+            // end of the state's bytes when it was longer)
+            const auto needed = static_cast<size_t>(PyBytes_Size(pyStateBytes));
+            if (size < needed) {
+                Py_DECREF(pyStateBytes);
+                clearLogBuffer();
+                PyGILState_Release(gilState);
+                throw std::runtime_error(data_.instanceName + ": fmi2SerializeFMUstate: the "
+                    "buffer of " + std::to_string(size) + " bytes is shorter than the state's " +
+                    std::to_string(needed) + " (fmi2SerializedFMUstateSize); nothing was written");
+            }
+            for (size_t i = 0; i < needed; i++) { // navfmu patch: the state's bytes only
                 bytes[i] = c[i];
             }
             Py_DECREF(pyStateBytes);
@@ -592,9 +615,11 @@ public:
         });
     }
 
-    void DeSerializeFMUstate(const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) override
+    std::string DeSerializeFMUstate(
+        const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) override
     {
-        py_safe_run([this, &bytes, size, &state](PyGILState_STATE gilState) {
+        std::string phase;
+        py_safe_run([this, &bytes, size, &state, &phase](PyGILState_STATE gilState) {
             PyObject* pyStateBytes = PyBytes_FromStringAndSize(bytes, size);
             if (pyStateBytes == nullptr) {
                 handle_py_exception("[DeSerializeFMUstate] PyBytes_FromStringAndSize", gilState);
@@ -606,8 +631,18 @@ public:
                 handle_py_exception("[DeSerializeFMUstate] PyObject_CallMethod", gilState);
             }
             state = reinterpret_cast<fmi2FMUstate*>(pyState);
+            // navfmu patch: the phase the state restores (fmushell's FmuState.fmi2_phase)
+            PyObject* name = PyObject_GetAttrString(pyState, "fmi2_phase");
+            if (name != nullptr && PyUnicode_Check(name)) {
+                PyObject* utf8 = PyUnicode_AsEncodedString(name, "utf-8", "replace");
+                if (utf8 != nullptr) phase = PyBytes_AsString(utf8);
+                Py_XDECREF(utf8);
+            }
+            Py_XDECREF(name);
+            PyErr_Clear();
             clearLogBuffer();
         });
+        return phase;
     }
 
     ~PySlaveInstance() override
@@ -680,7 +715,8 @@ private:
             if (auto refusal = take_refused_call()) {
                 clearLogBuffer();
                 PyGILState_Release(gilState);
-                throw std::runtime_error(*refusal); // fmi2Error, the instance stays usable
+                // fmi2Error; the instance stays usable unless the refusal says it failed
+                throw refused_call(refusal->message, refusal->instanceFailed);
             }
         }
         if (err != nullptr) {

@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 
 namespace pythonfmu
 {
@@ -83,7 +84,9 @@ public:
 
     virtual size_t SerializedFMUstateSize(const fmi2FMUstate& state) = 0;
     virtual void SerializeFMUstate(const fmi2FMUstate& state, fmi2Byte bytes[], size_t size) = 0;
-    virtual void DeSerializeFMUstate(const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) = 0;
+    // navfmu patch: returns the name of the phase the state restores (Guards.hpp, phaseNamed)
+    virtual std::string DeSerializeFMUstate(
+        const fmi2Byte bytes[], size_t size, fmi2FMUstate& state) = 0;
 
     virtual ~SlaveInstance() = default;
     ;
