@@ -76,8 +76,8 @@ class FmuInstance(Instance):
     """An FMI 2.0 co-simulation FMU run through fmpy.
 
     The FMU is extracted to a temporary folder (or into ``unzipdir``), loaded and
-    instantiated with logging on; its log messages are kept (the last :data:`LOG_MESSAGES_KEPT`) and included in every
-    :class:`SimulationError`.  A status of Discard, Error or Fatal from any call raises
+    instantiated with logging on; its log messages are kept (the last
+    :data:`LOG_MESSAGES_KEPT`) and included in every :class:`SimulationError`.  A status of Discard, Error or Fatal from any call raises
     :class:`SimulationError`; Warning is accepted (the message stays in the log).
     """
 
