@@ -77,8 +77,9 @@ class FmuInstance(Instance):
 
     The FMU is extracted to a temporary folder (or into ``unzipdir``), loaded and
     instantiated with logging on; its log messages are kept (the last
-    :data:`LOG_MESSAGES_KEPT`) and included in every :class:`SimulationError`.  A status of Discard, Error or Fatal from any call raises
-    :class:`SimulationError`; Warning is accepted (the message stays in the log).
+    :data:`LOG_MESSAGES_KEPT`) and included in every :class:`SimulationError`.  A status
+    of Discard, Error or Fatal from any call raises :class:`SimulationError`; Warning is
+    accepted (the message stays in the log).
     """
 
     def __init__(self, path, name: str, unzipdir: Optional[str] = None):
