@@ -186,6 +186,7 @@ class HostedFmuInstance(Instance):
         self._header = bytearray(HEADER.size)
         self._pending_set = False
         self._fresh = False
+        self._busy = False
         self._host: Optional[_Host] = _Host()
         self._finalizer = weakref.finalize(self, self._host.close)
         try:
@@ -209,14 +210,24 @@ class HostedFmuInstance(Instance):
         return SimulationError(f"component '{self.name}' ({self.path.name}): {reason} in "
                                f"{call}{when}{after}", component=self.name, time=time, log=log)
 
-    def _receive(self, what: str, time: Optional[float]) -> int:
-        """Wait for the reply's header; the host's end or silence raised as its error."""
+    def _round_trip(self, request, what: str, time: Optional[float], into=None):
+        """Send ``request``, wait for the reply and read its payload (into the memoryview
+        ``into``, else a new bytearray, returned); the host's end or silence and a failed
+        call raised as their errors.  ``_busy`` holds while a reply is owed."""
         host = self._host
         if host is None:
             raise SimulationError(f"component '{self.name}' ({self.path.name}): its FMU "
                                   f"process has ended", component=self.name, time=time)
+        self._busy = True
+        try:
+            write_all(host.requests, request)
+        except OSError:
+            pass            # the host has ended: the wait below says how
         try:
             host.wait_reply(self.call_timeout, self._header)
+            status, length = HEADER.unpack(self._header)
+            body = into[:length] if into is not None and status == OK else bytearray(length)
+            host.read(memoryview(body))
         except HostHung:
             raise self._failed(what, time, "the FMU process hung",
                                f": no answer within the call timeout of "
@@ -225,12 +236,10 @@ class HostedFmuInstance(Instance):
             code = host.returncode()
             verb = "died with" if code < 0 else "ended with"
             raise self._failed(what, time, f"the FMU process {verb} {ending(code)}") from None
-        status, length = HEADER.unpack(self._header)
+        self._busy = False
         if status == FAILED:
-            body = bytearray(length)
-            host.read(memoryview(body))
             raise self._error(json.loads(body))
-        return length
+        return body
 
     def _error(self, body) -> NavfmuError:
         kind, message = body["kind"], body["message"]
@@ -244,22 +253,12 @@ class HostedFmuInstance(Instance):
         return SimulationError(f"component '{self.name}' ({self.path.name}): the FMU host "
                                f"failed: {message}", component=self.name, time=self.time)
 
-    def _send(self, data) -> None:
-        try:
-            write_all(self._host.requests, data)
-        except (BrokenPipeError, AttributeError, TypeError):
-            pass            # the host has ended: _receive says how
-
     def _call(self, method: str, *args) -> Any:
         if self._pending_set:
             self._exchange(SET, 0.0, 0.0)
-        what = method.replace("_", " ")
         payload = json.dumps([method, list(args)]).encode("utf-8")
-        self._send(HEADER.pack(CALL, len(payload)) + payload)
-        length = self._receive(what, self.time)
-        body = bytearray(length)
-        self._host.read(memoryview(body))
-        return json.loads(body)
+        return json.loads(self._round_trip(HEADER.pack(CALL, len(payload)) + payload,
+                                           method.replace("_", " "), self.time))
 
     def _exchange(self, flags: int, t: float, h: float, time: Optional[float] = None) -> None:
         """One STEP request: set the marked inputs, step, read the outputs (per ``flags``)."""
@@ -268,11 +267,8 @@ class HostedFmuInstance(Instance):
         self._flags[0] = flags
         self._times[0], self._times[1] = t, h
         what = "fmi2DoStep" if flags & DO_STEP else "fmi2Get* of the outputs"
-        when = self.time if time is None else time
-        self._send(self._request)
-        length = self._receive(what, when)
-        if length:
-            self._host.read(self._reply_bytes[:length])
+        if self._round_trip(self._request, what, self.time if time is None else time,
+                            into=self._reply_bytes):
             self.real_out[:], self.int_out[:], self.bool_out[:] = self._replied
         self._pending_set = False
         self._fresh = bool(flags & GET)
@@ -342,6 +338,8 @@ class HostedFmuInstance(Instance):
         if host is None:
             return
         try:
+            if self._busy:          # a call was cut short: its reply would come first
+                host.kill()
             if host.proc is not None and host.proc.poll() is None:
                 payload = json.dumps(["terminate", []]).encode("utf-8")
                 write_all(host.requests, HEADER.pack(CALL, len(payload)) + payload)
