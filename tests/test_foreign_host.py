@@ -218,3 +218,19 @@ def test_a_foreign_fmus_ordinary_error_keeps_its_in_process_message(tmp_path, fa
         messages[mode] = str(exc.value).splitlines()[0]
     assert messages["never"] == messages["always"]
     assert "crash_at" in messages["always"]
+
+
+def test_a_montecarlo_run_of_a_crashing_foreign_filter_is_one_line(tmp_path, faulty):
+    """The FMU backend of a campaign hosts the foreign filter too: its crash is the run's
+    error, and the campaign folder is not left behind half made."""
+    ssd = _model(tmp_path / "toy", faulty, crash_at=1.0)
+    out = tmp_path / "campaign"
+    proc, tmp = _cli(["montecarlo", ssd.parent, "--runs", 1, "--backend", "fmu",
+                      "--filters", ssd.parent / "Faulty.fmu", "--out", out], tmp_path)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 2, stderr
+    lines = stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("navfmu: error: ")
+    assert lines[0].endswith("component 'filter' (Faulty.fmu): the FMU process died with "
+                             "SIGSEGV in fmi2DoStep at t = 1 s")
+    assert not out.exists() and list(tmp.iterdir()) == [] and _host_processes(tmp) == []
