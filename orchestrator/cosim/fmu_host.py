@@ -103,7 +103,9 @@ class Host:
 
     # -- CALL -----------------------------------------------------------------------------
     def call(self, method: str, args):
-        if METHODS.get(method, None) is not None:
+        if method not in METHODS:
+            raise ValueError(f"unknown request {method!r}")
+        if METHODS[method] is not None:
             self._mark(METHODS[method])
         return getattr(self, "_" + method)(*args)
 

@@ -79,8 +79,8 @@ class _Host:
                     stderr=log, env=child_environment())
         except BaseException:
             self.proc = None
-            os.close(requests_r)
-            os.close(replies_w)
+            for fd in (requests_r, replies_w, self.replies_fd):
+                os.close(fd)
             self.close()
             raise
         os.close(requests_r)
@@ -150,17 +150,15 @@ class _Host:
     def close(self) -> None:
         """Kill the host if it still runs, close the pipes, remove its folder (idempotent)."""
         self.kill()
-        for f in (getattr(self, "replies", None),):
-            if f is not None and not f.closed:
-                f.close()
-        for fd_name in ("requests",):
-            fd = getattr(self, fd_name, None)
-            if fd is not None:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
-                setattr(self, fd_name, None)
+        replies = getattr(self, "replies", None)
+        if replies is not None and not replies.closed:
+            replies.close()
+        if self.requests is not None:
+            try:
+                os.close(self.requests)
+            except OSError:
+                pass
+            self.requests = None
         shutil.rmtree(self.workdir, ignore_errors=True)
 
 
