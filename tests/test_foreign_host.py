@@ -274,3 +274,17 @@ def test_a_hosted_fmus_state_is_saved_and_restored_in_its_host(tmp_path):
     assert np.array_equal(a[10:].view(np.uint64), b.view(np.uint64))
     assert np.array_equal(a.view(np.uint64), c.view(np.uint64))
     assert np.ptp(a[:, 2]) > 0                        # the IMU increments move
+
+
+def test_bench_against_libcosim_keeps_a_crashing_foreign_fmu_in_a_child(tmp_path, faulty):
+    """libcosim loads the FMUs into the process that runs it: with a foreign FMU that is a
+    child, whose crash is one line, status 2, its temporary files gone with it."""
+    ssd = _model(tmp_path / "toy", faulty, crash_at=12.3)
+    proc, tmp = _cli(["bench", ssd.parent, "--libcosim", "--stop", 20, "--repeat", 1],
+                     tmp_path)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 2, stderr
+    lines = stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("navfmu: error: ")
+    assert "libcosim" in lines[0] and "ended with SIGSEGV" in lines[0]
+    assert list(tmp.iterdir()) == []

@@ -48,14 +48,15 @@ def run_child(module: str, job: Dict[str, Any], timeout: float = CHILD_TIMEOUT_S
               ) -> Dict[str, Any]:
     """Run ``python -m module JOB.json`` and return the JSON of its last stdout line; when
     the child dies first (an FMU that crashes its host) or hangs, ``{"error": ...}`` says how
-    it ended, with the last line it wrote to stderr."""
+    it ended, with the last line it wrote to stderr.  The child's temporary files (the FMUs
+    it extracts) go into the job's folder, removed however the child ended."""
     with tempfile.TemporaryDirectory(prefix="navfmu_child_") as tmp:
         job_file = Path(tmp) / "job.json"
         job_file.write_text(json.dumps(job), encoding="utf-8")
         try:
             proc = subprocess.run([sys.executable, "-m", module, str(job_file)], cwd=tmp,
                                   capture_output=True, text=True, timeout=timeout,
-                                  env=child_environment())
+                                  env=dict(child_environment(), TMPDIR=tmp))
         except subprocess.TimeoutExpired:
             return {"error": f"the host process did not finish within {timeout:.0f} s"}
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
