@@ -297,7 +297,8 @@ def test_the_identity_holds_every_option_that_decides_the_numbers(tmp_path):
                    "seeds": {"trajectory": 4, "gnss": 1004}, "parameters": list(OVERRIDE),
                    "backend": "direct", "stop_time": 4.0, "window": (1.0, 3.0),
                    "samples": "fixes", "series": "csv",
-                   "out": str((tmp_path / "c").resolve()), "commit": campaign.commit}
+                   "out": str((tmp_path / "c").resolve()), "commit": campaign.commit,
+                   "isolation": {"mode": "foreign", "call_timeout": 120.0}}
 
 
 def test_overrides_and_the_stop_time_are_checked_before_any_run(tmp_path):

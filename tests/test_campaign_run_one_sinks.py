@@ -9,6 +9,8 @@ from types import SimpleNamespace
 
 import pytest
 
+from orchestrator.cosim.isolation import Isolation
+
 from orchestrator.campaigns import campaign as cp
 from orchestrator.cosim import master
 from orchestrator.results import mission_metrics, recorder
@@ -48,9 +50,10 @@ class _Simulation:
 
     last = None
 
-    def __init__(self, model, backend, registry, parameters):
+    def __init__(self, model, backend, registry, parameters, isolation):
         self.decimation = {"trajectory": 1, "gnss": 4, "filter": 2}
         self.parameters = parameters
+        self.isolation = isolation
         _Simulation.last = self
 
     def run(self, stop_time, sink):
@@ -89,6 +92,7 @@ def test_the_sinks_of_a_run_without_a_series(tmp_path, stand_ins):
     assert _made(_Parquet) == [] and _made(_Csv) == []
     assert _Simulation.last.sink.sinks == [metrics, mission]
     assert _Simulation.last.parameters == {"gnss.seed": 7}
+    assert _Simulation.last.isolation == Isolation()      # a job that does not say: foreign
     assert record["metrics"] == {} and record["stop_time"] == 4.0 and record["index"] == 3
 
 

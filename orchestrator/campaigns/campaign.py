@@ -43,6 +43,7 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from ..building import build as fmu_build
 from ..cosim import interrupts
+from ..cosim.isolation import Isolation
 from ..results import metrics as nav_metrics
 from ..results import mission_metrics
 from ..results import recorder
@@ -77,6 +78,9 @@ class CampaignSpec:
     #: runs per batch on the direct backend (None: chosen, :mod:`.batching`); not part of
     #: the campaign's identity: a batch's runs are its single runs, bit for bit
     batch: Optional[int] = None
+    #: which FMUs run in a host process of their own (``--isolate``, ``--call-timeout``);
+    #: not part of the identity either: a hosted FMU's numbers are its in-process ones
+    isolation: Isolation = Isolation()
 
     def __post_init__(self):
         if isinstance(self.runs, bool) or not isinstance(self.runs, int) or self.runs < 1:
@@ -264,7 +268,8 @@ def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
     model = swap_filter(load_scenario(job["ssd"]), job["filter"])
     sim = Simulation(model, backend=job["backend"],
                      registry=registry() if job["backend"] == "direct" else None,
-                     parameters=_job_parameters(job))
+                     parameters=_job_parameters(job),
+                     isolation=Isolation(**job.get("isolation", {})))
     sinks = _RunSinks(job, overlap=max(sim.decimation.values()) + 1)
     header = sim.run(stop_time=job["stop_time"], sink=sinks.tee)
     return sinks.record(header, time.perf_counter() - t0)
@@ -410,7 +415,9 @@ class Campaign:
                 "index": index, "seeds": run_seeds(s, self.offsets, index),
                 "parameters": list(s.parameters), "backend": s.backend,
                 "stop_time": s.stop_time, "window": s.window, "samples": s.samples,
-                "series": s.series, "out": str(self.out.resolve()), "commit": self.commit}
+                "series": s.series, "out": str(self.out.resolve()), "commit": self.commit,
+                "isolation": {"mode": s.isolation.mode,
+                              "call_timeout": s.isolation.call_timeout}}
 
     def missing(self) -> List[Tuple[str, int]]:
         return [(f, i) for i in range(self.runs) for f in self.spec.filters

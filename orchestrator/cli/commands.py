@@ -22,6 +22,7 @@ from .cli_options import (DEFAULT_OUT, filter_names, nonempty_path, parse_named_
                           parse_sets, parse_window)
 from ..errors import NavfmuError, SimulationError
 from ..cosim.exchange import ALGORITHMS
+from ..cosim.isolation import DEFAULT_CALL_TIMEOUT_S, ISOLATE_MODES, Isolation
 from .progress import progress_bars
 from .user_warnings import in_cli_voice
 
@@ -112,7 +113,30 @@ def _common_run_options(f):
                      show_default=True, expose_value=False,
                      callback=lambda ctx, _, v: ctx.meta.__setitem__("algorithm", v),
                      help="Exchange: Gauss-Seidel order, or Jacobi (libcosim's).")(f)
+    return _isolation_options(f)
+
+
+def _isolation_options(f):
+    """``--isolate`` and ``--call-timeout``, kept in the context for :func:`_isolation`."""
+    f = click.option("--isolate", type=click.Choice(ISOLATE_MODES), default=ISOLATE_MODES[0],
+                     show_default=True, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("isolate", v),
+                     help="Run FMUs in a host process of their own: the foreign ones (not "
+                     "this installation's build), always, or never; a crash or hang there "
+                     "ends the run with one error line.")(f)
+    f = click.option("--call-timeout", type=float, default=DEFAULT_CALL_TIMEOUT_S,
+                     show_default=True, expose_value=False,
+                     callback=lambda ctx, _, v: ctx.meta.__setitem__("call_timeout", v),
+                     help="Longest one FMI call of an FMU in a host process may take [s] "
+                     "before it counts as hung and is killed.")(f)
     return f
+
+
+def _isolation():
+    """The ``--isolate`` / ``--call-timeout`` of the current command."""
+    meta = click.get_current_context().meta
+    return Isolation(meta.get("isolate", ISOLATE_MODES[0]),
+                     meta.get("call_timeout", DEFAULT_CALL_TIMEOUT_S))
 
 
 def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
@@ -124,7 +148,8 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
                   echo=click.echo,
                   algorithm=meta.get("algorithm", ALGORITHMS[0]),
                   replay=replay, log_sensors=log_sensors,
-                  replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")})
+                  replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")},
+                  isolation=_isolation())
 
 
 @cli.command()
@@ -315,6 +340,7 @@ BATCH_HELP = ("Runs of one filter stepped together as one batch on the direct ba
 @click.option("--series", type=click.Choice(["parquet", "csv"]),
               help="Also keep every run's time series in this format.")
 @click.option("--batch", type=int, default=None, help=BATCH_HELP)
+@_isolation_options
 def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
                seed_offsets, backend, stop, window, samples, sets, series, batch):
     """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
@@ -327,7 +353,8 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
         scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
         stop_time=stop, window=parse_window(window), samples=samples,
         seed_offsets=campaign.parse_seed_offsets(seed_offsets),
-        parameters=tuple(parse_sets(sets).items()), series=series, batch=batch)
+        parameters=tuple(parse_sets(sets).items()), series=series, batch=batch,
+        isolation=_isolation())
     model_name = scenarios.load_scenario(scenario).name
     out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
     with progress_bars() as progress_bar:

@@ -61,7 +61,7 @@ def _time_origin_note(run) -> str:
 
 
 def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
-                  log_sensors, algorithm, echo, replay_options=None):
+                  log_sensors, algorithm, echo, replay_options=None, isolation=None):
     stream_dir = None
     if fmt == "parquet":
         if log_sensors:
@@ -79,11 +79,12 @@ def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, r
                 model, filter=f, backend=backend, stop_time=stop, parameters=parameters,
                 window=window, progress=progress_bar(f or "scenario"), algorithm=algorithm,
                 log=lambda m: echo(m, err=True), replay=replay, stream_to=stream_to,
-                replay_options=replay_options))
+                replay_options=replay_options, isolation=isolation))
     return runs
 
 
-def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm, echo):
+def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm, echo,
+                  isolation=None):
     """The mission's baseline run (its ``mission.json``), reported under its label (kept in
     memory, also under ``--format parquet``)."""
     with progress_bars() as progress_bar:
@@ -91,19 +92,20 @@ def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm,
             model, backend=backend, stop_time=stop,
             parameters={**baseline["parameters"], **(parameters or {})}, window=window,
             progress=progress_bar(baseline["label"]), algorithm=algorithm,
-            log=lambda m: echo(m, err=True))
+            log=lambda m: echo(m, err=True), isolation=isolation)
     run.label = baseline["label"]
     return run
 
 
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
                   fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
-                  replay=None, log_sensors=None, replay_options=None) -> None:
+                  replay=None, log_sensors=None, replay_options=None, isolation=None) -> None:
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
     ``navfmu-results/<model>``), each run with its progress bar.  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
-    ``--max-dt-jitter``), only with ``replay``."""
+    ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
+    process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones)."""
     replay_options = {k: v for k, v in (replay_options or {}).items() if v is not None}
     if replay_options and replay is None:
         raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
@@ -114,11 +116,11 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
-                         log_sensors, algorithm, echo, replay_options)
+                         log_sensors, algorithm, echo, replay_options, isolation)
     baseline = scenarios.mission_baseline(model) if replay is None else None
     if baseline is not None:
         runs.append(_baseline_run(model, baseline, stop, backend, window, parameters,
-                                  algorithm, echo))
+                                  algorithm, echo, isolation))
     if log_sensors:
         from ..running.replay import write_sensor_log
 

@@ -1,6 +1,7 @@
 """What the master knows of each component before anything is instantiated: its variables
-(name, type, causality, unit, value reference), its model name and how to make an instance,
-read from the FMU's model description or from the direct backend's registered class."""
+(name, type, causality, unit, value reference), its model name and how to make an instance
+(an FMU in the master's process or in a host process of its own, :mod:`.isolation`), read
+from the FMU's model description or from the direct backend's registered class."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -11,6 +12,8 @@ from .backends import Instance, VarInfo
 from .direct_instance import DirectInstance
 from ..errors import NavfmuError
 from .fmu_instance import FmuInstance
+from .hosted_instance import HostedFmuInstance
+from .isolation import Isolation
 from ..model.fmu_path import searched_places
 from ..model.ssp import ComponentSpec
 
@@ -24,6 +27,8 @@ class Described:
     source: str            # FMU path or Python class, for messages
     model_name: str
     make: Callable[[], Instance]
+    #: whether it runs in a host process of its own (:mod:`.isolation`)
+    hosted: bool = False
 
 
 def _model_name_of_fmu(path: Path) -> str:
@@ -35,7 +40,9 @@ def _model_name_of_fmu(path: Path) -> str:
         raise NavfmuError(f"cannot read the model description of {path}: {exc}") from None
 
 
-def describe_fmu(spec: ComponentSpec) -> Described:
+def describe_fmu(spec: ComponentSpec, isolation: Isolation = Isolation()) -> Described:
+    """The FMU of ``spec``, made in the master's process or in a host process of its own
+    as ``isolation`` says."""
     from fmpy import read_model_description
 
     path = spec.source
@@ -52,6 +59,10 @@ def describe_fmu(spec: ComponentSpec) -> Described:
     for v in md.modelVariables:
         unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
         variables[v.name] = VarInfo(v.name, v.type, v.causality, unit, v.valueReference)
+    if isolation.hosts(path, md.modelName):
+        return Described(spec, variables, str(path), md.modelName,
+                          lambda: HostedFmuInstance(path, spec.name, isolation.call_timeout),
+                          hosted=True)
     return Described(spec, variables, str(path), md.modelName,
                       lambda: FmuInstance(path, spec.name))
 

@@ -76,13 +76,14 @@ def _cleanup_files(unzipdir: Optional[str]) -> None:
 class FmuInstance(Instance):
     """An FMI 2.0 co-simulation FMU run through fmpy.
 
-    The FMU is extracted to a temporary folder, loaded and instantiated with logging on; its
-    log messages are kept (the last :data:`LOG_MESSAGES_KEPT`) and included in every
-    :class:`SimulationError`.  A status of Discard, Error or Fatal from any call raises
-    :class:`SimulationError`; Warning is accepted (the message stays in the log).
+    The FMU is extracted to a temporary folder (or into ``unzipdir``), loaded and
+    instantiated with logging on; its log messages are kept (the last
+    :data:`LOG_MESSAGES_KEPT`) and included in every :class:`SimulationError`.  A status
+    of Discard, Error or Fatal from any call raises :class:`SimulationError`; Warning is
+    accepted (the message stays in the log).
     """
 
-    def __init__(self, path, name: str):
+    def __init__(self, path, name: str, unzipdir: Optional[str] = None):
         super().__init__()
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE, \
@@ -120,7 +121,7 @@ class FmuInstance(Instance):
             unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
             self.variables[v.name] = VarInfo(v.name, v.type, v.causality, unit, v.valueReference)
 
-        self._unzipdir = str(extract(str(self.path)))
+        self._unzipdir = str(extract(str(self.path), unzipdir))
         self._finalizer = weakref.finalize(self, _cleanup_files, self._unzipdir)
         self.build_info = fmu_builds.build_info(self.path, md, Path(self._unzipdir))
         self._env_id = next(_ENV_IDS)

@@ -23,13 +23,17 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import json
 import os
+import sys
 import time as _time
+from pathlib import Path
 from typing import Dict, List, Optional
 
 import numpy as np
 
 from .backends import NUMERIC_TYPES
+from .host_process import run_child
 from ..errors import NavfmuError, SimulationError
 from ..results.run_results import Results
 from ..model.ssp_archive import load_model
@@ -235,14 +239,37 @@ def bench_against_libcosim(source, stop_time: float, repeat: int = 3) -> Dict[st
     step, alternating ``repeat`` times in one process; each one's fastest wall time (creation
     and initialization included) and the ratios ours / libcosim's.  libcosim runs twice per
     round: recording every output every step (as ours does), and on its own
-    (``simulate_until``, nothing read back)."""
+    (``simulate_until``, nothing read back).
+
+    libcosim loads every FMU into the process that runs it, so a model with a foreign FMU
+    (:mod:`orchestrator.cosim.isolation`) is timed in a child process
+    (:func:`~orchestrator.cosim.host_process.run_child`): its crash or hang ends the child and
+    is this call's :class:`~orchestrator.errors.NavfmuError`.  Both masters keep their FMUs
+    in the process that times them, so the two run alike."""
+    from .component_description import describe_fmu
+
+    model = load_model(source)
+    if not any(describe_fmu(spec).hosted for spec in model.components):
+        return _bench(source, stop_time, repeat)
+    out = run_child(__name__, {"source": str(Path(source).resolve()),
+                               "stop_time": float(stop_time), "repeat": int(repeat)})
+    if "error" in out:
+        raise NavfmuError(f"{source}: the benchmark against libcosim, run in a process of its "
+                          f"own for the model's foreign FMUs: {out['error']}")
+    return out
+
+
+def _bench(source, stop_time: float, repeat: int) -> Dict[str, float]:
+    """:func:`bench_against_libcosim` in this process."""
+    from .isolation import Isolation
     from .master import Simulation
 
     best = {"ours_s": float("inf"), "libcosim_recorded_s": float("inf"),
             "libcosim_unrecorded_s": float("inf")}
     for _ in range(max(1, int(repeat))):
         t0 = _time.perf_counter()
-        Simulation(load_model(source), algorithm="jacobi").run(stop_time)
+        Simulation(load_model(source), algorithm="jacobi",
+                   isolation=Isolation("never")).run(stop_time)
         best["ours_s"] = min(best["ours_s"], _time.perf_counter() - t0)
         t0 = _time.perf_counter()
         run_libcosim(source, stop_time)
@@ -258,4 +285,15 @@ def bench_against_libcosim(source, stop_time: float, repeat: int = 3) -> Dict[st
     return best
 
 
+def main(job_file) -> None:
+    """The child of :func:`bench_against_libcosim`: its job's measurements as JSON."""
+    with open(job_file, encoding="utf-8") as f:
+        job = json.load(f)
+    print(json.dumps(_bench(job["source"], job["stop_time"], job["repeat"])), flush=True)
+
+
 __all__ = ["run_libcosim", "bench_against_libcosim", "LOG_LEVEL"]
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])

@@ -113,6 +113,15 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    component raising ParameterError/InputError) raises
    :class:`~orchestrator.errors.SimulationError` naming the component and the time, with the
    component's log; every instance is terminated and freed, and no results are returned.
+
+10. **Host processes.**  An FMU the isolation puts in a host process of its own (by
+   default every foreign FMU: :mod:`orchestrator.cosim.isolation`) is stepped by these same
+   rules through the same interface, one round trip per step
+   (:mod:`orchestrator.cosim.hosted_instance`), with the same numbers bit for bit.  Its host
+   dying (a segfault, an abort) or a call of it outlasting the call timeout is a
+   :class:`~orchestrator.errors.SimulationError` naming the component, the FMI call and the
+   time, handled as in rule 9; Ctrl-C kills the host at once.  ``metadata["hosted"]`` lists
+   those components.
 """
 from __future__ import annotations
 
@@ -127,6 +136,7 @@ from .backends import NUMERIC_TYPES, Instance
 from .component_description import describe_direct, describe_fmu
 from ..errors import NavfmuError, SkippedParametersWarning, WiringError
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
+from .isolation import Isolation
 from ..results.recorder import Recording
 from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
@@ -174,7 +184,9 @@ class Simulation:
     ``backend`` is ``"fmu"`` (every component's ``source`` FMU through fmpy) or ``"direct"``
     (the Python component registered under the FMU's model name in ``registry``, a mapping
     model name -> component class).  ``record`` selects what is recorded (None: every output).
-    ``parameters`` overrides values as ``{"Component.variable": value}``.
+    ``parameters`` overrides values as ``{"Component.variable": value}``.  ``isolation``
+    (:mod:`orchestrator.cosim.isolation`, default: foreign FMUs) says which FMUs run in a
+    host process of their own (rule 10).
     Construction checks the wiring (rule 8); :meth:`run` instantiates, runs and terminates.
     """
 
@@ -183,7 +195,7 @@ class Simulation:
                  record: Optional[Iterable[str]] = None,
                  parameters: Optional[Mapping[str, Any]] = None,
                  base_step: Optional[float] = None, record_every: int = 1,
-                 algorithm: str = "gauss-seidel"):
+                 algorithm: str = "gauss-seidel", isolation: Optional[Isolation] = None):
         if backend not in ("fmu", "direct"):
             raise NavfmuError(f"unknown backend '{backend}' (use 'fmu' or 'direct')")
         if algorithm not in ALGORITHMS:
@@ -200,8 +212,9 @@ class Simulation:
         self.base_step = float(base_step) if base_step is not None else model.base_step
         if not self.base_step > 0:
             raise NavfmuError(f"the base step must be > 0, got {self.base_step}")
+        self.isolation = isolation if isolation is not None else Isolation()
         self.components = [
-            describe_fmu(c) if backend == "fmu" else describe_direct(c, registry)
+            describe_fmu(c, self.isolation) if backend == "fmu" else describe_direct(c, registry)
             for c in model.components
         ]
         self.names = [c.spec.name for c in self.components]
@@ -493,6 +506,7 @@ class Simulation:
             "delayed_connections": [str(c) for c in self.delayed_connections],
             "sources": {d.spec.name: d.source for d in self.components},
             "model_names": {d.spec.name: d.model_name for d in self.components},
+            "hosted": [d.spec.name for d in self.components if d.hosted],
             "replaced_sources": {k: str(v) for k, v in self.model.replaced_sources.items()},
             "skipped_parameters": list(self.skipped_parameters),
             "parameters": {n: {k: v for k, v in p.items()}

@@ -132,7 +132,8 @@ def filter_label(model: SystemModel, filter: Optional[str] = None) -> str:
 def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend: str = "fmu",
                       stop_time: Optional[float] = None, parameters=None, window=None,
                       progress=None, build=True, log=print, replay=None,
-                      algorithm="gauss-seidel", stream_to=None, replay_options=None) -> Run:
+                      algorithm="gauss-seidel", stream_to=None, replay_options=None,
+                      isolation=None) -> Run:
     """Run one scenario (optionally with the filter component swapped, and with its sensor
     components replaced by a replay of the sensor log in folder ``replay``, see
     :func:`orchestrator.running.replay.replay_model`, with its keyword arguments
@@ -140,7 +141,9 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     truth).
 
     ``stream_to``: a ``.parquet`` path; the rows then go to that file and to the metrics in
-    chunks (memory flat in the flight length) instead of staying in ``results``."""
+    chunks (memory flat in the flight length) instead of staying in ``results``.
+    ``isolation``: which FMUs run in a host process of their own
+    (:class:`~orchestrator.cosim.isolation.Isolation`; default: the foreign ones)."""
     label = filter_label(model, filter)
     if filter:
         model = swap_filter(model, filter)
@@ -158,7 +161,8 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
     sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
-                     parameters=parameters, record=record, algorithm=algorithm)
+                     parameters=parameters, record=record, algorithm=algorithm,
+                     isolation=isolation)
     prechecks.check_simulation(sim, stop_time)
     if stream_to is not None:
         run = _streamed_run(label, model, sim, stop_time, progress, window, stream_to)

@@ -20,6 +20,7 @@ import numpy as np
 
 from navcore.ins.earth import radii
 
+from ..cosim.isolation import ISOLATE_MODES, Isolation
 from ..errors import NavfmuError
 from ..results import metrics
 from ..results.jsonsafe import jsonable
@@ -31,8 +32,9 @@ MODULE = "orchestrator.verification.scenario_run"
 
 
 def run_isolated(job: Dict[str, Any]) -> Dict[str, Any]:
-    """The summary of ``job`` computed in a child process (``{"error": ...}`` on a failure)."""
-    return run_child(MODULE, job)
+    """The summary of ``job`` computed in a child process (``{"error": ...}`` on a failure);
+    that child is the FMU's host already, so it runs every FMU in its own process."""
+    return run_child(MODULE, dict(job, isolation="never"))
 
 
 def run_job(job: Dict[str, Any], isolated: bool) -> Dict[str, Any]:
@@ -138,7 +140,9 @@ def summarize_run(job: Dict[str, Any]) -> Dict[str, Any]:
             run = scenarios.simulate_scenario(model, backend=job.get("backend", "fmu"),
                                               stop_time=job.get("stop"),
                                               parameters=job.get("parameters") or {},
-                                              build=False, log=lambda m: None)
+                                              build=False, log=lambda m: None,
+                                              isolation=Isolation(job.get("isolation",
+                                                                          ISOLATE_MODES[0])))
         except NavfmuError as exc:
             return {"error": str(exc).splitlines()[0]}
     results = run.results

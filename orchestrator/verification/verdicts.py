@@ -1,25 +1,17 @@
-"""A check's verdict and the child processes the checks that load the FMU run in.
+"""A check's verdict, and the child processes the checks that load the FMU run in
+(:func:`run_child`, shared with the master's FMU host: :mod:`orchestrator.cosim.host_process`).
 
 Verdicts: ``pass``, ``fail``, ``warn`` (worth a look, does not fail the verification) and
 ``skip`` (the FMU lacks what the check needs, e.g. an optional output; never a fail).
 """
 from __future__ import annotations
 
-import json
-import os
-import signal
-import subprocess
-import sys
-import tempfile
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Any, Dict, Optional
 
-from ..building.build import ROOT
+from ..cosim.host_process import run_child
 
 VERDICTS = ("pass", "fail", "warn", "skip")
-#: longest a child process may take before it counts as hung [s]
-CHILD_TIMEOUT_S = 900.0
 
 
 @dataclass
@@ -42,43 +34,6 @@ class Check:
 
     def as_dict(self):
         return asdict(self)
-
-
-def _ending(returncode: int) -> str:
-    if returncode < 0:
-        try:
-            return f"signal {signal.Signals(-returncode).name}"
-        except ValueError:
-            return f"signal {-returncode}"
-    return f"exit status {returncode}"
-
-
-def run_child(module: str, job: Dict[str, Any], timeout: float = CHILD_TIMEOUT_S
-              ) -> Dict[str, Any]:
-    """Run ``python -m module JOB.json`` and return the JSON of its last stdout line; when
-    the child dies first (an FMU that crashes its host) or hangs, ``{"error": ...}`` says how
-    it ended, with the last line it wrote to stderr."""
-    with tempfile.TemporaryDirectory(prefix="navfmu_verify_") as tmp:
-        job_file = Path(tmp) / "job.json"
-        job_file.write_text(json.dumps(job), encoding="utf-8")
-        env = dict(os.environ)
-        paths = [str(ROOT), str(ROOT / "fmus")]
-        env["PYTHONPATH"] = os.pathsep.join(paths + [p for p in env.get("PYTHONPATH", "")
-                                                     .split(os.pathsep) if p])
-        try:
-            proc = subprocess.run([sys.executable, "-m", module, str(job_file)], cwd=tmp,
-                                  capture_output=True, text=True, timeout=timeout, env=env)
-        except subprocess.TimeoutExpired:
-            return {"error": f"the host process did not finish within {timeout:.0f} s"}
-    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-    if proc.returncode == 0 and lines:
-        try:
-            return json.loads(lines[-1])
-        except json.JSONDecodeError:
-            pass
-    last = (proc.stderr.strip().splitlines() or ["no message"])[-1]
-    return {"error": f"the host process ended with {_ending(proc.returncode)} "
-                     f"({last[:300]})", "crashed": True}
 
 
 __all__ = ["Check", "VERDICTS", "run_child"]
