@@ -90,6 +90,19 @@ def _host_processes(tmp: Path):
     return found
 
 
+def _code_changed_copy(original: Path, target: Path) -> Path:
+    """A copy of ``original`` with one comment line added to a bundled Python file: the
+    same build, its code changed after it."""
+    with zipfile.ZipFile(original) as src, zipfile.ZipFile(target, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename.endswith(".py") and "/navcore_" in info.filename \
+                    and info.filename.endswith("/__init__.py") and data:
+                data += b"# changed after the build\n"
+            dst.writestr(info, data)
+    return target
+
+
 # -- which FMUs are foreign ---------------------------------------------------------------
 def test_ours_is_this_builds_fmu_or_an_identical_copy_anything_else_is_foreign(tmp_path,
                                                                                faulty):
@@ -99,9 +112,11 @@ def test_ours_is_this_builds_fmu_or_an_identical_copy_anything_else_is_foreign(t
     renamed = tmp_path / "MyFilter.fmu"
     shutil.copy(ours, renamed)
     assert not is_foreign(renamed, "Kf")              # the same bytes under another name
-    with zipfile.ZipFile(renamed, "a") as z:          # one changed byte: another build
-        z.comment = b"rebuilt elsewhere"
-    assert is_foreign(renamed, "Kf")
+    with zipfile.ZipFile(renamed, "a") as z:          # other bytes, the same build and code
+        z.comment = b"packed elsewhere"
+    assert not is_foreign(renamed, "Kf")
+    changed = _code_changed_copy(ours, tmp_path / "Changed.fmu")
+    assert is_foreign(changed, "Kf")                  # its code changed after the build
     assert is_foreign(ours, "Iakf")                   # not the build of the model it claims
     assert is_foreign(faulty, "Faulty")               # no FMU of that model here
 
@@ -127,13 +142,10 @@ def test_a_hosted_fmu_gives_the_in_process_numbers_bit_for_bit(tmp_path, faulty,
 
 
 def test_a_foreign_copy_of_kf_gives_the_in_process_numbers_bit_for_bit(tmp_path):
-    """Our Kf, altered in one byte of its archive, in the aircraft scenario: hosted by
+    """Our Kf, its code altered after its build, in the aircraft scenario: hosted by
     default, the same rows as in the master's process."""
     fmu_build.build(log=None)
-    copy = tmp_path / "KfCopy.fmu"
-    shutil.copy(fmu_build.DIST / "Kf.fmu", copy)
-    with zipfile.ZipFile(copy, "a") as z:
-        z.comment = b"a copy from elsewhere"
+    copy = _code_changed_copy(fmu_build.DIST / "Kf.fmu", tmp_path / "KfCopy.fmu")
     model = scenarios.load_scenario(Path(fmu_build.ROOT) / "models" / "aircraft_500s")
     runs = {mode: scenarios.simulate_scenario(model, filter=str(copy), stop_time=3.0,
                                               isolation=Isolation(mode), log=lambda m: None)
@@ -244,10 +256,7 @@ def test_a_hosted_fmus_state_is_saved_and_restored_in_its_host(tmp_path):
     from orchestrator.cosim.hosted_instance import HostedFmuInstance
 
     fmu_build.build(["TrajectoryImu"], log=None)
-    copy = tmp_path / "Trajectory.fmu"
-    shutil.copy(fmu_build.DIST / "TrajectoryImu.fmu", copy)
-    with zipfile.ZipFile(copy, "a") as z:
-        z.comment = b"elsewhere"
+    copy = _code_changed_copy(fmu_build.DIST / "TrajectoryImu.fmu", tmp_path / "Trajectory.fmu")
     outputs = ["truth_lat", "truth_vn", "imu_dvel_x", "imu_dtheta_z"]
     hosted, here = HostedFmuInstance(copy, "trajectory", 60.0), FmuInstance(copy, "here")
     rows = {"hosted": [], "restored": [], "here": []}

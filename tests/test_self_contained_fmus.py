@@ -172,8 +172,10 @@ def test_a_changed_copy_runs_alone_and_is_refused_beside_its_original(dist, tmp_
 
 
 def test_our_master_runs_a_changed_copy_s_own_code_beside_the_original(dist, tmp_path):
-    """The master gives a changed copy names of its own: Kf and the copy in one process, each
-    its own numbers; the results say which build ran and that the copy was changed."""
+    """The master gives a changed copy names of its own: Kf and the copy in one process (not
+    hosted apart, as the copy would be by default), each its own numbers; the results say
+    which build ran and that the copy was changed."""
+    from orchestrator.cosim.isolation import Isolation
     from orchestrator.cosim.master import Simulation
     from orchestrator.model.ssp import load_ssd
 
@@ -182,7 +184,8 @@ def test_our_master_runs_a_changed_copy_s_own_code_beside_the_original(dist, tmp
     runs = {}
     for label, fmu in (("original", dist / "Kf.fmu"), ("copy", copy),
                        ("original again", dist / "Kf.fmu")):
-        results = Simulation(model.replace_source("filter", fmu)).run(stop_time=3.0)
+        results = Simulation(model.replace_source("filter", fmu),
+                             isolation=Isolation("never")).run(stop_time=3.0)
         runs[label] = results
     h = {k: np.asarray(r.column("filter", "nav_h")) for k, r in runs.items()}
     np.testing.assert_array_equal(h["original"], h["original again"])

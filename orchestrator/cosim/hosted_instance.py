@@ -193,6 +193,7 @@ class HostedFmuInstance(Instance):
             self.terminate()
             raise
         self.model_name = info["model_name"]
+        self.build_info = dict(info["build_info"], hosted=True)
         self.can_get_set_state = bool(info["can_get_set_state"])
         self.variables = {v[0]: VarInfo(*v) for v in info["variables"]}
 
