@@ -55,7 +55,7 @@ def setup(slave, component_class):
     # the FMU's identity hashes its sources: read them now, while the folder pythonfmu loaded
     # them from exists (a host may delete it once the first instance is freed)
     fmu_identity(type(slave))
-    finalize_python_at_exit(slave)
+    finalize_python_at_exit()
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
     for port in cls.inputs:

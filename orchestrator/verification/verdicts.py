@@ -11,11 +11,13 @@ import signal
 import subprocess
 import sys
 import tempfile
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Dict, Optional
 
 from ..building.build import ROOT
+from ..errors import NavfmuWarning
 
 VERDICTS = ("pass", "fail", "warn", "skip")
 #: longest a child process may take before it counts as hung [s]
@@ -71,14 +73,32 @@ def run_child(module: str, job: Dict[str, Any], timeout: float = CHILD_TIMEOUT_S
         except subprocess.TimeoutExpired:
             return {"error": f"the host process did not finish within {timeout:.0f} s"}
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-    if proc.returncode == 0 and lines:
-        try:
-            return json.loads(lines[-1])
-        except json.JSONDecodeError:
-            pass
     last = (proc.stderr.strip().splitlines() or ["no message"])[-1]
+    result = _result(lines[-1]) if lines else None
+    if result is not None and proc.returncode != 0:
+        _warn_crash_at_exit(job, proc.returncode, last)
+    if result is not None:
+        return result
     return {"error": f"the host process ended with {_ending(proc.returncode)} "
                      f"({last[:300]})", "crashed": True}
+
+
+def _result(line: str) -> Optional[Dict[str, Any]]:
+    try:
+        return json.loads(line)
+    except json.JSONDecodeError:
+        return None
+
+
+def _warn_crash_at_exit(job: Dict[str, Any], returncode: int, last: str) -> None:
+    """The child wrote its result (its last act) and then died: a crash in the process's
+    exit, not in the run the check judges (e.g. a pythonfmu binary without navfmu's exit
+    hook resetting its freed interpreter owner, docs/guide/reliability.md).  The result
+    counts; the warning says what happened."""
+    warnings.warn(f"verify: {Path(str(job.get('fmu', '?'))).name}: the host process ended with "
+                  f"{_ending(returncode)} at exit, after the run had written its result "
+                  f"({last[:200]}); the result counts, the crash is of the process's exit",
+                  NavfmuWarning, stacklevel=3)
 
 
 __all__ = ["Check", "VERDICTS", "run_child"]
