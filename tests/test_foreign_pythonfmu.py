@@ -78,7 +78,8 @@ def stock_fmu(tmp_path_factory):
     script = folder / "Stock.py"
     script.write_text(STOCK_SCRIPT)
     fmu = FmuBuilder.build_FMU(script, dest=folder)
-    wheel_library = Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64" / "libpythonfmu-export.so"
+    wheel_library = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+                     / "libpythonfmu-export.so")
     unzipped = Path(extract(str(fmu), unzipdir=str(folder / "unzipped")))
     library = unzipped / "binaries" / "linux64" / "Stock.so"
     assert library.read_bytes() == wheel_library.read_bytes(), "not the stock library"
@@ -211,7 +212,7 @@ def test_native_host_with_a_stock_pythonfmu_fmu_under_valgrind(pair_host, host_e
     """valgrind memcheck finds no access to freed memory and no invalid write or free, ours
     first and instances alive at exit (before the fix: a read of 4 bytes inside the freed
     128-byte PyState block, from the stock binary's finalizePythonInterpreter in _dl_fini).
-    About 60 s."""
+    About 45 s."""
     valgrind = shutil.which("valgrind")
     if valgrind is None:
         pytest.skip("no valgrind on PATH")

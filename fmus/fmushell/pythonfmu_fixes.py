@@ -127,13 +127,13 @@ class PythonfmuExitHooks:
         """Register ``name``'s ``finalizePythonInterpreter`` with ``__cxa_atexit`` if it is a
         pythonfmu binary, pinning it (RTLD_NODELETE) so the hook never outlives its code;
         any other object is let go again.  True when hooked."""
-        handle = self._libc.dlopen(name, os.RTLD_NOW | _RTLD_NOLOAD)
+        handle = self._libc.dlopen(name, os.RTLD_LAZY | _RTLD_NOLOAD)
         if not handle:
             return False
         try:
             if not all(self._libc.dlsym(handle, s) for s in _PYTHONFMU_SYMBOLS):
                 return False
-            pinned = self._libc.dlopen(name, os.RTLD_NOW | _RTLD_NOLOAD | _RTLD_NODELETE)
+            pinned = self._libc.dlopen(name, os.RTLD_LAZY | _RTLD_NOLOAD | _RTLD_NODELETE)
             finalize = pinned and self._libc.dlsym(pinned, _PYTHONFMU_SYMBOLS[0])
             return bool(finalize) and self._register(finalize, None, None) == 0
         finally:
