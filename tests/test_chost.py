@@ -28,6 +28,8 @@ from fmpy.fmi2 import FMU2Slave
 
 from orchestrator.building import build as fmu_build
 
+from native_hosts import compile_c_host
+
 ROOT = Path(__file__).resolve().parent.parent
 HOST_SOURCE = Path(__file__).resolve().parent / "chost" / "fmi2_host.c"
 FMU_NAMES = [s.stem for s in fmu_build.slave_scripts()]
@@ -50,17 +52,7 @@ def _navfmu(*args):
 
 @pytest.fixture(scope="module")
 def host(tmp_path_factory):
-    cc = shutil.which("cc")
-    if cc is None:
-        pytest.skip("no C compiler 'cc' on PATH: cannot build the native FMI host")
-    include = Path(fmpy.__file__).parent / "c-code"
-    if not (include / "fmi2Functions.h").is_file():
-        pytest.skip(f"the installed fmpy ships no FMI 2 headers in {include}")
-    exe = tmp_path_factory.mktemp("chost") / "fmi2_host"
-    r = subprocess.run([cc, "-O1", "-Wall", "-Wextra", "-Werror", "-I", str(include), "-o",
-                        str(exe), str(HOST_SOURCE), "-ldl"], capture_output=True, text=True)
-    assert r.returncode == 0, f"compiling {HOST_SOURCE} failed:\n{r.stderr}"
-    return exe
+    return compile_c_host(HOST_SOURCE, tmp_path_factory.mktemp("chost"))
 
 
 @pytest.fixture(scope="module")

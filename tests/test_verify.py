@@ -200,3 +200,29 @@ def test_broken_filter_fails_its_check_in_a_full_verification(broken, navfmu_cli
     checks = json.loads((out / "verify.json").read_text())["checks"]
     assert status == 1
     assert {c["id"] for c in checks if c["verdict"] == "fail"} == {meant} | also
+
+
+
+CHILD = """
+import json, os, sys
+if json.load(open(sys.argv[1]))["write"]:
+    print(json.dumps({"rms_m": 1.5}), flush=True)
+os.abort()
+"""
+
+
+def test_a_crash_at_exit_after_the_result_is_a_warning_not_a_failed_run(tmp_path, monkeypatch):
+    """A child that wrote its result and then died (a pythonfmu binary without the exit hook
+    corrupting the heap at exit) gives its result and a warning naming the signal; one that
+    died before writing it is a crashed run."""
+    from orchestrator.errors import NavfmuWarning
+    from orchestrator.verification.verdicts import run_child
+
+    (tmp_path / "aborting_child.py").write_text(CHILD)
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    with pytest.warns(NavfmuWarning, match=r"Filter\.fmu: the host process ended with "
+                                           r"SIGABRT at exit, after the run had written"):
+        assert run_child("aborting_child", {"fmu": "/x/Filter.fmu", "write": True}) == {
+            "rms_m": 1.5}
+    result = run_child("aborting_child", {"fmu": "/x/Filter.fmu", "write": False})
+    assert result["crashed"] and "SIGABRT" in result["error"]

@@ -31,7 +31,9 @@ does the FMI side once for all of them, one concern per module:
   folder that exists (:mod:`fmushell.private_paths`);
 * works around two defects of pythonfmu 0.7's native binary that corrupted the heap at
   process exit: its loader's extra ``Py_DECREF`` of the script's globals and its interpreter
-  teardown running after the C++ static destructors (:mod:`fmushell.pythonfmu_fixes`).
+  teardown running after the C++ static destructors, followed by a second reset of its
+  destroyed interpreter owner; the latter for every pythonfmu binary in the process, a third
+  party's FMU's too (:mod:`fmushell.pythonfmu_fixes`).
 
 Hostile or careless host calls (FMI rules checked here and in
 :meth:`navcore.core.component.Component.advance`):

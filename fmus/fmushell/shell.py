@@ -59,7 +59,7 @@ def setup(slave, component_class):
     if getattr(slave, "resources", None):
         adopt_folder(slave.resources, sys.modules[type(slave).__module__].__dict__)
     fmu_identity(type(slave))
-    finalize_python_at_exit(slave)
+    finalize_python_at_exit()
     for port in cls.parameters:
         _register(slave, port, Fmi2Causality.parameter, Fmi2Variability.fixed, Fmi2Initial.exact)
     for port in cls.inputs:

@@ -114,7 +114,8 @@ class Host:
 
         self.instance = inst = FmuInstance(path, name, unzipdir=unzipdir)
         return {"model_name": inst.model_name, "can_get_set_state": inst.can_get_set_state,
-                "build_info": inst.build_info, "variables": [astuple(v) for v in inst.variables.values()]}
+                "build_info": inst.build_info,
+                "variables": [astuple(v) for v in inst.variables.values()]}
 
     def _prepare(self, inputs, outputs):
         inst = self.instance

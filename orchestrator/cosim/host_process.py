@@ -14,10 +14,12 @@ import signal
 import subprocess
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any, Dict
 
 from ..building.build import ROOT
+from ..errors import NavfmuWarning
 
 #: longest a one-shot child may take before it counts as hung [s]
 CHILD_TIMEOUT_S = 900.0
@@ -60,14 +62,32 @@ def run_child(module: str, job: Dict[str, Any], timeout: float = CHILD_TIMEOUT_S
         except subprocess.TimeoutExpired:
             return {"error": f"the host process did not finish within {timeout:.0f} s"}
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
-    if proc.returncode == 0 and lines:
-        try:
-            return json.loads(lines[-1])
-        except json.JSONDecodeError:
-            pass
     last = (proc.stderr.strip().splitlines() or ["no message"])[-1]
+    result = _result(lines[-1]) if lines else None
+    if result is not None and proc.returncode != 0:
+        _warn_crash_at_exit(job, proc.returncode, last)
+    if result is not None:
+        return result
     return {"error": f"the host process ended with {ending(proc.returncode)} "
                      f"({last[:300]})", "crashed": True}
+
+
+def _result(line: str):
+    try:
+        return json.loads(line)
+    except json.JSONDecodeError:
+        return None
+
+
+def _warn_crash_at_exit(job: Dict[str, Any], returncode: int, last: str) -> None:
+    """The child wrote its result (its last act) and then died: a crash in the process's
+    exit, not in the run it reports (e.g. a pythonfmu binary without navfmu's exit hook
+    resetting its freed interpreter owner, docs/guide/reliability.md).  The result counts;
+    the warning says what happened."""
+    warnings.warn(f"{Path(str(job.get('fmu', '?'))).name}: the host process ended with "
+                  f"{ending(returncode)} at exit, after the run had written its result "
+                  f"({last[:200]}); the result counts, the crash is of the process's exit",
+                  NavfmuWarning, stacklevel=3)
 
 
 __all__ = ["CHILD_TIMEOUT_S", "child_environment", "ending", "run_child"]

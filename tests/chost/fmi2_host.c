@@ -19,29 +19,7 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
-
-static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    va_list args;
-    (void)env;
-    fprintf(stderr, "[%s] status %d %s: ", instance ? instance : "?", (int)status,
-            category ? category : "");
-    va_start(args, message);
-    vfprintf(stderr, message, args);
-    va_end(args);
-    fputc('\n', stderr);
-}
-
-static void *load(void *lib, const char *name)
-{
-    void *f = dlsym(lib, name);
-    if (f == NULL) {
-        fprintf(stderr, "fmi2_host: symbol %s not found: %s\n", name, dlerror());
-        exit(1);
-    }
-    return f;
-}
+#include "fmi2_host_util.h"
 
 #define CHECK(call, what)                                                          \
     do {                                                                           \

@@ -810,10 +810,11 @@ BOOL APIENTRY DllMain(HMODULE hModule,
     return TRUE;
 }
 #elif defined(__linux__)
-__attribute__((destructor)) void onLibraryUnload()
-{
-    finalizePythonInterpreter();
-}
+// navfmu patch: no __attribute__((destructor)) resetting pyState.  On Linux the static
+// shared_ptr's own destructor, registered with __cxa_atexit when the library is loaded,
+// always runs before such a function (at exit() and at dlclose): the second reset released
+// the freed PyState's control block again, a decrement inside a freed heap block ("corrupted
+// double-linked list" when glibc had binned it).
 #else
 #    error port the code
 #endif
