@@ -260,3 +260,44 @@ def test_fmpy_simulate_ssp_runs_two_models_in_one_process(dist, tmp_path):
     # fmpy records a row per step of 0.01 s (and one more when its accumulated time falls
     # short of the stop time)
     assert all(r in (100, 101) for r in got), got
+
+
+def test_navfmu_compare_runs_a_changed_copy_beside_the_original(dist, tmp_path, navfmu_cli):
+    """``navfmu compare --filters Kf,<a copy whose code adds 1000 m to its height>``: two
+    rows, the copy's height error 1000 m larger (the copy's own code ran)."""
+    copy = changed_copy(dist / "Kf.fmu", tmp_path / "KfHigher.fmu")
+    status, out, err = navfmu_cli("compare", ROOT / "models" / "aircraft_500s", "--filters",
+                                  f"Kf,{copy}", "--stop", "3", "--no-plots",
+                                  "--out", tmp_path / "out")
+    assert status == 0, err
+    metrics = json.loads((tmp_path / "out" / "metrics.json").read_text())
+    builds = {label: run["metadata"]["builds"]["filter"] for label, run in metrics.items()}
+    assert builds["Kf"]["changed_after_build"] is False
+    assert builds["KfHigher"]["changed_after_build"] is True
+    h = {label: np.loadtxt(tmp_path / "out" / f"results_{label}.csv", delimiter=",",
+                           skiprows=1, usecols=_column(tmp_path / "out" /
+                                                       f"results_{label}.csv", "filter.nav_h"))
+         for label in ("Kf", "KfHigher")}
+    np.testing.assert_allclose(h["KfHigher"][1:] - h["Kf"][1:], ADDED_HEIGHT, rtol=0,
+                               atol=1e-6)
+
+
+def _column(csv: Path, name: str) -> int:
+    header = csv.read_text().split("\n", 1)[0].split(",")
+    return next(i for i, h in enumerate(header) if h.split(" [")[0] == name)
+
+
+def test_verify_checks_a_changed_copy_s_own_code(dist, tmp_path):
+    """verify's FMI checks on a copy whose code raises when imported fail (they ran the
+    copy, not the installed navcore nor the unchanged Kf)."""
+    from orchestrator.verification import roles
+    from orchestrator.verification.fmi_checks import run_fmi_checks
+    from orchestrator.verification.setting import make_setting
+
+    copy = changed_copy(dist / "Kf.fmu", tmp_path / "KfRaises.fmu",
+                        change="\nraise RuntimeError('this copy refuses to load')\n")
+    facts = roles.read_fmu(copy)
+    checks = {c.id: c for c in run_fmi_checks(make_setting(facts, roles.detect_role(facts),
+                                                          (), None))}
+    assert checks["fmi.state"].verdict == "fail"
+    assert checks["fmi.validate"].verdict == "pass"
