@@ -203,3 +203,48 @@ def test_archive_holds_no_string_value_and_step_hints_only_when_asked(built, tmp
         spec = next(c for c in model.components if c.name == component)
         start = {v.name: v.start for v in read_model_description(str(spec.source)).modelVariables}
         assert start[name] == value
+
+
+def _oms_master(text):
+    """The System's Annotations children and OMSimulator's FixedStepMaster element."""
+    from orchestrator.packaging.oms_annotation import OMS_ANNOTATION_TYPE, OMS_NS
+
+    ssd_ns = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+    system = ET.fromstring(text).find(f"{{{ssd_ns}}}System")
+    annotations = list(system)[-1]
+    assert annotations.tag.endswith("}Annotations")
+    first = list(annotations)[0]
+    assert first.get("type") == OMS_ANNOTATION_TYPE
+    master = first.find(f"{{{OMS_NS}}}Annotations/{{{OMS_NS}}}SimulationInformation/"
+                        f"{{{OMS_NS}}}FixedStepMaster")
+    return list(annotations), master
+
+
+def test_archive_system_names_omsimulators_fixed_step_master(built, tmp_path):
+    """OMSimulator takes a System's kind from this annotation and imports no System without."""
+    from orchestrator.packaging.package import package
+
+    folder = Path(__file__).parents[1] / "models" / "uav_mission"
+    archive = package(folder, tmp_path / "a.ssp", step_hints=False)
+    with zipfile.ZipFile(archive) as z:
+        text = z.read("SystemStructure.ssd").decode()
+    children, master = _oms_master(text)
+    assert len(children) == 1
+    assert master.get("description") == "oms-ma"
+    assert float(master.get("stepSize")) == load_model(folder).base_step == 0.02
+    # other readers skip it: our loader reads the archive as the folder
+    assert load_model(archive).base_step == load_model(folder).base_step
+
+
+def test_oms_annotation_goes_first_into_a_systems_own_annotations_once():
+    from orchestrator.packaging.oms_annotation import with_oms_system_annotation
+
+    text = ssd_text(component_xml("a", "../../fmus/dist/Kf.fmu")).replace(
+        "</ssd:System>", '<ssd:Annotations><ssc:Annotation type="com.example"/>'
+                         "</ssd:Annotations></ssd:System>", 1)
+    once = with_oms_system_annotation(text, 0.05)
+    children, master = _oms_master(once)
+    assert [c.get("type") for c in children] == ["org.openmodelica", "com.example"]
+    assert float(master.get("stepSize")) == 0.05
+    assert with_oms_system_annotation(once, 0.05) == once
+    assert once.count("xmlns:oms=") == 1

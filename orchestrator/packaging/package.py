@@ -10,7 +10,9 @@ scenario's parameter values as start values, with the files a String parameter n
 ``_3``... suffixes), and every Component carries ``type``.  String parameter values are
 left out of the archive's parameter sets (the FMU copies start from them) and, with
 ``step_hints=False``, the Components' step hints too, so strict SSP readers (OMSimulator)
-import it (:mod:`orchestrator.packaging.strict_ssp`).  libcosim and our
+import it (:mod:`orchestrator.packaging.strict_ssp`); the System carries OMSimulator's
+annotation naming its co-simulation master, without which OMSimulator imports no System
+(:mod:`orchestrator.packaging.oms_annotation`).  libcosim and our
 :func:`orchestrator.model.ssp.load_model` read it unchanged, with the folder's numbers (with
 the step hints).  The archive is written to a temporary name and renamed.
 """
@@ -27,6 +29,7 @@ from ..results.run_results import atomic_write
 from ..model.ssp import FMU_TYPE
 from ..model.ssp_archive import load_model
 from .fmu_copies import FmuCopy, component_copies, fmu_bytes
+from .oms_annotation import with_oms_system_annotation
 from .strict_ssp import without_component_annotations, without_string_values
 
 RESOURCES = "resources"
@@ -95,6 +98,7 @@ def package(model_dir, out, step_hints: bool = True) -> Path:
     sources = _resource_names(copies)
     ssd = model.path
     ssd_text = without_string_values(_rewrite_ssd(ssd.read_text(encoding="utf-8"), sources))
+    ssd_text = with_oms_system_annotation(ssd_text, model.base_step)
     if not step_hints:
         ssd_text = without_component_annotations(ssd_text)
     files = list(_folder_files(ssd))
