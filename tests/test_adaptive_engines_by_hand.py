@@ -54,6 +54,14 @@ def stepped(engine, k=0):
     return engine
 
 
+def after_first_update(engine):
+    """``engine`` stepped, updated with a clean fix and stepped again: the time before a
+    filter's first update is no fix interval, so its recovery guard counts from there."""
+    stepped(engine).update(CLEAN[0])
+    assert not engine.guard.due(np.ones(engine.m, dtype=bool)).any()
+    return stepped(engine, 1)
+
+
 def before(engine):
     return copy.deepcopy(engine.nav), (engine.gyro_bias.copy(), engine.accel_bias.copy())
 
@@ -366,9 +374,11 @@ def test_newton_extrapolated_variance_of_a_replaced_sample():
 
 
 def test_newton_reacquires_a_fault_after_an_outage_with_recovery():
-    kf = NewtonRobustKfEngine(config(), strapdown(), **dict(NEWTON, recovery=True,
-                                                             recovery_epochs=1))
-    stepped(kf)
+    """A clean first update (the time before it is no fix interval), then a fault one
+    interval later: re-acquired (recovery_epochs = 1)."""
+    kf = after_first_update(NewtonRobustKfEngine(
+        config(), strapdown(), **dict(NEWTON, recovery=True, recovery_epochs=1)))
+    assert kf.guard.interval == 0.0 and not kf.rejected.any()
     z = np.array([80.0, -0.5, 0.3, 0.02, -0.01, 0.0])
     P_pred = kf.covariance()
     due = np.array([True, False, False, False, False, False])
@@ -461,8 +471,8 @@ def test_igg3_with_every_component_dropped_only_predicts():
 
 
 def test_igg3_reacquires_a_rejected_component_with_full_weight():
-    kf = stepped(Igg3RobustKfEngine(config(), strapdown(), **dict(IGG, recovery=True,
-                                                                  recovery_epochs=1)))
+    kf = after_first_update(Igg3RobustKfEngine(config(), strapdown(),
+                                               **dict(IGG, recovery=True, recovery_epochs=1)))
     z, _ = igg_z(kf, [20.0, 0.5, 0.0, 0.0, 0.0, 0.0])
     P_pred = kf.covariance()
     lam = inflation_factor(z[:1], P_pred[:1, :1], R0[:1, :1], 1)
@@ -475,9 +485,8 @@ def test_igg3_reacquires_a_rejected_component_with_full_weight():
     dx, P, _, _ = textbook(P_inflated, z, R0)
     check_feedback(kf, nav, biases, dx, P)
     # the re-acquired component keeps at least full weight though above k0 after inflation
-    kf2 = stepped(Igg3RobustKfEngine(config(), strapdown(), **dict(IGG, recovery=True,
-                                                                   recovery_epochs=1,
-                                                                   igg_k0=0.5, igg_k1=0.9)))
+    kf2 = after_first_update(Igg3RobustKfEngine(config(), strapdown(), **dict(
+        IGG, recovery=True, recovery_epochs=1, igg_k0=0.5, igg_k1=0.9)))
     z2, _ = igg_z(kf2, [20.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     kf2.update(z2)
     assert kf2.weights[0] == 1.0
@@ -623,3 +632,34 @@ def test_igg3_reacquires_one_component_and_weighs_the_others_on_the_inflated_pre
     np.testing.assert_array_equal(result.innovation, z2)
     assert result.outlier is True
     np.testing.assert_array_equal(kf.guard.since_accepted, np.zeros(6))
+
+
+def receiver_r(engine, std):
+    """What the component does with ``r_from_receiver``: the receiver's position sigmas
+    ``std`` (N, E, D) as the position part of the engine's nominal R."""
+    R = engine.R0.copy()
+    R[[0, 1, 2], [0, 1, 2]] = np.asarray(std) ** 2
+    engine.R0 = R
+
+
+@pytest.mark.parametrize("engine_class, options", [(SageHusaFadingEngine, SHF),
+                                                   (IakfEngine, IAKF)])
+def test_the_r_bound_follows_the_receivers_sigmas_per_axis(engine_class, options):
+    """The failing case of a real drive: 1-cm RTK fixes with ``r_from_receiver`` and an INS
+    that drifts off by decimetres.  R_hat stays within ``r_max_scale`` times the receiver's
+    variance of each axis (N, E, D distinct), not 4 x r_pos^2; the floor follows it too."""
+    kf = stepped(engine_class(config(), strapdown(), **dict(options, recovery=True)))
+    std = np.array([0.01, 0.02, 0.04])
+    bound = 4.0 * np.concatenate([std ** 2, R_SIGMA[3:] ** 2])
+    for k in range(5):                  # the sigmas change from fix to fix; the last: std
+        receiver_r(kf, std * (1.0 + 0.1 * (k % 2)))
+        kf.update(np.array([0.6, -0.9, 1.2, 0.02, -0.01, 0.03]))
+        stepped(kf, k + 1)
+    np.testing.assert_allclose(kf.r_max, 4.0 * np.diag(kf.R0), rtol=1e-15)
+    np.testing.assert_allclose(kf.r_min, options["r_floor_fraction"] * np.diag(kf.R0),
+                               rtol=1e-15)
+    np.testing.assert_allclose(kf.r_max, bound, rtol=1e-15)
+    r_hat = np.diag(kf.R)
+    assert np.all(r_hat <= bound * (1.0 + 1e-12)), r_hat / bound
+    # the innovations are tens of receiver sigmas: R_hat sits at its bound on the position axes
+    assert np.all(r_hat[:3] >= 0.5 * bound[:3]), r_hat[:3] / bound[:3]

@@ -153,7 +153,8 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
         when a long quiet stretch or compressed innovations drive it towards H P H'.
     max_fading_factor : optional cap on lambda (None = paper 001's uncapped eq. 12).
     r_max_scale : recovery guard (with ``recovery`` on): R_hat stays at most this multiple of
-        R0 per axis (:func:`navcore.filters.recovery.bounded_r`), so a diverging state cannot drive
+        the nominal R in use per axis (R0, or the receiver's R of the fix with
+        ``r_from_receiver``) (:func:`navcore.filters.recovery.bounded_r`), so a diverging state cannot drive
         the estimate away; paper 001's eq. 9 has no upper bound.
     recovery : the recovery guard of :mod:`navcore.filters.recovery` (ours; off = paper 001's law):
         here only the bound ``r_max_scale``.  This filter takes every fix, and after an outage
@@ -163,20 +164,37 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
     """
 
     state_fields = ("R", "sage_husa_index")
-    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor", "r_min",
-                      "r_max")
+    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor",
+                      "r_floor_fraction", "r_max_scale")
 
     def __init__(self, config, nav, *, forgetting_factor, reserve_gamma, r_floor_fraction,
                  max_fading_factor, r_max_scale, recovery, recovery_epochs):
         super().__init__(config, nav)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
-        self.r_max = float(r_max_scale) * np.diag(self.R0) if self.guard.enabled else None
+        self.r_max_scale = float(r_max_scale) if self.guard.enabled else None
         self.forgetting_factor = float(forgetting_factor)
         self.reserve_gamma = float(reserve_gamma)
         self.max_fading_factor = max_fading_factor
-        self.r_min = laws.r_floor_from_initial(self.R0, r_floor_fraction)
+        self.r_floor_fraction = float(r_floor_fraction)
+        laws.r_floor_from_initial(self.R0, self.r_floor_fraction)   # checks the fraction
         self.R = self.R0.copy()
         self.sage_husa_index = 0
+
+    @property
+    def r_min(self):
+        """Floor of R_hat's variances: ``r_floor_fraction`` of the nominal R in use (R0, or
+        the receiver's sigmas of this fix with ``r_from_receiver``)."""
+        return laws.r_floor_from_initial(self.R0, self.r_floor_fraction)
+
+    @property
+    def r_max(self):
+        """Recovery guard: ceiling of R_hat's variances, ``r_max_scale`` times the nominal R
+        in use (None with the guard off).  Relative to the R of this fix, not to the
+        configured ``r_pos_*``: with ``r_from_receiver`` a 1-cm RTK fix bounds R_hat at 2 cm,
+        where a bound of 4 x (5 m)^2 let it grow 3.4e5-fold on a real drive."""
+        if self.r_max_scale is None:
+            return None
+        return self.r_max_scale * np.diag(self.R0)
 
     # -- the arithmetic of the runs' updates (RowUpdates), pieces shared with IakfEngine -------
     @classmethod

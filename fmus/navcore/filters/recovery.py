@@ -30,7 +30,9 @@ bounded; the fading factor of the strong tracking filter, Zhou & Frank 1996, Int
   reject is taken, with the covariance inflated by what the outage really did to the state;
   a shorter outage or a single outlier between accepted fixes is left to the law.
 * **bounded adaptive scales** -- :func:`bounded_r` keeps an estimated R at most ``r_max_scale``
-  times the configured R per axis (SageHusaFading, Iakf).
+  times the nominal R in use per axis (SageHusaFading, Iakf): the configured R, or with
+  ``r_from_receiver`` the receiver's own R of the fix (a bound relative to the configured
+  5 m let R grow 3.4e5-fold over 1-cm RTK fixes).
 
 With ``recovery`` off every filter is its paper's law as printed; the papers' scenarios set it
 off (their filter.ssv), so their numbers are those of the law.  What each filter flags:
@@ -65,7 +67,8 @@ RECOVERY_PARAMETERS = (
 )
 #: bound of the estimated R (SageHusaFading, Iakf)
 R_MAX_SCALE = real("r_max_scale", "", "recovery guard: the estimated R stays at most this "
-                   "multiple of the configured R per axis (variances; with recovery on)",
+                   "multiple of the nominal R in use per axis (r_pos_*/r_vel_*, or the receiver's "
+                   "sigmas with r_from_receiver; variances; with recovery on)",
                    4.0, Limits(1.0, 1e12))
 
 
@@ -150,7 +153,7 @@ class RecoveryGuard:
     the components it accepted.  ``n_reacquired`` counts re-acquisitions.
     """
 
-    state_fields = ("elapsed", "interval", "since_accepted", "n_reacquired")
+    state_fields = ("elapsed", "interval", "since_accepted", "n_reacquired", "opened")
     derived_fields = ("enabled", "epochs")
 
     def __init__(self, m, *, recovery, recovery_epochs):
@@ -160,6 +163,7 @@ class RecoveryGuard:
         self.interval = 0.0                # smallest fix interval seen [s] (0: none yet)
         self.since_accepted = np.zeros(m)  # s since each component was last accepted
         self.n_reacquired = 0
+        self.opened = False                # an update has been opened (fix intervals begin)
 
     def advance(self, dt):
         self.advance_over((dt,))
@@ -174,12 +178,16 @@ class RecoveryGuard:
     def open_epoch(self):
         self.interval, self.since_accepted = self._opened()
         self.elapsed = 0.0
+        self.opened = True
 
     def _opened(self):
-        """(interval, since_accepted) as :meth:`open_epoch` leaves them."""
+        """(interval, since_accepted) as :meth:`open_epoch` leaves them.  A fix interval is
+        the time between two updates: the time from the filter's start (or its start from
+        the data) to its first update is not one -- a first fix 5 ms after the start would
+        otherwise make every later run of two rejected fixes a re-acquisition."""
         gap = self.elapsed
         interval = self.interval
-        if gap > 0.0 and (interval == 0.0 or gap < interval):
+        if self.opened and gap > 0.0 and (interval == 0.0 or gap < interval):
             interval = gap
         return interval, self.since_accepted + gap
 
