@@ -112,6 +112,11 @@ def shf_by_hand(engine, v, b, gamma, cap=None, r_max=None):
         lam = max(1.0, (v @ v - np.trace(HQH) - np.trace(R)) / np.trace(HP0H))
         lam = lam if cap is None else min(lam, cap)
     P_pred = lam * p_prop + q_acc                                             # eq. 10
+    if r_max is not None:       # the guard on: attitude and biases faded up to their p0 only
+        p0_var = np.asarray(engine.config.p0) ** 2
+        lam_i = [lam if i < 6 else min(lam, max(1.0, p0_var[i] / p_prop[i, i]))
+                 for i in range(N_STATES)]
+        P_pred = np.sqrt(np.outer(lam_i, lam_i)) * p_prop + q_acc
     dx, P, K, S = textbook(P_pred, v, R)
     d = (1.0 - b) / (1.0 - b ** (k + 1))
     e = v - (K @ v)[:6]

@@ -37,7 +37,7 @@ from ..ins.error_model import N_STATES
 from ..errors import InputError
 from .innovation_stats import chi2_gate, dot_rows, nis, nis_rows, trace_rows
 from .ins_gnss_kf import KfEngine, UpdateResult, kalman_rows, predicted_rows
-from .recovery import GuardedEngine, bounded_r_rows
+from .recovery import GuardedEngine, bounded_r_rows, faded_within_initial_rows
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
@@ -154,13 +154,15 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
     max_fading_factor : optional cap on lambda (None = paper 001's uncapped eq. 12).
     r_max_scale : recovery guard (with ``recovery`` on): R_hat stays at most this multiple of
         the nominal R in use per axis (R0, or the receiver's R of the fix with
-        ``r_from_receiver``) (:func:`navcore.filters.recovery.bounded_r`), so a diverging state cannot drive
-        the estimate away; paper 001's eq. 9 has no upper bound.
+        ``r_from_receiver``; :func:`navcore.filters.recovery.bounded_r`), so a diverging
+        state cannot drive the estimate away; paper 001's eq. 9 has no upper bound.
     recovery : the recovery guard of :mod:`navcore.filters.recovery` (ours; off = paper 001's law):
-        here only the bound ``r_max_scale``.  This filter takes every fix, and after an outage
-        its own fading factor (eq. 12) inflates P as much as the innovation asks, so it needs
-        no re-acquisition (one on top of the fading factor made it worse after each outage
-        of models/mems_outages).  ``recovery_epochs`` serves Iakf.
+        here the bound ``r_max_scale`` and the fading of paper 001 eq. 10 kept within the
+        initial attitude and bias variances
+        (:func:`navcore.filters.recovery.faded_within_initial_rows`).  This filter takes
+        every fix, and after an outage its own fading factor (eq. 12) inflates P as much as
+        the innovation asks, so it needs no re-acquisition (one on top of the fading factor
+        made it worse after each outage of models/mems_outages).  ``recovery_epochs`` serves Iakf.
     """
 
     state_fields = ("R", "sage_husa_index")
@@ -179,6 +181,11 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
         laws.r_floor_from_initial(self.R0, self.r_floor_fraction)   # checks the fraction
         self.R = self.R0.copy()
         self.sage_husa_index = 0
+
+    @property
+    def p0_var(self):
+        """The initial variances of the error state (the recovery guard's fading ceiling)."""
+        return np.asarray(self.config.p0, dtype=float) ** 2
 
     @property
     def r_min(self):
@@ -226,7 +233,13 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
             raise InputError(f"lam (fading factor) must be finite and > 0, got "
                              f"{lam[~np.isfinite(lam)][0]}")
         _require_finite(("P_propagated", p_prop), ("GQG", q_acc))
-        dx, P, _, S, K = kalman_rows(laws.fading_predict_rows(p_prop, q_acc, lam), v, R, H)
+        P_pred = laws.fading_predict_rows(p_prop, q_acc, lam)
+        guarded = [b for b, engine in enumerate(engines) if engine.guard.enabled]
+        if guarded:                     # recovery guard: attitude and biases faded up to p0
+            P_pred[guarded] = faded_within_initial_rows(
+                p_prop[guarded], q_acc[guarded], lam[guarded],
+                np.array([engines[b].p0_var for b in guarded]))
+        dx, P, _, S, K = kalman_rows(P_pred, v, R, H)
         _require_finite(("K", K), ("P_post", P))
         weights = np.array([laws.sage_husa_weight(engine.sage_husa_index + 1,
                                                   engine.forgetting_factor)
