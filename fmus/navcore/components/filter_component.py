@@ -279,6 +279,9 @@ class InsGnssFilter(Component):
                 fix = _fix_of(inputs)
                 if init.mode == "gnss":
                     state = init.state_from_fix(fix, self.nav_time)
+                    warning = None if state is not None else init.waiting_warning(fix[0])
+                    if warning:
+                        self.notify(f"{self.model_name}: {warning}")
                 else:
                     init.note_fix(fix)
         if init.alignment_ready():
