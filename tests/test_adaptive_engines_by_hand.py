@@ -156,10 +156,13 @@ def test_sage_husa_fading_two_updates_by_hand():
 
 
 def test_sage_husa_fading_factor_cap_and_bounded_r_with_recovery():
-    options = dict(SHF, max_fading_factor=3.0, recovery=True)
-    kf = stepped(SageHusaFadingEngine(config(), strapdown(), **options))
+    """With the guard, the fading factor acts at a re-acquisition (here: one fix interval
+    without a fix, recovery_epochs = 1), capped, on attitude and biases up to p0."""
+    options = dict(SHF, max_fading_factor=3.0, recovery=True, recovery_epochs=1)
+    kf = after_first_update(SageHusaFadingEngine(config(), strapdown(), **options))
     np.testing.assert_allclose(kf.r_max, 4.0 * R_SIGMA ** 2, rtol=1e-15)
     z = np.array([60.0, -50.0, 40.0, 3.0, -2.0, 1.0])
+    assert kf.fading_allowed()
     nav, biases = before(kf)
     ref = shf_by_hand(kf, z, 0.9, 2.0, cap=3.0, r_max=4.0 * R_SIGMA ** 2)
     result = kf.update(z)
@@ -668,3 +671,24 @@ def test_the_r_bound_follows_the_receivers_sigmas_per_axis(engine_class, options
     assert np.all(r_hat <= bound * (1.0 + 1e-12)), r_hat / bound
     # the innovations are tens of receiver sigmas: R_hat sits at its bound on the position axes
     assert np.all(r_hat[:3] >= 0.5 * bound[:3]), r_hat[:3] / bound[:3]
+
+
+def test_with_the_guard_the_fading_factor_waits_for_a_re_acquisition():
+    """Fixes every interval, each beyond its predicted covariance (a receiver whose sigma is
+    too small): paper 001's eq. 12 fades at every one; with the guard (recovery_epochs = 2)
+    the factor stays 1 until two fix intervals pass without a fix, then fades once."""
+    z = np.array([9.0, -8.0, 7.0, 0.3, -0.2, 0.1])
+    factors = []
+    for options in (SHF, dict(SHF, recovery=True, recovery_epochs=2)):
+        kf = SageHusaFadingEngine(config(), strapdown(), **options)
+        row = []
+        for k in range(4):
+            stepped(kf, k)
+            if k == 3:                      # one fix missing: two intervals
+                stepped(kf, k)
+            row.append((kf.fading_allowed(), kf.update(z).fading_factor))
+        factors.append(row)
+    law, guarded = factors
+    assert all(allowed and fading > 1.0 for allowed, fading in law), law
+    assert [allowed for allowed, _ in guarded] == [False, False, False, True]
+    assert [fading for _, fading in guarded[:3]] == [1.0, 1.0, 1.0] and guarded[3][1] > 1.0
