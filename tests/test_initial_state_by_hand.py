@@ -278,21 +278,15 @@ def test_default_speed_is_met_by_a_walk_and_a_slower_one_warns_after_a_minute():
 
 def _walk_notices(name, **params):
     """(notices, aligned) of filter ``name`` with init_mode 'gnss' on a walk at 1.8 m/s
-    (north 1.08, east 1.44 m/s), 1 Hz fixes from 1 s, a 10 Hz IMU at rest, 75 s."""
+    (walk_inputs), a 10 Hz IMU at rest, 75 s."""
     from navcore.components import registry
-    from navcore.ins import earth
-    lat0, dt = math.radians(40.0), 0.1
-    f = registry.REGISTRY[name](init_mode="gnss", init_lat=lat0, init_h=100.0, **params)
+    from walk_inputs import LAT, walk_fix
+    dt = 0.1
+    f = registry.REGISTRY[name](init_mode="gnss", init_lat=LAT, init_h=100.0, **params)
     f.start(0.0)
-    rn, re = earth.radii(lat0)
     notices = []
     for k in range(750):
-        epoch = (k + 1) // 10
-        t = epoch * 1.0
-        fix = {"gnss_time": t, "gnss_lat": lat0 + 1.08 * t / (rn + 100.0),
-               "gnss_lon": 1.44 * t / ((re + 100.0) * math.cos(lat0)), "gnss_h": 100.0,
-               "gnss_vn": 1.08, "gnss_ve": 1.44, "gnss_vd": 0.0, "gnss_valid": epoch > 0,
-               "gnss_epoch": epoch}
+        fix = walk_fix(k, dt)
         imu = {"imu_time": (k + 1) * dt, "imu_dt": dt, "imu_dtheta_x": 0.0,
                "imu_dtheta_y": 0.0, "imu_dtheta_z": 0.0, "imu_dvel_x": 0.0,
                "imu_dvel_y": 0.0, "imu_dvel_z": -9.80 * dt}
