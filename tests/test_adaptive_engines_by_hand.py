@@ -391,7 +391,7 @@ def test_newton_reacquires_a_fault_after_an_outage_with_recovery():
     P_pred = kf.covariance()
     due = np.array([True, False, False, False, False, False])
     lam = inflation_factor(z[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     nav, biases = before(kf)
     result = kf.update(z)
     assert kf.guard.n_reacquired == 1 and not kf.rejected.any()
@@ -484,7 +484,7 @@ def test_igg3_reacquires_a_rejected_component_with_full_weight():
     z, _ = igg_z(kf, [20.0, 0.5, 0.0, 0.0, 0.0, 0.0])
     P_pred = kf.covariance()
     lam = inflation_factor(z[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     u = z / np.sqrt(np.diag(P_inflated[:6, :6] + R0))
     assert abs(u[0]) == pytest.approx(1.0, rel=1e-6) and abs(u[1]) < 1.5
     nav, biases = before(kf)
@@ -597,7 +597,7 @@ def test_newton_reacquires_one_component_and_tests_the_others_on_the_inflated_pr
     P_pred = kf.covariance()
     z2 = np.array([80.0, -0.5, 0.3, 0.02, 0.0, 100.0])
     lam = inflation_factor(z2[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     S = P_inflated[:6, :6] + R0
     z2[4] = at_threshold(S[4, 4])
     assert z2[4] ** 2 / (P_pred[4, 4] + R0[4, 4]) > 6.635       # failed before inflation
@@ -626,7 +626,7 @@ def test_igg3_reacquires_one_component_and_weighs_the_others_on_the_inflated_pre
     P_pred = kf.covariance()
     z2, S_before = igg_z(kf, [20.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     lam = inflation_factor(z2[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     S = P_inflated[:6, :6] + R0
     z2[1] = 1.5 * math.sqrt(S[1, 1])
     assert z2[1] / math.sqrt(S_before[1, 1]) > 2.0                 # rejected before

@@ -167,7 +167,7 @@ def test_inflation_factor_at_the_target_and_at_the_cap():
 
 def test_inflate_navigation_by_hand_on_a_small_covariance():
     P = np.full((15, 15), 2.0) + np.eye(15)
-    Q = inflate_navigation(P, 4.0)
+    Q = inflate_navigation(P, 4.0, np.full(15, 100.0))
     assert Q[0, 0] == 12.0 and Q[8, 8] == 12.0 and Q[0, 8] == 8.0       # times 4
     assert Q[0, 9] == 4.0 and Q[14, 3] == 4.0                             # times 2
     assert Q[9, 9] == 3.0 and Q[14, 9] == 2.0                             # unchanged

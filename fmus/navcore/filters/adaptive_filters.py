@@ -183,11 +183,6 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
         self.sage_husa_index = 0
 
     @property
-    def p0_var(self):
-        """The initial variances of the error state (the recovery guard's fading ceiling)."""
-        return np.asarray(self.config.p0, dtype=float) ** 2
-
-    @property
     def r_min(self):
         """Floor of R_hat's variances: ``r_floor_fraction`` of the nominal R in use (R0, or
         the receiver's sigmas of this fix with ``r_from_receiver``)."""

@@ -185,6 +185,12 @@ class KfEngine:
         self.last = None  # UpdateResult of the latest update
         self.rate_ib = np.zeros(3)  # body rate of the latest interval (lever-arm velocity)
 
+    @property
+    def p0_var(self):
+        """The initial variances of the error state (15,): the ceiling of the recovery
+        guards' inflation of attitude and biases (navcore.filters.recovery)."""
+        return np.asarray(self.config.p0, dtype=float) ** 2
+
     # -- time update -------------------------------------------------------------------
     def propagate(self, dtheta, dvel, dt):
         """Mechanize one IMU interval with bias-compensated increments and propagate P
