@@ -54,6 +54,14 @@ def stepped(engine, k=0):
     return engine
 
 
+def after_first_update(engine):
+    """``engine`` stepped, updated with a clean fix and stepped again: the time before a
+    filter's first update is no fix interval, so its recovery guard counts from there."""
+    stepped(engine).update(CLEAN[0])
+    assert not engine.guard.due(np.ones(engine.m, dtype=bool)).any()
+    return stepped(engine, 1)
+
+
 def before(engine):
     return copy.deepcopy(engine.nav), (engine.gyro_bias.copy(), engine.accel_bias.copy())
 
@@ -104,6 +112,11 @@ def shf_by_hand(engine, v, b, gamma, cap=None, r_max=None):
         lam = max(1.0, (v @ v - np.trace(HQH) - np.trace(R)) / np.trace(HP0H))
         lam = lam if cap is None else min(lam, cap)
     P_pred = lam * p_prop + q_acc                                             # eq. 10
+    if r_max is not None:       # the guard on: attitude and biases faded up to their p0 only
+        p0_var = np.asarray(engine.config.p0) ** 2
+        lam_i = [lam if i < 6 else min(lam, max(1.0, p0_var[i] / p_prop[i, i]))
+                 for i in range(N_STATES)]
+        P_pred = np.sqrt(np.outer(lam_i, lam_i)) * p_prop + q_acc
     dx, P, K, S = textbook(P_pred, v, R)
     d = (1.0 - b) / (1.0 - b ** (k + 1))
     e = v - (K @ v)[:6]
@@ -143,10 +156,13 @@ def test_sage_husa_fading_two_updates_by_hand():
 
 
 def test_sage_husa_fading_factor_cap_and_bounded_r_with_recovery():
-    options = dict(SHF, max_fading_factor=3.0, recovery=True)
-    kf = stepped(SageHusaFadingEngine(config(), strapdown(), **options))
+    """With the guard, the fading factor acts at a re-acquisition (here: one fix interval
+    without a fix, recovery_epochs = 1), capped, on attitude and biases up to p0."""
+    options = dict(SHF, max_fading_factor=3.0, recovery=True, recovery_epochs=1)
+    kf = after_first_update(SageHusaFadingEngine(config(), strapdown(), **options))
     np.testing.assert_allclose(kf.r_max, 4.0 * R_SIGMA ** 2, rtol=1e-15)
     z = np.array([60.0, -50.0, 40.0, 3.0, -2.0, 1.0])
+    assert kf.fading_allowed()
     nav, biases = before(kf)
     ref = shf_by_hand(kf, z, 0.9, 2.0, cap=3.0, r_max=4.0 * R_SIGMA ** 2)
     result = kf.update(z)
@@ -366,14 +382,16 @@ def test_newton_extrapolated_variance_of_a_replaced_sample():
 
 
 def test_newton_reacquires_a_fault_after_an_outage_with_recovery():
-    kf = NewtonRobustKfEngine(config(), strapdown(), **dict(NEWTON, recovery=True,
-                                                             recovery_epochs=1))
-    stepped(kf)
+    """A clean first update (the time before it is no fix interval), then a fault one
+    interval later: re-acquired (recovery_epochs = 1)."""
+    kf = after_first_update(NewtonRobustKfEngine(
+        config(), strapdown(), **dict(NEWTON, recovery=True, recovery_epochs=1)))
+    assert kf.guard.interval == 0.0 and not kf.rejected.any()
     z = np.array([80.0, -0.5, 0.3, 0.02, -0.01, 0.0])
     P_pred = kf.covariance()
     due = np.array([True, False, False, False, False, False])
     lam = inflation_factor(z[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     nav, biases = before(kf)
     result = kf.update(z)
     assert kf.guard.n_reacquired == 1 and not kf.rejected.any()
@@ -461,12 +479,12 @@ def test_igg3_with_every_component_dropped_only_predicts():
 
 
 def test_igg3_reacquires_a_rejected_component_with_full_weight():
-    kf = stepped(Igg3RobustKfEngine(config(), strapdown(), **dict(IGG, recovery=True,
-                                                                  recovery_epochs=1)))
+    kf = after_first_update(Igg3RobustKfEngine(config(), strapdown(),
+                                               **dict(IGG, recovery=True, recovery_epochs=1)))
     z, _ = igg_z(kf, [20.0, 0.5, 0.0, 0.0, 0.0, 0.0])
     P_pred = kf.covariance()
     lam = inflation_factor(z[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     u = z / np.sqrt(np.diag(P_inflated[:6, :6] + R0))
     assert abs(u[0]) == pytest.approx(1.0, rel=1e-6) and abs(u[1]) < 1.5
     nav, biases = before(kf)
@@ -475,9 +493,8 @@ def test_igg3_reacquires_a_rejected_component_with_full_weight():
     dx, P, _, _ = textbook(P_inflated, z, R0)
     check_feedback(kf, nav, biases, dx, P)
     # the re-acquired component keeps at least full weight though above k0 after inflation
-    kf2 = stepped(Igg3RobustKfEngine(config(), strapdown(), **dict(IGG, recovery=True,
-                                                                   recovery_epochs=1,
-                                                                   igg_k0=0.5, igg_k1=0.9)))
+    kf2 = after_first_update(Igg3RobustKfEngine(config(), strapdown(), **dict(
+        IGG, recovery=True, recovery_epochs=1, igg_k0=0.5, igg_k1=0.9)))
     z2, _ = igg_z(kf2, [20.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     kf2.update(z2)
     assert kf2.weights[0] == 1.0
@@ -580,7 +597,7 @@ def test_newton_reacquires_one_component_and_tests_the_others_on_the_inflated_pr
     P_pred = kf.covariance()
     z2 = np.array([80.0, -0.5, 0.3, 0.02, 0.0, 100.0])
     lam = inflation_factor(z2[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     S = P_inflated[:6, :6] + R0
     z2[4] = at_threshold(S[4, 4])
     assert z2[4] ** 2 / (P_pred[4, 4] + R0[4, 4]) > 6.635       # failed before inflation
@@ -609,7 +626,7 @@ def test_igg3_reacquires_one_component_and_weighs_the_others_on_the_inflated_pre
     P_pred = kf.covariance()
     z2, S_before = igg_z(kf, [20.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     lam = inflation_factor(z2[:1], P_pred[:1, :1], R0[:1, :1], 1)
-    P_inflated = inflate_navigation(P_pred, lam)
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
     S = P_inflated[:6, :6] + R0
     z2[1] = 1.5 * math.sqrt(S[1, 1])
     assert z2[1] / math.sqrt(S_before[1, 1]) > 2.0                 # rejected before
@@ -623,3 +640,55 @@ def test_igg3_reacquires_one_component_and_weighs_the_others_on_the_inflated_pre
     np.testing.assert_array_equal(result.innovation, z2)
     assert result.outlier is True
     np.testing.assert_array_equal(kf.guard.since_accepted, np.zeros(6))
+
+
+def receiver_r(engine, std):
+    """What the component does with ``r_from_receiver``: the receiver's position sigmas
+    ``std`` (N, E, D) as the position part of the engine's nominal R."""
+    R = engine.R0.copy()
+    R[[0, 1, 2], [0, 1, 2]] = np.asarray(std) ** 2
+    engine.R0 = R
+
+
+@pytest.mark.parametrize("engine_class, options", [(SageHusaFadingEngine, SHF),
+                                                   (IakfEngine, IAKF)])
+def test_the_r_bound_follows_the_receivers_sigmas_per_axis(engine_class, options):
+    """The failing case of a real drive: 1-cm RTK fixes with ``r_from_receiver`` and an INS
+    that drifts off by decimetres.  R_hat stays within ``r_max_scale`` times the receiver's
+    variance of each axis (N, E, D distinct), not 4 x r_pos^2; the floor follows it too."""
+    kf = stepped(engine_class(config(), strapdown(), **dict(options, recovery=True)))
+    std = np.array([0.01, 0.02, 0.04])
+    bound = 4.0 * np.concatenate([std ** 2, R_SIGMA[3:] ** 2])
+    for k in range(5):                  # the sigmas change from fix to fix; the last: std
+        receiver_r(kf, std * (1.0 + 0.1 * (k % 2)))
+        kf.update(np.array([0.6, -0.9, 1.2, 0.02, -0.01, 0.03]))
+        stepped(kf, k + 1)
+    np.testing.assert_allclose(kf.r_max, 4.0 * np.diag(kf.R0), rtol=1e-15)
+    np.testing.assert_allclose(kf.r_min, options["r_floor_fraction"] * np.diag(kf.R0),
+                               rtol=1e-15)
+    np.testing.assert_allclose(kf.r_max, bound, rtol=1e-15)
+    r_hat = np.diag(kf.R)
+    assert np.all(r_hat <= bound * (1.0 + 1e-12)), r_hat / bound
+    # the innovations are tens of receiver sigmas: R_hat sits at its bound on the position axes
+    assert np.all(r_hat[:3] >= 0.5 * bound[:3]), r_hat[:3] / bound[:3]
+
+
+def test_with_the_guard_the_fading_factor_waits_for_a_re_acquisition():
+    """Fixes every interval, each beyond its predicted covariance (a receiver whose sigma is
+    too small): paper 001's eq. 12 fades at every one; with the guard (recovery_epochs = 2)
+    the factor stays 1 until two fix intervals pass without a fix, then fades once."""
+    z = np.array([9.0, -8.0, 7.0, 0.3, -0.2, 0.1])
+    factors = []
+    for options in (SHF, dict(SHF, recovery=True, recovery_epochs=2)):
+        kf = SageHusaFadingEngine(config(), strapdown(), **options)
+        row = []
+        for k in range(4):
+            stepped(kf, k)
+            if k == 3:                      # one fix missing: two intervals
+                stepped(kf, k)
+            row.append((kf.fading_allowed(), kf.update(z).fading_factor))
+        factors.append(row)
+    law, guarded = factors
+    assert all(allowed and fading > 1.0 for allowed, fading in law), law
+    assert [allowed for allowed, _ in guarded] == [False, False, False, True]
+    assert [fading for _, fading in guarded[:3]] == [1.0, 1.0, 1.0] and guarded[3][1] > 1.0

@@ -213,7 +213,7 @@ def test_gnss_sigmas_with_the_fixs_velocity_sigma():
     p0 = init.start_sigmas(P0, r, 2.0)
     assert p0[:3].tolist() == [1.0, 3.0, 4.0]                       # raised to the fix's
     assert p0[3:6].tolist() == [0.1, 0.3, 0.9]
-    assert p0[8] == pytest.approx(0.3 / 2.0)                        # the course: horizontal
+    assert p0[8] == pytest.approx(math.atan(0.3 / 2.0))             # the course: horizontal
     assert p0[6:8].tolist() == [0.01, 0.01]                         # levelled: as given
     assert p0[9:].tolist() == P0[9:].tolist()
 
@@ -234,8 +234,74 @@ def test_sigmas_given_as_integers_become_floats():
     assert p0[6] == pytest.approx(math.radians(5.0))
 
 
-def test_configured_sigmas_above_what_gnss_knows_are_kept():
+def test_configured_level_sigmas_above_what_gnss_knows_are_kept_the_yaw_is_the_course():
     p0 = P0.copy()
     p0[6:9] = [0.01, 0.2, 0.5]            # roll below the 5 deg floor, pitch and yaw above it
     out = Initializer("gnss").start_sigmas(p0, np.array([0.5, 0.5, 0.5]), 10.0)
-    assert out[6:9] == pytest.approx([math.radians(5.0), 0.2, 0.5])
+    # the yaw is the course's: velocity sigma sqrt(2) 0.5 / 2 m/s at 10 m/s (2.03 deg)
+    assert out[6:9] == pytest.approx([math.radians(5.0), 0.2,
+                                      math.atan(math.sqrt(2.0) * 0.5 / 2.0 / 10.0)])
+
+
+@pytest.mark.parametrize("speed, v_sigma, yaw_sigma_deg", [
+    (10.0, (0.05, 0.3, 0.9), math.degrees(math.atan(0.3 / 10.0))),   # 2 deg floor: 1.72 < 2
+    (1.0, (0.05, 0.2, 0.9), math.degrees(math.atan(0.2 / 1.0))),     # a walk: 11.3 deg
+    (2.0, (0.4, 0.1, 0.9), math.degrees(math.atan(0.4 / 2.0)))])     # the larger of N and E
+def test_the_yaw_sigma_is_the_courses_not_the_configured_100_deg(speed, v_sigma, yaw_sigma_deg):
+    """The car's case: 100 deg configured for the given state; started from a course the
+    yaw's sigma is atan(sigma_v / v) of the horizontal velocity sigma, at least 2 deg."""
+    p0 = P0.copy()
+    p0[8] = math.radians(100.0)
+    r = np.array([0.01, 0.02, 0.03, *v_sigma])
+    out = Initializer("gnss").start_sigmas(p0, r, speed)
+    assert out[8] == pytest.approx(math.radians(max(2.0, yaw_sigma_deg)), rel=1e-12)
+
+
+def test_default_speed_is_met_by_a_walk_and_a_slower_one_warns_after_a_minute():
+    """A walk at 1.8 m/s starts at the default init_speed_min; with 2 m/s (the former
+    default) it never does: one warning 60 s after the first valid fix, naming the speeds."""
+    assert DEFAULT_INIT_SPEED <= 1.8
+    walk = Initializer("gnss", use_fix_velocity=True)
+    assert walk.state_from_fix(_fix(0.0, 0.7, 0.2, 5.0, v=(1.0, 1.5, 0.0)), 0.0) is not None
+    slow = Initializer("gnss", speed_min=2.0, use_fix_velocity=True)
+    warnings = []
+    for k in range(62):
+        t = 3.0 + k
+        assert slow.state_from_fix(_fix(t, 0.7, 0.2, 5.0, v=(1.0, 1.5, 0.0)), t) is None
+        warning = slow.waiting_warning(t)
+        if warning:
+            warnings.append((t, warning))
+    assert len(warnings) == 1 and warnings[0][0] == 63.0
+    assert "init_speed_min = 2 m/s in the 60 s" in warnings[0][1]
+    assert "the fastest: 1.8 m/s" in warnings[0][1]
+
+
+def _walk_notices(name, **params):
+    """(notices, aligned) of filter ``name`` with init_mode 'gnss' on a walk at 1.8 m/s
+    (walk_inputs), a 10 Hz IMU at rest, 75 s."""
+    from navcore.components import registry
+    from walk_inputs import LAT, walk_fix
+    dt = 0.1
+    f = registry.REGISTRY[name](init_mode="gnss", init_lat=LAT, init_h=100.0, **params)
+    f.start(0.0)
+    notices = []
+    for k in range(750):
+        fix = walk_fix(k, dt)
+        imu = {"imu_time": (k + 1) * dt, "imu_dt": dt, "imu_dtheta_x": 0.0,
+               "imu_dtheta_y": 0.0, "imu_dtheta_z": 0.0, "imu_dvel_x": 0.0,
+               "imu_dvel_y": 0.0, "imu_dvel_z": -9.80 * dt}
+        f.advance(k * dt, dt, {**imu, **fix})
+        notices += f.take_notices()
+    return notices, bool(f.out["aligned"])
+
+
+@pytest.mark.parametrize("name", ["Kf", "Ukf"])
+def test_a_walk_starts_at_the_default_and_warns_once_below_a_higher_speed(name):
+    notices, aligned = _walk_notices(name)
+    assert aligned and not [n for n in notices if "init_mode 'gnss'" in n]
+    notices, aligned = _walk_notices(name, init_speed_min=2.0)
+    waiting = [n for n in notices if "init_mode 'gnss'" in n]
+    assert not aligned and len(waiting) == 1, notices
+    assert waiting[0].startswith(f"{name}: init_mode 'gnss': no fix with a horizontal speed of "
+                                 "at least init_speed_min = 2 m/s in the 60 s since")
+    assert "(the fastest: 1.8 m/s)" in waiting[0]

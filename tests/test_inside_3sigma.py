@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from navcore.ins.earth import radii
-from orchestrator.results.metrics import filter_metrics
+from orchestrator.results.metrics import (INCONSISTENT_OUTSIDE_PCT, filter_metrics,
+                                          inconsistency_warning)
 from orchestrator.results.run_results import Results
 
 LAT, LON, H = 0.7, 2.0, 100.0
@@ -56,3 +57,41 @@ def test_inside_three_sigma_counts_by_hand_and_skips_samples_without_a_sigma():
     m = filter_metrics(_results(err, std), "filter", truth_name="truth")
     assert m["inside_3sigma_pct"]["position"]["n"] == pytest.approx(100.0 * 2 / 3)
     assert m["inside_3sigma_pct"]["position"]["e"] == 100.0
+
+
+def test_the_share_outside_is_pooled_over_the_axes_and_warns_above_half():
+    """Errors of 4, 2 and 0.5 sigma on N, E, D (sigmas 1, 2, 3 m), 10 samples: N is outside
+    every time, E and D never: 1/3 outside, no warning.  Biased errors of 4 sigma on N and
+    E: 2/3 outside, the warning names the filter and the share."""
+    n = 10
+    std = np.tile([1.0, 2.0, 3.0], (n, 1))
+    m = filter_metrics(_results(np.tile([4.0, 4.0, 1.5], (n, 1)), std), "filter",
+                       truth_name="truth")
+    assert m["position_outside_3sigma_pct"] == pytest.approx(100.0 / 3.0)
+    assert inconsistency_warning("Iakf", m) is None
+    m = filter_metrics(_results(np.tile([-4.0, 8.5, 1.5], (n, 1)), std), "filter",
+                       truth_name="truth")
+    assert m["position_outside_3sigma_pct"] == pytest.approx(200.0 / 3.0)
+    assert inconsistency_warning("Iakf", m) == (
+        "filter 'Iakf' is inconsistent: 67 % of its position errors are outside +/-3 sigma "
+        "(its reported sigmas understate its error; real GNSS errors are biased and "
+        "time-correlated)")
+
+
+def test_the_warning_starts_above_half_and_needs_sigmas():
+    assert INCONSISTENT_OUTSIDE_PCT == 50.0
+    assert inconsistency_warning("Kf", {"position_outside_3sigma_pct": 50.0}) is None
+    assert "50 %" in inconsistency_warning("Kf", {"position_outside_3sigma_pct": 50.4})
+    assert inconsistency_warning("Kf", {"position_rms_m": {}}) is None
+
+
+def test_the_report_names_the_inconsistent_filter_and_its_runs():
+    from types import SimpleNamespace
+    from orchestrator.reporting.report import _inconsistent
+    rows = [{"metrics": {"position_outside_3sigma_pct": pct}} for pct in (91.2, 12.0, 60.0)]
+    plan = {"model": SimpleNamespace(name="drive"),
+            "records": {"Iakf": rows, "Kf": [{"metrics": {"position_outside_3sigma_pct": 1.0}}]}}
+    assert _inconsistent([plan]) == [
+        "- drive: warning: filter 'Iakf' is inconsistent: 91 % of its position errors are "
+        "outside +/-3 sigma (its reported sigmas understate its error; real GNSS errors are "
+        "biased and time-correlated) (in 2 of 3 runs)", ""]

@@ -102,10 +102,19 @@ def test_the_nis_warning_and_the_3_sigma_percentages_reach_the_cli(capsys, tmp_p
     stdout, stderr = capsys.readouterr()
     assert exc.value.code == 0, stderr
     warnings = [line for line in stderr.splitlines() if line.startswith("navfmu: warning:")]
-    assert len(warnings) == 1 and "filter: NewtonRobustKf: at t = " in warnings[0], stderr
+    assert len(warnings) == 2 and "filter: NewtonRobustKf: at t = " in warnings[0], stderr
     assert "chi-square band" in warnings[0]
     assert "inside 3 sigma [%] pos/vel/att" in stdout
     metrics = json.loads((out / "metrics.json").read_text())
     inside = metrics["NewtonRobustKf"]["metrics"]["filter"]
     assert set(inside["inside_3sigma_pct"]) == {"position", "velocity", "attitude"}
     assert inside["inside_3sigma_pct"]["position"]["n"] < 50.0     # far from 99.7 %
+    # most position errors outside +-3 sigma: one line in the summary and in metrics.json
+    outside = inside["position_outside_3sigma_pct"]
+    pooled = 100.0 - sum(inside["inside_3sigma_pct"]["position"].values()) / 3.0
+    assert outside == pytest.approx(pooled, rel=1e-9) and outside > 50.0
+    assert warnings[1] == (f"navfmu: warning: filter 'NewtonRobustKf' is inconsistent: "
+                           f"{outside:.0f} % of its position errors are outside +/-3 sigma "
+                           "(its reported sigmas understate its error; real GNSS errors are "
+                           "biased and time-correlated)")
+    assert inside["inconsistent"] == warnings[1][len("navfmu: warning: "):]

@@ -37,11 +37,19 @@ def test_inflate_navigation_scales_the_navigation_block_and_keeps_p_definite():
     rng = np.random.default_rng(1)
     M = rng.standard_normal((15, 15))
     P = M @ M.T + 15 * np.eye(15)
-    Q = inflate_navigation(P, 100.0)
+    roomy = np.full(15, 1e9)                 # an initial covariance that caps nothing
+    Q = inflate_navigation(P, 100.0, roomy)
     assert np.allclose(Q[:9, :9], 100.0 * P[:9, :9])
     assert np.allclose(Q[:9, 9:], 10.0 * P[:9, 9:]) and np.array_equal(Q[9:, 9:], P[9:, 9:])
     np.linalg.cholesky(Q)
-    assert inflate_navigation(P, 1.0) is P
+    assert inflate_navigation(P, 1.0, roomy) is P
+    # attitude stops at its initial variance (distinct per axis); position and velocity not
+    p0_var = np.full(15, 1e9)
+    p0_var[6:9] = np.diag(P)[6:9] * np.array([2.0, 50.0, 400.0])
+    Q = inflate_navigation(P, 100.0, p0_var)
+    np.testing.assert_allclose(np.diag(Q)[6:9], np.diag(P)[6:9] * [2.0, 50.0, 100.0])
+    np.testing.assert_allclose(np.diag(Q)[:6], 100.0 * np.diag(P)[:6])
+    np.linalg.cholesky(Q)
 
 
 def test_bounded_r_caps_the_variances_of_a_diagonal_r_and_leaves_a_small_one():

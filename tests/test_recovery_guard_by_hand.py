@@ -38,8 +38,17 @@ def test_a_new_guard_has_no_interval_and_nothing_elapsed():
     assert guard.due(np.ones(3, dtype=bool)).tolist() == [False, False, False]
 
 
+def _first_update(guard, gap=0.005):
+    """The filter's first update ``gap`` after its start: a gap that is no fix interval."""
+    guard.advance(gap)
+    guard.open_epoch()
+    assert guard.interval == 0.0 and guard.opened
+    guard.close_epoch(np.ones(guard.since_accepted.shape, dtype=bool))
+
+
 def test_the_interval_is_the_smallest_gap_seen_and_a_zero_gap_is_none():
     guard = RecoveryGuard(2, recovery=True, recovery_epochs=3)
+    _first_update(guard)
     guard.advance(0.5)
     guard.advance(0.75)
     assert guard.elapsed == 1.25
@@ -158,7 +167,7 @@ def test_inflation_factor_at_the_target_and_at_the_cap():
 
 def test_inflate_navigation_by_hand_on_a_small_covariance():
     P = np.full((15, 15), 2.0) + np.eye(15)
-    Q = inflate_navigation(P, 4.0)
+    Q = inflate_navigation(P, 4.0, np.full(15, 100.0))
     assert Q[0, 0] == 12.0 and Q[8, 8] == 12.0 and Q[0, 8] == 8.0       # times 4
     assert Q[0, 9] == 4.0 and Q[14, 3] == 4.0                             # times 2
     assert Q[9, 9] == 3.0 and Q[14, 9] == 2.0                             # unchanged
@@ -206,6 +215,7 @@ def test_an_outage_of_exactly_the_limit_counts_and_the_interval_is_half_a_second
     """Fixes at 2 Hz, recovery after 2 intervals: an outage of exactly 2 x 0.5 s less the
     relative tolerance 1e-6 reaches the limit (inclusive)."""
     guard = RecoveryGuard(1, recovery=True, recovery_epochs=2)
+    _first_update(guard, 0.25)
     guard.advance(0.5)
     guard.open_epoch()
     guard.close_epoch(np.array([True]))
@@ -236,3 +246,21 @@ def test_a_nis_at_the_gate_itself_is_not_flagged():
     # flagged when the NIS *exceeds* the 99 % quantile
     for m in (3, 6):
         assert not flag_by_gate(chi2_gate(0.01, m), m).any()
+
+
+def test_the_time_before_the_first_update_is_no_fix_interval():
+    """The failing case of a real log: the first fix 5 ms after the filter's start, then 4 Hz
+    fixes.  Before, 5 ms became the interval, so two rejected fixes in a row (0.5 s > 5 x
+    5 ms) were a re-acquisition; now the interval is 0.25 s and only five intervals without
+    an accepted value (1.25 s) are."""
+    guard = RecoveryGuard(3, recovery=True, recovery_epochs=5)
+    _first_update(guard, 0.005)
+    flagged = np.array([True, False, True])
+    for k in range(5):
+        guard.advance(0.25)
+        guard.open_epoch()
+        assert guard.interval == 0.25
+        due = guard.due(flagged)
+        assert due.tolist() == ([True, False, True] if k == 4 else [False, False, False]), k
+        guard.close_epoch(~flagged)
+    np.testing.assert_allclose(guard.since_accepted, [1.25, 0.0, 1.25])

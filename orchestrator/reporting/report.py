@@ -440,7 +440,22 @@ def _consistency(sections) -> List[str]:
                          + f" | {_ci(nis, 2)} | {first.get('dof', '-')} | "
                          + (f"{band[0]:.2f}-{band[1]:.2f}" if band else "-") + " | "
                          + " / ".join(_ci(v, 1) for v in inside) + " |")
-    return lines + [""]
+    return lines + [""] + _inconsistent(sections)
+
+
+def _inconsistent(sections) -> List[str]:
+    """One line per scenario and filter with runs whose position errors are mostly outside
+    +-3 sigma (:func:`orchestrator.results.metrics.inconsistency_warning` of its first such
+    run, and how many runs are)."""
+    lines = []
+    for plan in sections:
+        for f, rows in plan["records"].items():
+            found = [w for w in (nav_metrics.inconsistency_warning(f, row["metrics"])
+                                 for row in rows) if w]
+            if found:
+                lines.append(f"- {plan['model'].name}: warning: {found[0]} (in {len(found)} of "
+                             f"{len(rows)} runs)")
+    return lines + [""] if lines else []
 
 
 def _cross_matrix(sections) -> List[str]:

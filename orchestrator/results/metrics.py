@@ -24,6 +24,11 @@ Definitions (errors are estimate - truth):
 * Inside +-3 sigma: per group and axis, the percentage of the window's samples with
   |e_i| <= 3 sigma_i (99.73 % for a consistent Gaussian error); samples without a sigma
   (sigma <= 0) are not counted.
+* Inconsistent filter: its position errors (the N, E and D samples pooled) are outside
+  +-3 sigma in more than :data:`INCONSISTENT_OUTSIDE_PCT` % of the samples
+  (``position_outside_3sigma_pct``): most of the time its reported sigmas understate its
+  error, so :func:`inconsistency_warning` says so on one line (the run's warnings, the
+  output folder's metrics.json, the report).
 * Only samples within the truth's span count: the first to the last finite ``truth_time``
   recorded (a replayed log's truth source outputs NaN outside its truth file's span); the
   result states that span (``truth_span_s``) next to the samples' ``window_s``.
@@ -319,6 +324,10 @@ class MetricAccumulator:
                 g: {a: (100.0 * float(self.inside_3sigma[g][i] / self.sigma_n[g][i])
                         if self.sigma_n[g][i] else float("nan")) for i, a in enumerate(AXES)}
                 for g in self.nees_groups}
+            counted = float(self.sigma_n["position"].sum())
+            if "position" in self.nees_groups and counted:
+                out["position_outside_3sigma_pct"] = 100.0 * (
+                    1.0 - float(self.inside_3sigma["position"].sum()) / counted)
         if self.nis_n:
             dof = _median_of_counts(self.dof_counts)
             n = self.nis_n
@@ -337,6 +346,21 @@ class MetricAccumulator:
 
 _NEES_GROUPS = {"position": ("pos_", "std_p"), "velocity": ("vel_", "std_v"),
                 "attitude": ("phi_", "std_att_")}
+
+#: a filter whose position errors are outside +-3 sigma in more than this percentage of the
+#: samples is inconsistent "for most of the time" (a consistent Gaussian error: 0.27 %)
+INCONSISTENT_OUTSIDE_PCT = 50.0
+
+
+def inconsistency_warning(label, metrics):
+    """The one-line warning for filter ``label`` whose ``metrics`` (:func:`filter_metrics`)
+    have most position errors outside +-3 sigma, or None (consistent enough, or no sigmas)."""
+    outside = metrics.get("position_outside_3sigma_pct")
+    if outside is None or not outside > INCONSISTENT_OUTSIDE_PCT:
+        return None
+    return (f"filter '{label}' is inconsistent: {outside:.0f} % of its position errors are "
+            "outside +/-3 sigma (its reported sigmas understate its error; real GNSS errors "
+            "are biased and time-correlated)")
 
 
 def nis_band95(updates, dof):

@@ -168,10 +168,23 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
         run = _streamed_run(label, model, sim, stop_time, progress, window, stream_to)
         report_warnings(run.results)
         run.time_origin = origin
-        return run
+        return report_inconsistency(run)
     results = sim.run(stop_time=stop_time, progress=progress)
     report_warnings(results)
-    return measured_run(label, model, results, window, time_origin=origin)
+    return report_inconsistency(measured_run(label, model, results, window,
+                                             time_origin=origin))
+
+
+def report_inconsistency(run: Run) -> Run:
+    """Each filter of ``run`` whose position errors are mostly outside +-3 sigma
+    (:func:`orchestrator.results.metrics.inconsistency_warning`): the warning kept in its
+    metrics (``inconsistent``, so in metrics.json) and raised as a :class:`NavfmuWarning`."""
+    for metrics in run.metrics.values():
+        warning = nav_metrics.inconsistency_warning(run.label, metrics)
+        if warning:
+            metrics["inconsistent"] = warning
+            warnings.warn(warning, NavfmuWarning, stacklevel=3)
+    return run
 
 
 def measured_run(label: str, model: SystemModel, results: Results, window=None,

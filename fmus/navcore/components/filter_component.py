@@ -23,6 +23,8 @@ from ..sensors.imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_
     GYRO_BIAS_LIMITS)
 from ..filters.initial_state import (INIT_CHECK_SIGMAS, INIT_MODES, INIT_PARAMETERS,
                                      Initializer, disagreement)
+from ..filters.initial_biases import (INITIAL_BIAS_PARAMETERS, StaticBiasEstimator, bias_sigmas,
+                                      check_static_mode, given_biases)
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from ..filters.latency import SolutionHistory
 from .filter_batch import InsGnssFilterBatch
@@ -93,6 +95,7 @@ _FILTER_PARAMETERS = (
          "filter's nav_time is not applied (counted in n_stale_fixes); a later one is applied "
          "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
     *INIT_PARAMETERS,
+    *INITIAL_BIAS_PARAMETERS,
     *LEVER_ARM_PARAMETERS,
     boolean("r_from_receiver", "take the receiver's own per-fix position sigmas (inputs "
             "gnss_std_n/e/d, a replayed log's std_n/e/d) as the position part of R instead "
@@ -133,7 +136,7 @@ class InsGnssFilter(Component):
     inputs = signals.FILTER_INPUTS
     default_experiment = (0.0, 500.0, 0.01)
     state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
-                    "n_stale", "late_fixes", "nis_monitor", "initializer")
+                    "n_stale", "late_fixes", "nis_monitor", "initializer", "static_bias")
     derived_fields = ("max_fix_age",)
 
     def __init_subclass__(cls, **kwargs):
@@ -150,8 +153,9 @@ class InsGnssFilter(Component):
         p0 = np.concatenate([
             np.full(3, p["p0_pos"]), np.full(3, p["p0_vel"]),
             [p["p0_att_level"], p["p0_att_level"], p["p0_att_yaw"]],
-            np.full(3, p["p0_gyro_bias_dph"] * DPH), np.full(3, p["p0_accel_bias_ug"] * UG)])
+            bias_sigmas(p, p["p0_gyro_bias_dph"] * DPH, p["p0_accel_bias_ug"] * UG)])
         r = [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"], p["r_vel_n"], p["r_vel_e"], p["r_vel_d"]]
+        gyro_bias0, accel_bias0 = given_biases(p)
         return KfConfig(
             p0=p0, gyro_arw=p["q_gyro_arw_dpsh"] * DPSH, accel_vrw=p["q_accel_vrw_ugpsHz"] * UG,
             gyro_bias_sigma=p["q_gyro_bias_instability_dph"] * DPH,
@@ -159,7 +163,8 @@ class InsGnssFilter(Component):
             accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
             accel_bias_tau=p["q_accel_bias_tau_s"],
             r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
-            measurement=p["measurement"], lever_arm=lever_arm_of(p))
+            measurement=p["measurement"], lever_arm=lever_arm_of(p),
+            gyro_bias0=gyro_bias0, accel_bias0=accel_bias0)
 
     def engine_options(self):
         """Validated keyword arguments of the engine beyond (config, nav); subclasses extend."""
@@ -194,6 +199,9 @@ class InsGnssFilter(Component):
         self.require("init_mode", p["init_mode"] in INIT_MODES, f"is not one of {INIT_MODES}")
         self.initializer = Initializer(p["init_mode"], p["init_speed_min"], p["align_time"],
                                        p["measurement"] == "position_velocity")
+        why = check_static_mode(p["init_mode"], p["init_static_time"])
+        self.require("init_static_time", why is None, why or "")
+        self.static_bias = StaticBiasEstimator(p["init_static_time"])
         self.out["aligned"] = self.initializer.done
         self._write_solution()
         self.write_diagnostics(None)  # extra outputs start from the engine's initial state
@@ -269,6 +277,7 @@ class InsGnssFilter(Component):
             imu_time, dtheta, dvel, imu_dt = increment
             nav = self.engine.nav
             init.add_interval(dtheta, dvel, imu_dt, nav.lat, nav.h)
+            self.static_bias.add_interval(dtheta, dvel, imu_dt)
             self.nav_time = self.out["nav_time"] = imu_time
         state = None
         epoch = inputs["gnss_epoch"]
@@ -279,6 +288,9 @@ class InsGnssFilter(Component):
                 fix = _fix_of(inputs)
                 if init.mode == "gnss":
                     state = init.state_from_fix(fix, self.nav_time)
+                    warning = None if state is not None else init.waiting_warning(fix[0])
+                    if warning:
+                        self.notify(f"{self.model_name}: {warning}")
                 else:
                     init.note_fix(fix)
         if init.alignment_ready():
@@ -297,6 +309,12 @@ class InsGnssFilter(Component):
         config.p0 = self.initializer.start_sigmas(
             config.p0, r if self.initializer.use_fix_velocity else r[:3],
             max(math.hypot(v[0], v[1]), p["init_speed_min"]))
+        if p["init_static_time"] > 0.0:
+            bias, sigma, warning = self.static_bias.estimate(lat)
+            if warning:
+                self.notify(f"{self.model_name}: {warning}")
+            else:
+                config.gyro_bias0, config.p0[9:12] = bias, sigma
         if config.lever_arm is not None:   # the fix is the antenna's: back to the IMU
             lat, lon, h, _ = antenna_fix(lat, lon, h, v, euler_to_dcm(roll, pitch, yaw),
                                          -config.lever_arm, np.zeros(3))

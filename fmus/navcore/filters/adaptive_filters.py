@@ -37,7 +37,7 @@ from ..ins.error_model import N_STATES
 from ..errors import InputError
 from .innovation_stats import chi2_gate, dot_rows, nis, nis_rows, trace_rows
 from .ins_gnss_kf import KfEngine, UpdateResult, kalman_rows, predicted_rows
-from .recovery import GuardedEngine, bounded_r_rows
+from .recovery import GuardedEngine, bounded_r_rows, faded_within_initial_rows
 
 def masked_update(P_pred, z, R, keep):
     """Kalman update with only the measurement components where ``keep`` is True.
@@ -153,30 +153,50 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
         when a long quiet stretch or compressed innovations drive it towards H P H'.
     max_fading_factor : optional cap on lambda (None = paper 001's uncapped eq. 12).
     r_max_scale : recovery guard (with ``recovery`` on): R_hat stays at most this multiple of
-        R0 per axis (:func:`navcore.filters.recovery.bounded_r`), so a diverging state cannot drive
-        the estimate away; paper 001's eq. 9 has no upper bound.
+        the nominal R in use per axis (R0, or the receiver's R of the fix with
+        ``r_from_receiver``; :func:`navcore.filters.recovery.bounded_r`), so a diverging
+        state cannot drive the estimate away; paper 001's eq. 9 has no upper bound.
     recovery : the recovery guard of :mod:`navcore.filters.recovery` (ours; off = paper 001's law):
-        here only the bound ``r_max_scale``.  This filter takes every fix, and after an outage
-        its own fading factor (eq. 12) inflates P as much as the innovation asks, so it needs
-        no re-acquisition (one on top of the fading factor made it worse after each outage
-        of models/mems_outages).  ``recovery_epochs`` serves Iakf.
+        here the bound ``r_max_scale`` and the fading of paper 001 eq. 10 kept within the
+        initial attitude and bias variances
+        (:func:`navcore.filters.recovery.faded_within_initial_rows`).  This filter takes
+        every fix, and after an outage its own fading factor (eq. 12) inflates P as much as
+        the innovation asks, so it needs no re-acquisition (one on top of the fading factor
+        made it worse after each outage of models/mems_outages).  ``recovery_epochs`` serves Iakf.
     """
 
     state_fields = ("R", "sage_husa_index")
-    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor", "r_min",
-                      "r_max")
+    derived_fields = ("forgetting_factor", "reserve_gamma", "max_fading_factor",
+                      "r_floor_fraction", "r_max_scale")
 
     def __init__(self, config, nav, *, forgetting_factor, reserve_gamma, r_floor_fraction,
                  max_fading_factor, r_max_scale, recovery, recovery_epochs):
         super().__init__(config, nav)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
-        self.r_max = float(r_max_scale) * np.diag(self.R0) if self.guard.enabled else None
+        self.r_max_scale = float(r_max_scale) if self.guard.enabled else None
         self.forgetting_factor = float(forgetting_factor)
         self.reserve_gamma = float(reserve_gamma)
         self.max_fading_factor = max_fading_factor
-        self.r_min = laws.r_floor_from_initial(self.R0, r_floor_fraction)
+        self.r_floor_fraction = float(r_floor_fraction)
+        laws.r_floor_from_initial(self.R0, self.r_floor_fraction)   # checks the fraction
         self.R = self.R0.copy()
         self.sage_husa_index = 0
+
+    @property
+    def r_min(self):
+        """Floor of R_hat's variances: ``r_floor_fraction`` of the nominal R in use (R0, or
+        the receiver's sigmas of this fix with ``r_from_receiver``)."""
+        return laws.r_floor_from_initial(self.R0, self.r_floor_fraction)
+
+    @property
+    def r_max(self):
+        """Recovery guard: ceiling of R_hat's variances, ``r_max_scale`` times the nominal R
+        in use (None with the guard off).  Relative to the R of this fix, not to the
+        configured ``r_pos_*``: with ``r_from_receiver`` a 1-cm RTK fix bounds R_hat at 2 cm,
+        where a bound of 4 x (5 m)^2 let it grow 3.4e5-fold on a real drive."""
+        if self.r_max_scale is None:
+            return None
+        return self.r_max_scale * np.diag(self.R0)
 
     # -- the arithmetic of the runs' updates (RowUpdates), pieces shared with IakfEngine -------
     @classmethod
@@ -208,7 +228,14 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
             raise InputError(f"lam (fading factor) must be finite and > 0, got "
                              f"{lam[~np.isfinite(lam)][0]}")
         _require_finite(("P_propagated", p_prop), ("GQG", q_acc))
-        dx, P, _, S, K = kalman_rows(laws.fading_predict_rows(p_prop, q_acc, lam), v, R, H)
+        lam = np.where([engine.fading_allowed() for engine in engines], lam, 1.0)
+        P_pred = laws.fading_predict_rows(p_prop, q_acc, lam)
+        guarded = [b for b, engine in enumerate(engines) if engine.guard.enabled]
+        if guarded:                     # recovery guard: attitude and biases faded up to p0
+            P_pred[guarded] = faded_within_initial_rows(
+                p_prop[guarded], q_acc[guarded], lam[guarded],
+                np.array([engines[b].p0_var for b in guarded]))
+        dx, P, _, S, K = kalman_rows(P_pred, v, R, H)
         _require_finite(("K", K), ("P_post", P))
         weights = np.array([laws.sage_husa_weight(engine.sage_husa_index + 1,
                                                   engine.forgetting_factor)
@@ -223,7 +250,29 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
                 R_new[bounded], np.array([engines[b].r_max for b in bounded]))
         return dict(v=v, lam=lam, dx=dx, P=P, S=S, R_used=R, R=R_new, nis=nis_rows(v, S))
 
+    def fading_allowed(self):
+        """Recovery guard: paper 001's fading factor (eq. 12) acts at a re-acquisition only,
+        the first fix after ``recovery_epochs`` fix intervals without an accepted one (an
+        outage; for Iakf also a run of compressed innovations, whose re-acquisition the
+        factor makes); always with the guard off (paper 001 as printed).  Eq. 11 reads an
+        innovation beyond its predicted covariance as a diverging state; on real data with
+        the receiver's own sigmas (1 cm RTK) nearly every innovation is beyond it, because
+        the receiver's errors are time-correlated and biased (R too small, not P), so the
+        factor fired at most fixes and inflated P -- attitude and biases too -- at every one
+        of them: the states then absorbed the fixes' errors (an accelerometer bias 0.3 m/s^2
+        off before a 60 s outage of a real drive, 7 times Kf's drift in it).  After a gap
+        the state is what is wrong, the law's case."""
+        return not self.guard.enabled or bool(
+            self.guard.due_at_opening(np.ones(self.m, dtype=bool)).any())
+
     def _take_update(self, outcome, b):
+        """:meth:`_sage_husa_take` between the guard's epoch bookkeeping (every fix taken)."""
+        self.guard.open_epoch()
+        result = self._sage_husa_take(outcome, b)
+        self.guard.close_epoch(np.ones(self.m, dtype=bool))
+        return result
+
+    def _sage_husa_take(self, outcome, b):
         """Run b's Sage-Husa index, R_hat and feedback from ``outcome``, and its result."""
         self.sage_husa_index += 1
         self.R = outcome["R"][b]
@@ -320,7 +369,7 @@ class IakfEngine(SageHusaFadingEngine):
         guard.open_epoch()
         if outcome["reacquired"][b]:
             guard.n_reacquired += 1
-        adapted = super()._take_update(outcome, b)
+        adapted = self._sage_husa_take(outcome, b)
         Y = float(outcome["Y"][b])
         guard.close_epoch(Y == 1.0)
         self.compression = Y

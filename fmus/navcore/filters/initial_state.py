@@ -47,8 +47,13 @@ from ..ins.rotations import euler_to_dcm, wrap_angle
 INIT_MODES = ("given", "gnss", "align")
 #: a given state farther from the first fix than this many sigmas (sqrt(P + R)) is warned of
 INIT_CHECK_SIGMAS = 5.0
-#: default horizontal speed from which the course over ground is the heading [m/s]
-DEFAULT_INIT_SPEED = 2.0
+#: default horizontal speed from which the course over ground is the heading [m/s]: a slow
+#: walk (people walk at 1.2-1.4 m/s; a walk at 1.8 m/s never reached the former 2 m/s).  A
+#: low speed costs no false confidence: the heading's sigma is the course's own, atan(sigma_v
+#: / v) (:meth:`Initializer.start_sigmas`), 3 deg at 1 m/s for a 0.05 m/s velocity sigma
+DEFAULT_INIT_SPEED = 1.0
+#: a filter waiting for a fix at init_speed_min this long after its first valid fix warns [s]
+INIT_WAIT_WARNING_S = 60.0
 #: default length of a static alignment [s]
 DEFAULT_ALIGN_TIME = 60.0
 #: largest time between two fixes whose positions give the initial velocity [s]
@@ -57,7 +62,8 @@ MAX_DIFFERENCED_FIX_GAP = 2.0
 REST_ACCEL_TOLERANCE = 0.3
 #: ... and |omega| below this [rad/s] (about 1 deg/s)
 REST_RATE_TOLERANCE = 0.02
-#: heading 1-sigma after a course initialization: velocity sigma / speed, at least this [rad]
+#: heading 1-sigma after a course initialization: atan(velocity sigma / speed), at least this
+#: [rad] (what the course cannot see: a car's sideslip, a walker's sway)
 MIN_COURSE_SIGMA = math.radians(2.0)
 #: level 1-sigma without a rest stretch (roll 0, pitch from the flight path) [rad]
 NO_REST_LEVEL_SIGMA = math.radians(5.0)
@@ -68,7 +74,8 @@ INIT_PARAMETERS = (
            "accelerometers at rest) or 'align' (static coarse alignment: leveling and "
            "gyrocompassing over align_time)", "given"),
     real("init_speed_min", "m/s", "init_mode 'gnss': horizontal speed from which the course "
-         "over ground gives the heading", DEFAULT_INIT_SPEED, Limits(0.0, 1e3, low_open=True)),
+         "over ground gives the heading (a slow walk)", DEFAULT_INIT_SPEED,
+         Limits(0.0, 1e3, low_open=True)),
     real("align_time", "s", "init_mode 'align': length of the static alignment from the start",
          DEFAULT_ALIGN_TIME, Limits(0.0, 3600.0, low_open=True)),
 )
@@ -112,7 +119,8 @@ class Initializer:
     docstring); ``done`` from the start for ``given``."""
 
     state_fields = ("done", "elapsed", "rest_dvel", "rest_dtheta", "rest_time", "all_dvel",
-                    "all_dtheta", "previous_fix", "first_position", "checked", "warned")
+                    "all_dtheta", "previous_fix", "first_position", "checked", "warned",
+                    "first_fix_time", "fastest", "wait_warned")
     derived_fields = ("mode", "speed_min", "align_time", "use_fix_velocity")
 
     def __init__(self, mode, speed_min=DEFAULT_INIT_SPEED, align_time=DEFAULT_ALIGN_TIME,
@@ -127,6 +135,9 @@ class Initializer:
         self.all_dvel, self.all_dtheta = np.zeros(3), np.zeros(3)
         self.previous_fix = None      # (time, lat, lon, h)
         self.first_position = None    # (lat, lon, h)
+        self.first_fix_time = None    # gnss: time of the first valid fix [s]
+        self.fastest = 0.0            # ... and the largest horizontal speed since [m/s]
+        self.wait_warned = False      # ... and the wait was warned of
 
     # -- intervals -------------------------------------------------------------------------
     def add_interval(self, dtheta, dvel, dt, lat, h):
@@ -164,7 +175,10 @@ class Initializer:
         t, lat, lon, h = fix[:4]
         if self.first_position is None:
             self.first_position = (lat, lon, h)
+            self.first_fix_time = t
         v = self._velocity(fix)
+        if v is not None:
+            self.fastest = max(self.fastest, math.hypot(v[0], v[1]))
         if v is None or math.hypot(v[0], v[1]) < self.speed_min:
             return None
         age = nav_time - t
@@ -177,6 +191,20 @@ class Initializer:
             roll, pitch = 0.0, math.atan2(-v[2], math.hypot(v[0], v[1]))
         yaw = math.atan2(v[1], v[0])
         return lat_now, lon_now, h - v[2] * age, v, roll, pitch, yaw
+
+    def waiting_warning(self, t):
+        """Mode ``gnss``: the warning (once) that no fix at ``init_speed_min`` came in the
+        :data:`INIT_WAIT_WARNING_S` seconds since the first valid fix, at gnss_time ``t``; else
+        None.  Without it a walk below the speed ran to its end on the given state."""
+        if (self.done or self.wait_warned or self.first_fix_time is None
+                or t - self.first_fix_time < INIT_WAIT_WARNING_S):
+            return None
+        self.wait_warned = True
+        return (f"init_mode 'gnss': no fix with a horizontal speed of at least init_speed_min "
+                f"= {self.speed_min:g} m/s in the {t - self.first_fix_time:.4g} s since the "
+                f"first valid fix (the fastest: {self.fastest:.3g} m/s); the filter has not "
+                "started and outputs its given state (aligned = false) until one comes: lower "
+                "init_speed_min, or set init_mode = 'given' or 'align'")
 
     def note_fix(self, fix):
         """A valid fix in mode ``align``: its position is the alignment's."""
@@ -194,15 +222,22 @@ class Initializer:
     def start_sigmas(self, p0, r_sigma, speed):
         """The initial 1-sigma vector ``p0`` (15,) with position, velocity and attitude
         raised to what the method knows at least: the fix's sigma for position and
-        velocity (``gnss``), the course's velocity sigma / ``speed`` for yaw, and
-        :data:`NO_REST_LEVEL_SIGMA` for a level taken from the flight path."""
+        velocity (``gnss``) and :data:`NO_REST_LEVEL_SIGMA` for a level taken from the
+        flight path.  The yaw's sigma (``gnss``) is the course's own, whatever the configured
+        one (which belongs to the given state): the course ``atan2(v_e, v_n)`` of a velocity
+        whose horizontal sigma is ``sigma_v`` is off by ``atan(sigma_v / speed)`` (the
+        cross-track velocity error over the speed, first order; Groves 2013 sec. 5.6.2,
+        heading from the trajectory), at least :data:`MIN_COURSE_SIGMA`.  Keeping a
+        configured 100 deg after taking the yaw from a 10 m/s course left the UKF's first
+        updates to turn the heading on a 100 deg uncertainty (outages ended 79 m off on a
+        real car against Kf's 9 m)."""
         p0 = np.array(p0, dtype=float)
         if self.mode == "gnss":
             p0[0:3] = np.maximum(p0[0:3], r_sigma[0:3])
             v_sigma = (r_sigma[3:6] if len(r_sigma) == 6 else
                        math.sqrt(2.0) * r_sigma[0:3] / MAX_DIFFERENCED_FIX_GAP)
             p0[3:6] = np.maximum(p0[3:6], v_sigma)
-            p0[8] = max(p0[8], MIN_COURSE_SIGMA, float(max(v_sigma[:2])) / speed)
+            p0[8] = max(MIN_COURSE_SIGMA, math.atan2(float(max(v_sigma[:2])), speed))
             if self.rest_time == 0.0:
                 p0[6:8] = np.maximum(p0[6:8], NO_REST_LEVEL_SIGMA)
         return p0

@@ -55,6 +55,8 @@ class KfConfig:
     r_sigma: np.ndarray            # (3,) or (6,) measurement 1-sigma, pos NED [m] (+ vel [m/s])
     measurement: str = "position_velocity"
     lever_arm: Optional[np.ndarray] = None   # (3,) body [m], IMU to antenna; None = zero
+    gyro_bias0: Optional[np.ndarray] = None  # (3,) initial gyro bias [rad/s]; None = zero
+    accel_bias0: Optional[np.ndarray] = None  # (3,) initial accel bias [m/s^2]; None = zero
 
 
 @dataclass
@@ -152,6 +154,11 @@ def add_noise_rows(q_acc, q_density, dt):
             q_acc[b, i, i] += q_density[b, i] * dt
 
 
+def _initial_bias(value):
+    """A configured initial bias as a fresh (3,) float array (zeros for None)."""
+    return np.zeros(3) if value is None else np.array(value, dtype=float).reshape(3)
+
+
 class KfEngine:
     """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
 
@@ -170,13 +177,19 @@ class KfEngine:
         self.m = MEASUREMENTS[config.measurement]
         self.H = np.zeros((self.m, N_STATES))
         self.H[:, :self.m] = np.eye(self.m)
-        self.gyro_bias = np.zeros(3)
-        self.accel_bias = np.zeros(3)
+        self.gyro_bias = _initial_bias(config.gyro_bias0)
+        self.accel_bias = _initial_bias(config.accel_bias0)
         self.phi_acc = np.eye(N_STATES)
         self.q_acc = np.zeros((N_STATES, N_STATES))
         self.n_updates = 0
         self.last = None  # UpdateResult of the latest update
         self.rate_ib = np.zeros(3)  # body rate of the latest interval (lever-arm velocity)
+
+    @property
+    def p0_var(self):
+        """The initial variances of the error state (15,): the ceiling of the recovery
+        guards' inflation of attitude and biases (navcore.filters.recovery)."""
+        return np.asarray(self.config.p0, dtype=float) ** 2
 
     # -- time update -------------------------------------------------------------------
     def propagate(self, dtheta, dvel, dt):

@@ -22,7 +22,8 @@ bounded; the fading factor of the strong tracking filter, Zhou & Frank 1996, Int
   counts the epochs of a run of rejections *and* of an outage (no fix at all) alike.  A
   component the filter's law flags again after ``recovery_epochs`` fix intervals without an
   accepted value is re-acquired: the navigation part of the predicted covariance (position,
-  velocity, attitude and their cross terms with the biases; :func:`inflate_navigation`) is
+  velocity, attitude up to its initial variance, and their cross terms with the biases;
+  :func:`inflate_navigation`) is
   inflated by the factor ``lambda >= 1`` for which the flagged components' innovation has its
   expected NIS (:func:`inflation_factor`: ``v' (lambda H P H' + R)^-1 v = k`` for k components),
   and the law runs again on the inflated prediction with those components accepted.  So the
@@ -30,7 +31,9 @@ bounded; the fading factor of the strong tracking filter, Zhou & Frank 1996, Int
   reject is taken, with the covariance inflated by what the outage really did to the state;
   a shorter outage or a single outlier between accepted fixes is left to the law.
 * **bounded adaptive scales** -- :func:`bounded_r` keeps an estimated R at most ``r_max_scale``
-  times the configured R per axis (SageHusaFading, Iakf).
+  times the nominal R in use per axis (SageHusaFading, Iakf): the configured R, or with
+  ``r_from_receiver`` the receiver's own R of the fix (a bound relative to the configured
+  5 m let R grow 3.4e5-fold over 1-cm RTK fixes).
 
 With ``recovery`` off every filter is its paper's law as printed; the papers' scenarios set it
 off (their filter.ssv), so their numbers are those of the law.  What each filter flags:
@@ -65,7 +68,8 @@ RECOVERY_PARAMETERS = (
 )
 #: bound of the estimated R (SageHusaFading, Iakf)
 R_MAX_SCALE = real("r_max_scale", "", "recovery guard: the estimated R stays at most this "
-                   "multiple of the configured R per axis (variances; with recovery on)",
+                   "multiple of the nominal R in use per axis (r_pos_*/r_vel_*, or the receiver's "
+                   "sigmas with r_from_receiver; variances; with recovery on)",
                    4.0, Limits(1.0, 1e12))
 
 
@@ -105,18 +109,55 @@ def inflation_factor(v, HPH, R, target):
     return float(np.exp(hi))
 
 
-_NAV = np.zeros(15, dtype=bool)
-_NAV[POS] = _NAV[VEL] = _NAV[ATT] = True
+_POS_VEL = np.zeros(15, dtype=bool)
+_POS_VEL[POS] = _POS_VEL[VEL] = True
+_ATTITUDE = np.zeros(15, dtype=bool)
+_ATTITUDE[ATT] = True
 
 
-def inflate_navigation(P, lam):
-    """``D P D`` with ``D = diag(sqrt(lam))`` on position, velocity and attitude, 1 on the
-    biases: the navigation block times lambda, its cross terms with the biases times
-    sqrt(lambda), the bias block unchanged (positive definite whenever P is)."""
+def _scales_within_initial(var, lam, p0_var, capped):
+    """Per-state variance factors (B, 15): ``lam`` (B,) on position and velocity, on the
+    states ``capped`` only until their variance ``var`` reaches the initial one ``p0_var``
+    (never below 1), 1 elsewhere.  No update can make a filter less sure of its attitude or
+    biases than it was before any measurement: an inflation of them stops there (covariance
+    bounding at the initial uncertainty)."""
+    room = np.maximum(1.0, p0_var / np.maximum(var, np.finfo(float).tiny))
+    return np.where(_POS_VEL[None, :], lam[:, None],
+                    np.where(capped[None, :], np.minimum(lam[:, None], room), 1.0))
+
+
+def inflate_navigation(P, lam, p0_var):
+    """``D P D`` with ``D = diag(sqrt(lam_i))``: lambda on position and velocity, on attitude
+    only until its variance reaches the initial one ``p0_var`` (15,), 1 on the biases
+    (positive definite whenever P is).
+
+    Attitude is not measured by a fix: each re-acquisition multiplied its variance by lambda
+    and no update brought it back, so repeated re-acquisitions (101 in 300 s of a real log,
+    with a fix interval taken from the filter's start) grew the heading sigma geometrically
+    (1e30 rad after 36 of them) until the UKF's sigma points overflowed to NaN."""
     if lam == 1.0:
         return P
-    d = np.where(_NAV, np.sqrt(lam), 1.0)
+    d = np.sqrt(_scales_within_initial(np.diag(P)[None], np.array([lam]), p0_var[None],
+                                       _ATTITUDE)[0])
     return P * np.outer(d, d)
+
+
+def faded_within_initial_rows(p_prop, q_acc, lam, p0_var):
+    """Paper 001 eq. 10, ``P_pred = lambda Phi P Phi' + Q``, with the fading factor applied in
+    full to position and velocity and to attitude and the sensor biases only until their
+    variance reaches its initial one ``p0_var`` (:func:`_scales_within_initial`):
+    ``D Phi P Phi' D + Q`` with ``D = diag(sqrt(lambda_i))`` (positive definite whenever P is).
+
+    Eq. 12 sizes lambda from the position/velocity innovation and multiplies the whole P by
+    it.  On real data with centimetre fixes (RTK) and decimetre model errors its test fires
+    at nearly every fix, and the weakly observable heading and bias variances, which no update
+    brings back down, grow geometrically: on a real drive the attitude variance reached
+    2800 rad^2 and the position variance 1e12 m^2 after a 60 s outage, and Iakf stopped on a
+    non-positive-definite G.  A consistent run, whose faded variances stay below p0, gets
+    the law as printed.  ``lam`` (B,), ``p0_var`` (B, 15)."""
+    var = np.diagonal(p_prop, axis1=-2, axis2=-1)
+    d = np.sqrt(_scales_within_initial(var, lam, p0_var, ~_POS_VEL))
+    return p_prop * (d[:, :, None] * d[:, None, :]) + q_acc
 
 
 def bounded_r(R, r_max):
@@ -150,7 +191,7 @@ class RecoveryGuard:
     the components it accepted.  ``n_reacquired`` counts re-acquisitions.
     """
 
-    state_fields = ("elapsed", "interval", "since_accepted", "n_reacquired")
+    state_fields = ("elapsed", "interval", "since_accepted", "n_reacquired", "opened")
     derived_fields = ("enabled", "epochs")
 
     def __init__(self, m, *, recovery, recovery_epochs):
@@ -160,6 +201,7 @@ class RecoveryGuard:
         self.interval = 0.0                # smallest fix interval seen [s] (0: none yet)
         self.since_accepted = np.zeros(m)  # s since each component was last accepted
         self.n_reacquired = 0
+        self.opened = False                # an update has been opened (fix intervals begin)
 
     def advance(self, dt):
         self.advance_over((dt,))
@@ -174,12 +216,16 @@ class RecoveryGuard:
     def open_epoch(self):
         self.interval, self.since_accepted = self._opened()
         self.elapsed = 0.0
+        self.opened = True
 
     def _opened(self):
-        """(interval, since_accepted) as :meth:`open_epoch` leaves them."""
+        """(interval, since_accepted) as :meth:`open_epoch` leaves them.  A fix interval is
+        the time between two updates: the time from the filter's start (or its start from
+        the data) to its first update is not one -- a first fix 5 ms after the start would
+        otherwise make every later run of two rejected fixes a re-acquisition."""
         gap = self.elapsed
         interval = self.interval
-        if gap > 0.0 and (interval == 0.0 or gap < interval):
+        if self.opened and gap > 0.0 and (interval == 0.0 or gap < interval):
             interval = gap
         return interval, self.since_accepted + gap
 
@@ -242,5 +288,5 @@ class GuardedEngine:
 
 
 __all__ = ["RECOVERY_PARAMETERS", "R_MAX_SCALE", "GuardedEngine", "RecoveryGuard", "bounded_r",
-           "bounded_r_rows",
+           "bounded_r_rows", "faded_within_initial_rows",
            "flag_by_gate", "inflate_navigation", "inflation_factor", "recovery_options"]

@@ -202,7 +202,7 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
         due = self.guard.due_at_opening(faults)
         if due.any():                 # recovery guard: re-acquire with an inflated prediction
             P_pred = inflate_navigation(outcome["P_pred"][b], self.guard.reacquisition_factor(
-                z, outcome["P_pred"][b], self.R0, due))
+                z, outcome["P_pred"][b], self.R0, due), self.p0_var)
             S = P_pred[:m, :m] + self.R0
             chi2 = chi_square_per_observation(z, S)
             faults = (chi2 > self.chi2_threshold) & ~due
@@ -290,7 +290,8 @@ class Igg3RobustKfEngine(GuardedEngine, KfEngine):
         self.guard.open_epoch()
         due = self.guard.due(w == 0.0)
         if due.any():                 # recovery guard: re-acquire with an inflated prediction
-            P_pred = inflate_navigation(P_pred, self.guard.reacquisition(z, P_pred, self.R0, due))
+            P_pred = inflate_navigation(P_pred, self.guard.reacquisition(z, P_pred, self.R0, due),
+                                        self.p0_var)
             S = P_pred[:self.m, :self.m] + self.R0
             u = z / np.sqrt(np.diag(S))
             w = np.where(due, 1.0, robust_laws.igg3_weight(u, self.igg_k0, self.igg_k1))

@@ -194,7 +194,7 @@ class UkfEngine(KfEngine):
             if due.any():
                 lam = guard.reacquisition(v, P, self.R0, due)
                 for flt in filters:
-                    flt.P = inflate_navigation(flt.P, lam)
+                    flt.P = inflate_navigation(flt.P, lam, self.p0_var)
         guard.close_epoch(True)
         return lam
 
