@@ -130,6 +130,7 @@ from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from ..results.recorder import Recording
 from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
+from ..model.suggestions import did_you_mean
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 
@@ -167,6 +168,12 @@ def _column_blocks(sources):
 
 # ----------------------------------------------------------------------------------------
 # Simulation
+def _parameter_hint(d, name: str) -> str:
+    """The component's parameters close to the unknown ``name``, or all of them."""
+    names = sorted(v.name for v in d.variables.values() if v.causality == "parameter")
+    return did_you_mean(name, names) or f" (its parameters: {', '.join(names)})"
+
+
 # ----------------------------------------------------------------------------------------
 class Simulation:
     """Run a :class:`SystemModel` by the rules of the module docstring.
@@ -281,8 +288,8 @@ class Simulation:
             if var is None or var.causality not in settable:
                 raise WiringError(
                     f"parameter override '{key}': component '{comp}' ({d.source}) has no "
-                    f"parameter '{var_name}'" + ("" if var is None else
-                                                 f" (it is an {var.causality})")
+                    f"parameter '{var_name}'" + (_parameter_hint(d, var_name) if var is None
+                                                 else f" (it is an {var.causality})")
                 )
             values[comp][var_name] = value
         return values, skipped
@@ -291,7 +298,8 @@ class Simulation:
         comp, dot, var = key.partition(".")
         if comp not in self._index:
             raise WiringError(f"{what} '{key}': no component named '{comp}' "
-                              f"(components: {', '.join(self.names)})")
+                              f"(components: {', '.join(self.names)})"
+                              + did_you_mean(comp, self.names))
         return comp, var if dot else ""
 
     def _recorded(self, record: Optional[Iterable[str]]) -> Dict[str, List[str]]:

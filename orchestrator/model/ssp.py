@@ -155,7 +155,7 @@ def _swap_variant(comp: ComponentSpec, model_name: str) -> Dict[str, Tuple[str, 
     for ssv in comp.parameter_files:
         variant = ssv.with_name(f"{ssv.stem}.{model_name}{ssv.suffix}")
         if variant.is_file():
-            values.update(_read_ssv(variant))
+            values.update(read_ssv(variant))
     return values
 
 
@@ -174,7 +174,8 @@ def _read_parameter_set(path: Path, parameter_set: ET.Element,
     return result
 
 
-def _read_ssv(path: Path) -> Dict[str, Tuple[str, object]]:
+def read_ssv(path: Path) -> Dict[str, Tuple[str, object]]:
+    """A ``.ssv`` parameter set: name -> (type, value), each error naming the file."""
     root = _parse(path)
     if root.tag != _tag(SSV_NS, "ParameterSet"):
         raise SspError(
@@ -201,7 +202,7 @@ def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str,
             ssv_path = (path.parent / source).resolve()
             if not ssv_path.is_file():
                 raise SspError(f"{path}: {bwhere} source=\"{source}\": file not found ({ssv_path})")
-            values = _read_ssv(ssv_path)
+            values = read_ssv(ssv_path)
             files.append(ssv_path)
         else:
             pv = binding.find(_tag(SSD_NS, "ParameterValues"))
@@ -413,5 +414,5 @@ def load_ssd(path) -> SystemModel:
                        stop_time=stop, components=components, connections=connections)
 
 
-__all__ = ["SystemModel", "ComponentSpec", "Connection", "load_ssd", "FMU_TYPE", "SSD_NS",
-           "SSC_NS", "SSV_NS", "OSP_NS"]
+__all__ = ["SystemModel", "ComponentSpec", "Connection", "load_ssd", "read_ssv", "FMU_TYPE",
+           "SSD_NS", "SSC_NS", "SSV_NS", "OSP_NS"]

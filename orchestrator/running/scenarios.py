@@ -28,6 +28,7 @@ from ..cosim.master import Simulation
 from ..results.run_results import Results
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
+from ..model.suggestions import did_you_mean
 
 #: name of the component a ``--filter`` swap replaces
 FILTER_COMPONENT = "filter"
@@ -48,8 +49,9 @@ def resolve_filter(name_or_path: str) -> Path:
             raise NavfmuError(f"filter FMU file not found: {p}")
         return p.resolve()
     if not (fmu_build.FMU_SOURCES / f"{name_or_path}.py").is_file():
-        raise NavfmuError(f"unknown filter '{name_or_path}' (our filters: "
-                          f"{', '.join(filter_fmus())}; or give the path of an .fmu file)")
+        ours = filter_fmus()
+        raise NavfmuError(f"unknown filter '{name_or_path}' (our filters: {', '.join(ours)}; "
+                          f"or give the path of an .fmu file){did_you_mean(name_or_path, ours)}")
     return fmu_build.fmu_path(name_or_path)
 
 
