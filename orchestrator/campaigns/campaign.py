@@ -358,11 +358,13 @@ class Campaign:
     def check(self) -> None:
         """Load the scenario and the filters, compute the identity and compare it with the
         folder's manifest; writes nothing."""
-        from ..running.prechecks import check_stop_time
-        from ..running.scenarios import ensure_fmus, load_scenario, swap_filter
+        from ..running.prechecks import check_connected, check_stop_time
+        from ..running.scenarios import ensure_fmus, load_scenario, paper_reference, swap_filter
 
         spec = self.spec
         self.model = load_scenario(spec.scenario)
+        paper_reference(self.model)     # a malformed paper.json is refused before any run
+        check_connected(self.model)
         check_stop_time(spec.stop_time, self.model.start_time)
         models = [swap_filter(self.model, f) for f in spec.filters]   # unknown filter: error
         if spec.backend == "fmu":      # build once here, never in the workers

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
@@ -286,6 +287,7 @@ def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
     from ..results import plots  # not imported by the executor's workers
 
     out = Path(out)
+    made = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -305,5 +307,7 @@ def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
     except BaseException:
         for path in written:       # all three or none: no tuned set without its record
             path.unlink(missing_ok=True)
+        if made:
+            shutil.rmtree(out, ignore_errors=True)
         raise
     return written

@@ -11,6 +11,7 @@ Warnings for the user print once each as ``navfmu: warning: ...``
 """
 from __future__ import annotations
 
+import errno
 import signal
 import sys
 from pathlib import Path
@@ -43,6 +44,10 @@ class _Group(click.Group):
             with formatter.section("Commands"):
                 formatter.write_dl(rows)
 
+
+#: the errors of a disk that cannot take the output (full, over quota, read-only): the
+#: user's to act on, not a bug
+DISK_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS)
 
 #: every command: -h as well as --help, and each option's default in its help
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "show_default": True}
@@ -532,6 +537,11 @@ def main(argv=None):
     except Exception as exc:  # a bug: say so in one line unless --debug
         if debug:
             raise
+        if isinstance(exc, OSError) and exc.errno in DISK_ERRNOS:
+            # a full disk where no caller named the file: the file the system names, if any
+            where = f"{exc.filename}: " if exc.filename else ""
+            click.echo(f"navfmu: error: {where}cannot write: {exc.strerror}", err=True)
+            sys.exit(2)
         click.echo(f"navfmu: internal error: {exc!r} (run with --debug for the traceback)",
                    err=True)
         sys.exit(3)

@@ -111,6 +111,8 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
                           "applies to a sensor log)")
     model = scenarios.load_scenario(scenario)
+    scenarios.paper_reference(model)       # a malformed paper.json is refused before the run
+    prechecks.check_connected(model)
     window = parse_window(window)
     parameters = overrides(ssv, model, parse_sets(sets))
     prechecks.check_stop_time(stop, model.start_time)

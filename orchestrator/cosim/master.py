@@ -107,7 +107,9 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    (a filter swap keeps the scenario's parameters that still apply) and listed in
    :attr:`Simulation.skipped_parameters`; those of a swap variant file written for the new
    FMU (``file.MODEL.ssv`` next to a bound ``file.ssv``, :mod:`orchestrator.model.ssp`) are never
-   skipped.
+   skipped.  Units (:mod:`orchestrator.model.units`): a connector's declared unit and the
+   variable's, and the two ends of a connection, must be one unit (no connection converts);
+   a bound Real given with a ``unit`` is converted to the variable's unit, or refused.
 
 9. **Failures.**  A component failing mid-run (FMU status Discard/Error/Fatal, or a Python
    component raising ParameterError/InputError) raises
@@ -130,6 +132,7 @@ from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from ..results.recorder import Recording
 from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
+from ..model import units
 from ..model.suggestions import did_you_mean
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
@@ -258,6 +261,17 @@ class Simulation:
                 if var.type not in NUMERIC_TYPES:
                     raise WiringError(f"{where}: variable '{var_name}' is a {var.type}; only Real, "
                                       f"Integer and Boolean variables can be connected")
+                units.check_same(d.spec.units.get(var_name, ""), var.unit,
+                                 f"{where}: the system structure's connector '{var_name}' "
+                                 "against the FMU's variable")
+            self._check_connection_units(conn)
+
+    def _check_connection_units(self, conn: Connection) -> None:
+        """Both ends of ``conn`` in one unit (rule 8: the value passes unchanged)."""
+        ends = [self.components[self._index[c]].variables[v] for c, v in (
+            (conn.start_component, conn.start_connector),
+            (conn.end_component, conn.end_connector))]
+        units.check_same(ends[0].unit, ends[1].unit, f"connection {conn}")
 
     def _parameters(self, overrides: Mapping[str, Any]):
         values: Dict[str, Dict[str, Any]] = {n: {} for n in self.names}
@@ -277,6 +291,11 @@ class Simulation:
                         + ("does not exist" if var is None else
                            f"has causality '{var.causality}' (not settable)")
                     )
+                unit = d.spec.parameter_units.get(pname)
+                if unit:
+                    value = units.convert(value, unit, var.unit,
+                                          f"component '{d.spec.name}' ({d.source}): parameter "
+                                          f"'{pname}' = {value!r} {unit}")
                 values[d.spec.name][pname] = value
         if skipped:
             warnings.warn("parameters not present in the swapped-in component(s), skipped: "

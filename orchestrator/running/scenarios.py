@@ -21,6 +21,7 @@ from ..building.build import ensure_fmus
 from ..results import metrics as nav_metrics
 from ..results import mission_metrics
 from . import prechecks
+from .paper_shape import check_reference
 from ..results import recorder
 from ..results import windows as paper_windows
 from ..errors import NavfmuError, NavfmuWarning
@@ -81,9 +82,10 @@ def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
     if not ref.is_file():
         return None
     try:
-        return json.loads(ref.read_text(encoding="utf-8"))
+        data = json.loads(ref.read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
+    return check_reference(data, ref)
 
 
 def mission_baseline(model: SystemModel) -> Optional[Dict[str, Any]]:

@@ -6,7 +6,10 @@ An item is ``COMPONENT=FILE`` (the file's parameter names are the component's, a
 names carry the component (``filter.r_pos_n``).  Items apply in their order, a later one over
 an earlier one, all of them over the model's own bindings; ``--set`` applies over them.  They
 become the run's parameter overrides (``{"component.parameter": value}``), so the master
-checks every name against the component's FMU like a ``--set``.
+checks every name against the component's FMU like a ``--set``.  A Real given with a
+``unit`` is converted here to the unit of the variable in the component's FMU as the model
+names it (before a ``--filter`` swap: our filters share one contract), or refused by name
+(:mod:`orchestrator.model.units`).
 """
 from __future__ import annotations
 
@@ -16,6 +19,7 @@ from typing import Dict, Sequence, Tuple
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel, read_ssv
 from ..model.suggestions import did_you_mean
+from ..model.units import convert
 
 
 def split_item(item: str) -> Tuple[str, Path]:
@@ -32,10 +36,35 @@ def split_item(item: str) -> Tuple[str, Path]:
     return "", Path(text)
 
 
-def _read(item: str, path: Path) -> Dict[str, Tuple[str, object]]:
+def _read(item: str, path: Path, units=None) -> Dict[str, Tuple[str, object]]:
     if not path.is_file():
         raise NavfmuError(f"--ssv {item}: file not found ({path})")
-    return read_ssv(path)
+    return read_ssv(path, units)
+
+
+def _variable_units(model: SystemModel, component: str) -> Dict[str, str]:
+    """variable -> unit of ``component``'s FMU (or, not built, its navcore component)."""
+    from ..cosim.component_description import describe_direct, describe_fmu
+    from .scenarios import registry
+
+    spec = model.component(component)
+    described = (describe_fmu(spec) if spec.source.is_file()
+                 else describe_direct(spec, registry()))
+    return {name: v.unit for name, v in described.variables.items()}
+
+
+def _in_variable_units(item: str, model: SystemModel, bound, units: Dict[str, str]):
+    """``bound`` with each value given in a unit converted to its variable's unit."""
+    targets: Dict[str, Dict[str, str]] = {}
+    for key, unit in units.items():
+        comp, _, name = key.partition(".")
+        if comp not in targets:
+            targets[comp] = _variable_units(model, comp)
+        if name in targets[comp]:       # an unknown name is refused by the master, by name
+            typ, value = bound[key]
+            bound[key] = (typ, convert(value, unit, targets[comp][name],
+                                       f"--ssv {item}: parameter '{key}' = {value!r} {unit}"))
+    return bound
 
 
 def read_bindings(items: Sequence[str], model: SystemModel) -> Dict[str, Tuple[str, object]]:
@@ -45,11 +74,12 @@ def read_bindings(items: Sequence[str], model: SystemModel) -> Dict[str, Tuple[s
     bound: Dict[str, Tuple[str, object]] = {}
     for item in items:
         component, path = split_item(item)
-        values = _read(item, path)
+        file_units: Dict[str, str] = {}
+        values = _read(item, path, file_units)
         if component and component not in names:
             raise NavfmuError(f"--ssv {item}: {model.path} has no component '{component}' "
                               f"(components: {', '.join(names)}){did_you_mean(component, names)}")
-        for key, typed in values.items():
+        for key in values:
             if not component:
                 comp, dot, _ = key.partition(".")
                 if not dot:
@@ -60,7 +90,10 @@ def read_bindings(items: Sequence[str], model: SystemModel) -> Dict[str, Tuple[s
                     raise NavfmuError(
                         f"--ssv {item}: parameter '{key}': {model.path} has no component "
                         f"'{comp}' (components: {', '.join(names)}){did_you_mean(comp, names)}")
-            bound[f"{component}.{key}" if component else key] = typed
+        prefix = f"{component}." if component else ""
+        typed = {prefix + k: v for k, v in values.items()}
+        bound.update(_in_variable_units(item, model, typed,
+                                        {prefix + k: u for k, u in file_units.items()}))
     return bound
 
 
@@ -70,7 +103,12 @@ def read_fmu_bindings(items: Sequence[str]) -> Dict[str, object]:
     values: Dict[str, object] = {}
     for item in items:
         _, path = split_item(item)
-        values.update({k: v for k, (_, v) in _read(item, path).items()})
+        units: Dict[str, str] = {}
+        values.update({k: v for k, (_, v) in _read(item, path, units).items()})
+        for key, unit in units.items():
+            raise NavfmuError(f"--ssv {item}: parameter '{key}' is given in '{unit}'; navfmu "
+                              "verify takes the values in the FMU's own units (leave out the "
+                              "unit attribute)")
     return values
 
 
