@@ -39,6 +39,10 @@ knot = nautical_mile / hour = kn
 """
 
 
+#: units that declare no physical quantity: none, or a generic (dimensionless) signal
+GENERIC = ("", "1")
+
+
 class UnitError(NavfmuError):
     """A unit that is unknown, or that cannot be converted to the one it must meet."""
 
@@ -99,8 +103,9 @@ def convert(value: float, unit: str, target: str, where: str) -> float:
 def check_same(unit: str, other: str, where: str) -> None:
     """``unit`` and ``other`` are one unit (the same text, or two spellings of one unit):
     the master passes a connected value unchanged, so 'deg' against 'rad' or 'm/s' against
-    'm' is refused, naming ``where``; an empty unit (none declared) meets any."""
-    if not unit or not other or unit == other:
+    'm' is refused, naming ``where``.  An empty unit (none declared) and the dimensionless
+    '1' (a generic signal: a gain's input, a flag) meet any unit."""
+    if unit in GENERIC or other in GENERIC or unit == other:
         return
     a, b = _known(unit, where), _known(other, where)
     try:
@@ -112,4 +117,4 @@ def check_same(unit: str, other: str, where: str) -> None:
                         "value unchanged: give both ends one unit)")
 
 
-__all__ = ["UnitError", "convert", "check_same"]
+__all__ = ["UnitError", "GENERIC", "convert", "check_same"]
