@@ -162,6 +162,10 @@ BAD = {
     "verify_datasheet_text": (None, ["verify", KF, "--set", "datasheet.foo=bar", "--out", OUT],
                               "--set datasheet.foo=bar: a datasheet value must be a finite "
                               "number >= 0"),
+    "verify_junit_below_a_file": (None, ["verify", KF, "--junit", f"{SSV_KM}/junit.xml",
+                                         "--out", OUT],
+                                  f"--junit {SSV_KM}/junit.xml: cannot write into {SSV_KM}: "
+                                  "not a folder"),
     # -- a full disk ----------------------------------------------------------------------
     "disk_full_run": (None, ["run", S, "--stop", "20", "--backend", "direct", "--out",
                              "{full}/out"],

@@ -56,6 +56,8 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
     setting = make_setting(facts, found_role, scenario_names, sets)
     out = Path(out) if out else Path(default_root) / f"verify-{facts.model_name}"
     outputs.check_target(out)
+    if junit is not None:
+        outputs.check_writable(junit, "--junit")     # before the checks, not after them
     executor = Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)
     fmu_build.build([n for n in REFERENCE_FMUS if (fmu_build.FMU_SOURCES / f"{n}.py").is_file()],
                     log=log)
