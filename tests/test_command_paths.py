@@ -66,13 +66,11 @@ def _listing(folder):
     (["export", MODEL, "--out", f"{UNWRITABLE}.fmu"], ["--out", "cannot write into /proc"]),
     (["package", MODEL, "--out", f"{UNWRITABLE}.ssp"], ["--out", "cannot write into /proc"]),
     (["convert", "gnss-ins-sim", GIS, UNWRITABLE], ["destination", "cannot write into /proc"]),
-    (["tune", MODEL, "--params", "r_scale_max", "--ssv", f"{UNWRITABLE}.ssv"],
-     ["--ssv", "cannot write into /proc"]),
     (["tune", MODEL, "--params", "r_scale_max", "--out", UNWRITABLE],
      ["--out", "cannot write into /proc"]),
     (["montecarlo", MODEL, "--runs", "1", "--filters", "Kf", "--stop", "0.1", "--out",
       UNWRITABLE], ["--out", "cannot write"]),
-], ids=["export", "package", "convert", "tune-ssv", "tune-out", "montecarlo"])
+], ids=["export", "package", "convert", "tune-out", "montecarlo"])
 def test_unwritable_output_refused_before_the_work(navfmu_cli, tmp_path, monkeypatch, args,
                                                    words):
     monkeypatch.chdir(tmp_path)

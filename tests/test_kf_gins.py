@@ -17,7 +17,7 @@ from navcore.core.component import InputError
 from navcore.sensors.log_converters import read_kf_gins
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log
 from orchestrator.building import build as fmu_build
-from orchestrator.model.ssp import _read_ssv
+from orchestrator.model.ssp import read_ssv
 from orchestrator.running import scenarios
 from test_sensorlog import GNSS_INS_SIM, _log, _write_kf_gins
 
@@ -112,7 +112,7 @@ def test_config_becomes_a_filter_ssv_in_si_units(tmp_path, navfmu_cli):
                                 tmp_path / "kf-gins.yaml")
     assert code == 0, err
     assert "--start 456300" in out and "gsstd" in out      # the start, and what is left out
-    values = {k: v for k, (_, v) in _read_ssv(tmp_path / "log" / "filter.ssv").items()}
+    values = {k: v for k, (_, v) in read_ssv(tmp_path / "log" / "filter.ssv").items()}
     names = {p.name for p in components.Kf.parameters}
     assert set(values) <= names, set(values) - names
     d2r = math.pi / 180.0
@@ -240,7 +240,7 @@ def test_config_with_a_thirteen_column_file_uses_its_velocity(tmp_path, navfmu_c
                                 tmp_path / "kf-gins.yaml")
     assert code == 0, err
     assert re.search(r"--start 408640\.97(?![0-9])", out), out
-    values = {k: v for k, (_, v) in _read_ssv(tmp_path / "log" / "filter.ssv").items()}
+    values = {k: v for k, (_, v) in read_ssv(tmp_path / "log" / "filter.ssv").items()}
     assert values["measurement"] == "position_velocity" and values["r_from_receiver"] is True
     assert [values[f"r_vel_{a}"] for a in "ned"] == pytest.approx([0.011, 0.023, 0.047],
                                                                   rel=1e-12)

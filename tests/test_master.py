@@ -353,11 +353,11 @@ def test_failed_write_leaves_no_file(write_ssd, tmp_path, monkeypatch):
         raise OSError("disk full")  # ... then the failure
 
     monkeypatch.setattr(results_module, "write_csv_table", broken_writer)
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(NavfmuError, match=f"cannot write {out / 'r.csv'}: disk full"):
         res.to_csv(out / "r.csv")
     assert os.listdir(out) == []
     (out / "r.csv").write_text("previous")
-    with pytest.raises(OSError):
+    with pytest.raises(NavfmuError):
         res.to_csv(out / "r.csv")
     assert os.listdir(out) == ["r.csv"] and (out / "r.csv").read_text() == "previous"
 

@@ -341,10 +341,11 @@ def test_recording_an_unknown_component_is_refused(write_ssd):
 
 
 def test_units_come_from_the_component_or_else_from_the_ssd(write_ssd):
-    """Labelled's y has no unit of its own: the SSD's connector unit; gain's y is 'm' whatever
-    the SSD says; the String output is never recorded."""
+    """Labelled's y has no unit of its own: the SSD's connector unit; gain's y is its own 'm'
+    (a connector in another unit is refused: tests/test_bad_inputs.py); the String output is
+    never recorded."""
     gain = component_xml("gain", "Gain.fmu", [("u", "input", "Real"),
-                                              ("y", "output", "Real", "kg")])
+                                              ("y", "output", "Real", "m")])
     lab = _labelled([("u", "input", "Real"), ("y", "output", "Real", "V")])
     model = load_ssd(write_ssd(ssd_text(gain + lab, connection_xml("gain.y", "lab.u"),
                                         stop=0.2)))

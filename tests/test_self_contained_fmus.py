@@ -122,8 +122,16 @@ def _build_changed_kf(tmp_path: Path) -> Path:
                         ignore=shutil.ignore_patterns("__pycache__"))
     module = sources / fmu_build.LIBRARY / "components" / "kf_components.py"
     module.write_text(module.read_text() + CHANGE)
-    return fmu_build.build_one(sources / "Kf.py", tmp_path / "dist",
-                               fmu_build.patched_library(log=None))
+    # in a fresh interpreter: an FMU that ran in this one may have put its own pythonfmu
+    # (no builder binaries) first on the path (build.builder_usable)
+    built = run_script(f"""
+        import json
+        from pathlib import Path
+        from orchestrator.building import build
+        print(json.dumps(str(build.build_one(Path({str(sources / 'Kf.py')!r}),
+              Path({str(tmp_path / 'dist')!r}), build.patched_library(log=None)))))
+        """, cwd=tmp_path)
+    return Path(built)
 
 
 def test_two_builds_of_kf_run_their_own_code_side_by_side(dist, tmp_path):

@@ -3,7 +3,6 @@ set the model binds with one line, clear errors.  (How much faster 2 workers are
 not asserted: see docs/ahrs.md.)"""
 from __future__ import annotations
 
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +13,7 @@ from docs_tables import documented_parameters, parse_range
 from orchestrator.campaigns import tune as tuner
 from orchestrator.errors import NavfmuError
 from orchestrator.model.ssp import load_ssd
+from orchestrator.running.ssv_bindings import read_bindings
 
 MODEL = Path(__file__).resolve().parent.parent / "models" / "ahrs_turntable"
 PARAMS = ["fuzzy_e_z_right", "fuzzy_de_z_right"]
@@ -74,17 +74,19 @@ def test_search_ranges_are_the_documented_ones(serial):
     assert serial["ranges"] == {n: [documented[n].low, documented[n].high] for n in PARAMS}
 
 
-def test_tuned_set_is_bound_with_one_line(serial, tmp_path):
-    model = tmp_path / "model"
-    shutil.copytree(MODEL, model)
-    written = tuner.write_tune_outputs(serial, tmp_path / "out", ssv=model / "filter_tuned.ssv")
+def test_tuned_set_is_written_into_out_only_and_bound_with_ssv(serial, tmp_path):
+    before = {p.name: p.read_bytes() for p in MODEL.iterdir() if p.is_file()}
+    out = tmp_path / "out"
+    written = tuner.write_tune_outputs(serial, out)
     assert [p.name for p in written] == ["filter_tuned.ssv", "tune.json", "fitness.png"]
-    ssd = load_ssd(model / "SystemStructure.ssd")
-    bound = ssd.component("filter").parameters
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in written)
+    assert {p.name: p.read_bytes() for p in MODEL.iterdir() if p.is_file()} == before
+    # the printed way to apply it: --ssv filter=OUT/filter_tuned.ssv
+    bound = read_bindings([f"filter={written[0]}"], load_ssd(MODEL / "SystemStructure.ssd"))
     for name, value in serial["best_values"].items():
-        assert bound[name][1] == pytest.approx(value, rel=1e-15)
-    # the one file holds the component's other parameters too (it replaces its bindings)
-    assert bound["r_accel_mps2"] == ("Real", 0.0208)
+        assert bound[f"filter.{name}"][1] == pytest.approx(value, rel=1e-15)
+    # the one file holds the component's other parameters too (libcosim: one binding)
+    assert bound["filter.r_accel_mps2"] == ("Real", 0.0208)
 
 
 def test_bad_requests_are_user_errors():

@@ -19,5 +19,8 @@ Wings, lowest first; a wing imports only the ones before it (``tests/test_layout
 ``errors`` is the one error hierarchy, for navcore and the master.
 """
 
-#: navfmu's version: the distribution's (pyproject.toml reads it here) and every FMU's
+#: navfmu's version: the one definition (``pyproject.toml`` reads it, ``navfmu --version``
+#: prints it)
 __version__ = "0.1.0"
+#: the FMI standard every navfmu FMU implements
+FMI_VERSION = "2.0"

@@ -52,6 +52,7 @@ from . import batching
 from .executor import Executor, Task
 from ..results.jsonsafe import jsonable
 from ..results.run_results import atomic_write
+from .defaults import DEFAULT_SEED, DEFAULT_WORKERS
 
 MANIFEST = "campaign.json"
 FORMAT = "navfmu-campaign-1"
@@ -67,7 +68,7 @@ class CampaignSpec:
     scenario: str
     filters: Tuple[str, ...]
     runs: int
-    seed: int = 1
+    seed: int = DEFAULT_SEED
     backend: str = "direct"
     stop_time: Optional[float] = None
     window: Optional[Tuple[float, float]] = None
@@ -162,6 +163,19 @@ def random_components(model, backend: str, parameters=None) -> List[str]:
     return [d.spec.name for d in sim.components
             if (v := d.variables.get("seed")) is not None and v.type == "Integer"
             and v.causality == "parameter"]
+
+
+def _check_no_seed_override(spec: CampaignSpec, components: List[str]) -> None:
+    """A campaign gives every random component its seed (module docstring): a ``seed``
+    parameter set by ``--set`` or ``--ssv`` would be replaced in every run, so it is
+    refused, with the options that choose the seeds."""
+    for key, value in spec.parameters:
+        comp, _, name = key.partition(".")
+        if name == "seed" and comp in components:
+            raise NavfmuError(
+                f"--set {key}={value}: a campaign gives each random component its seed (run "
+                f"i: --seed + i + the component's offset); choose them with --seed and "
+                f"--seed-offset {comp}=K instead")
 
 
 def seed_offsets(spec: CampaignSpec, components: List[str]) -> Dict[str, int]:
@@ -349,18 +363,22 @@ class Campaign:
     def check(self) -> None:
         """Load the scenario and the filters, compute the identity and compare it with the
         folder's manifest; writes nothing."""
-        from ..running.prechecks import check_stop_time
-        from ..running.scenarios import ensure_fmus, load_scenario, swap_filter
+        from ..running.prechecks import check_connected, check_stop_time
+        from ..running.scenarios import ensure_fmus, load_scenario, paper_reference, swap_filter
 
         spec = self.spec
         self.model = load_scenario(spec.scenario)
+        paper_reference(self.model)     # a malformed paper.json is refused before any run
+        check_connected(self.model)
         check_stop_time(spec.stop_time, self.model.start_time)
         models = [swap_filter(self.model, f) for f in spec.filters]   # unknown filter: error
         if spec.backend == "fmu":      # build once here, never in the workers
             for m in models:
                 ensure_fmus(m, log=self.log)
-        self.offsets = seed_offsets(spec, random_components(models[0], spec.backend,
-                                                            spec.parameters))
+        # every filter's wiring and overrides, checked before any run (mixed roles refused)
+        randoms = [random_components(m, spec.backend, spec.parameters) for m in models]
+        _check_no_seed_override(spec, randoms[0])
+        self.offsets = seed_offsets(spec, randoms[0])
         self.identity = {
             "scenario": self.model.name, "ssd": str(Path(self.model.path).resolve()),
             "scenario_sha256": scenario_hash(self.model), "filters": list(spec.filters),
@@ -470,8 +488,9 @@ class Campaign:
         return out
 
 
-def run_campaign(spec: CampaignSpec, out, workers: int = 1, scheduler: Optional[str] = None,
-                 local_cluster: bool = False, progress=None, log=print) -> Dict[str, Any]:
+def run_campaign(spec: CampaignSpec, out, workers: int = DEFAULT_WORKERS,
+                 scheduler: Optional[str] = None, local_cluster: bool = False, progress=None,
+                 log=print) -> Dict[str, Any]:
     """Prepare, run the missing runs, summarize (written to ``summary.json``); returns the
     summary with ``counts`` (runs done before, run now, total)."""
     from .campaign_summary import summarize

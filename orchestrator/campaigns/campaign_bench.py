@@ -17,6 +17,7 @@ from typing import Any, Dict, Optional, Sequence
 
 from .campaign import Campaign, CampaignSpec
 from .executor import Executor, Task
+from .defaults import BENCH_RUNS, BENCH_WORKERS
 
 
 def _warm(seconds: float) -> int:
@@ -41,8 +42,9 @@ def _timed_campaign(spec: CampaignSpec, options: Dict[str, Any]) -> float:
             return time.perf_counter() - t0
 
 
-def bench_executors(scenario: str, filters: Sequence[str] = ("Kf",), runs: int = 8,
-                    stop_time: Optional[float] = 50.0, workers: int = 2, dask: bool = True,
+def bench_executors(scenario: str, filters: Sequence[str] = ("Kf",), runs: int = BENCH_RUNS,
+                    stop_time: Optional[float] = 50.0, workers: int = BENCH_WORKERS,
+                    dask: bool = True,
                     log=print) -> Dict[str, Any]:
     """Wall times of one campaign per executor mode and the derived ratios (JSON-ready)."""
     Executor(workers=workers)      # --workers checked before the serial leg runs

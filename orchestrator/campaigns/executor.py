@@ -44,6 +44,7 @@ from typing import Any, Callable, Dict, Hashable, Iterable, Iterator, Optional, 
 
 from ..cosim import interrupts
 from ..errors import NavfmuError
+from .defaults import DEFAULT_WORKERS
 
 #: how long the driver waits for tasks before it looks for a pending Ctrl-C or SIGTERM [s]
 POLL_S = 0.2
@@ -135,7 +136,7 @@ class Executor:
                 ...
     """
 
-    workers: int = 1
+    workers: int = DEFAULT_WORKERS
     scheduler: Optional[str] = None
     local_cluster: bool = False
     _pool: Any = field(default=None, init=False, repr=False)

@@ -41,6 +41,7 @@ from typing import Callable, Dict, List, Sequence, Tuple
 import numpy as np
 
 from ..errors import NavfmuError
+from .defaults import DEFAULT_SEED
 
 #: evaluate a batch of gene vectors (rows in [0, 1]) -> their costs J (> 0, lower is better)
 Evaluate = Callable[[np.ndarray], Sequence[float]]
@@ -102,7 +103,7 @@ class GeneticAlgorithm:
     generations: int = 5
     crossover_probability: float = 0.8
     mutation_probability: float = 0.2
-    seed: int = 0
+    seed: int = DEFAULT_SEED
 
     def __post_init__(self):
         if self.n_genes < 1:

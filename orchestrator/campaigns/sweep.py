@@ -21,6 +21,7 @@ from ..results import metrics as nav_metrics
 from . import batching
 from .executor import Executor, Task
 from ..results.phases import phase_statistics
+from .defaults import DEFAULT_WORKERS
 
 GROUPS = ("position", "velocity", "attitude")
 
@@ -106,7 +107,7 @@ def run_points(scenario: str, filter: str, points: Sequence[Tuple[float, Dict[st
 
 def sweep(scenario: str, filters: Sequence[str], levels: Sequence[float],
           scaled_names: Sequence[str], seeds: Sequence[Dict[str, Any]] = ({},),
-          stop_time: Optional[float] = None, workers: int = 1, progress=None,
+          stop_time: Optional[float] = None, workers: int = DEFAULT_WORKERS, progress=None,
           batch: Optional[int] = None):
     """Results keyed ``(level, filter, seed index)`` (module docstring).  ``batch``: points
     of a filter per batch (None: chosen, :mod:`.batching`; 1: one task per point)."""

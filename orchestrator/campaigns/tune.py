@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple
@@ -47,8 +48,10 @@ from .executor import Executor, Task
 from .genetic import GeneticAlgorithm, decode
 from ..results.run_results import atomic_write
 from ..running.scenarios import FILTER_COMPONENT, ensure_fmus, load_scenario, registry
+from ..running.ssv_bindings import bind_overrides
 from ..cosim.master import Simulation
 from ..model.ssp import SystemModel
+from .defaults import DEFAULT_SEED, DEFAULT_WORKERS
 
 
 @dataclass(frozen=True)
@@ -63,6 +66,8 @@ class TuneSpec:
     stop_time: Optional[float]
     window: Optional[Tuple[float, float]]
     seed_parameters: Tuple[str, ...]
+    #: fixed overrides of every run (``--ssv``), under the candidate's values and the seeds
+    parameters: Tuple[Tuple[str, Any], ...] = ()
 
 
 def parse_ranges(items: Sequence[str]) -> Dict[str, Tuple[float, float]]:
@@ -146,7 +151,8 @@ def _values(spec: TuneSpec, types, x) -> Dict[str, Any]:
 
 
 def _run_parameters(spec: TuneSpec, values: Dict[str, Any], seed) -> Dict[str, Any]:
-    parameters = {f"{spec.component}.{k}": v for k, v in values.items()}
+    parameters = dict(spec.parameters)
+    parameters.update({f"{spec.component}.{k}": v for k, v in values.items()})
     if seed is not None:
         parameters.update({p: seed for p in spec.seed_parameters})
     return parameters
@@ -218,14 +224,18 @@ def _costs(ex: Executor, spec: TuneSpec, candidates, batch: Optional[int],
 
 
 def run_tune(scenario, component: str, names: Sequence[str], generations: int = 5,
-             population: int = 10, workers: int = 1, seed: int = 0,
+             population: int = 10, workers: int = DEFAULT_WORKERS,
+             seed: int = DEFAULT_SEED,
              ranges: Optional[Dict[str, Tuple[float, float]]] = None,
              train_seeds: Sequence[int] = (), backend: str = "direct",
              stop_time: Optional[float] = None, window=None, scheduler=None,
              crossover_probability: float = 0.8, mutation_probability: float = 0.2,
-             progress=None, log=print, batch: Optional[int] = None) -> Dict[str, Any]:
+             progress=None, log=print, batch: Optional[int] = None,
+             parameters: Optional[Dict[str, Any]] = None) -> Dict[str, Any]:
     """Run the GA (see the module docstring); returns the JSON-ready summary.  ``batch``:
-    candidates per batch on the direct backend (None: chosen, :mod:`.batching`)."""
+    candidates per batch on the direct backend (None: chosen, :mod:`.batching`).
+    ``parameters``: overrides of every run (``{"component.parameter": value}``, ``--ssv``);
+    the tuned component's are its current values and go into the tuned set."""
     batching.check_batch(batch, backend)
     batch_size = batch
     model = load_scenario(scenario)
@@ -233,11 +243,13 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
         raise NavfmuError(f"--component: {model.path} has no component '{component}'")
     if backend == "fmu":
         ensure_fmus(model, log=log)
+    model = bind_overrides(model, parameters or {})
     lo, hi, types, current = resolve_parameters(model, component, list(names), ranges or {},
                                                 backend)
     spec = TuneSpec(str(model.path), component, tuple(names),
                     tuple(int(s) for s in train_seeds) or (None,), backend, stop_time,
-                    window, _seed_parameters(model, backend) if train_seeds else ())
+                    window, _seed_parameters(model, backend) if train_seeds else (),
+                    tuple((parameters or {}).items()))
     ga = GeneticAlgorithm(len(names), population, generations, crossover_probability,
                           mutation_probability, seed)
     # progress in individuals of the generations (an individual met before is not re-run)
@@ -269,22 +281,33 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
             "generation_mean": result.generation_mean, "evaluations": result.evaluations}
 
 
-def write_tune_outputs(summary: Dict[str, Any], out: Path, ssv: Optional[Path] = None
-                       ) -> List[Path]:
-    """``<component>_tuned.ssv`` (or ``ssv``), ``tune.json`` and ``fitness.png``."""
+def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
+    """``<component>_tuned.ssv``, ``tune.json`` and ``fitness.png``, all in ``out`` (never in
+    the model's folder); none of them if one cannot be written."""
     from ..results import plots  # not imported by the executor's workers
 
     out = Path(out)
+    made = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise NavfmuError(f"--out {out}: cannot make the folder: {exc.strerror or exc}"
                           ) from None
     name = f"{summary['component']}_tuned"
-    ssv = Path(ssv) if ssv else out / f"{name}.ssv"
+    ssv = out / f"{name}.ssv"
     text = ssv_text(name, summary["best_values"], summary.get("bound_parameters"))
-    written = [atomic_write(ssv, lambda f: f.write(text)),
-               atomic_write(out / "tune.json",
-                            lambda f: f.write(json.dumps(summary, indent=2))),
-               plots.plot_fitness(summary, out / "fitness.png")]
+    writers = [lambda: atomic_write(ssv, lambda f: f.write(text)),
+               lambda: atomic_write(out / "tune.json",
+                                    lambda f: f.write(json.dumps(summary, indent=2))),
+               lambda: plots.plot_fitness(summary, out / "fitness.png")]
+    written: List[Path] = []
+    try:
+        for write in writers:
+            written.append(write())
+    except BaseException:
+        for path in written:       # all three or none: no tuned set without its record
+            path.unlink(missing_ok=True)
+        if made:
+            shutil.rmtree(out, ignore_errors=True)
+        raise
     return written

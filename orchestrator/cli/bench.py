@@ -9,6 +9,7 @@ from typing import Any, Dict, List, Optional, Sequence
 
 from navcore.ins import ideal_track
 
+from ..campaigns.defaults import BENCH_RUNS, BENCH_WORKERS
 from ..running import prechecks
 from .cli_options import filter_names
 from ..running.comparison_text import _num
@@ -35,13 +36,41 @@ def single_run_costs():
             os.environ[ideal_track.SWITCH] = before
 
 
-def _check_bench_run(model: SystemModel, stop_time, repeat) -> int:
-    """The checked ``repeat`` count of a benchmark (at least one run) and its stop time."""
+#: the most alternating runs per path or filter a benchmark takes (the fastest of a few is
+#: the measurement; more only lengthen it)
+MAX_REPEAT = 100
+
+
+def check_bench_options(filters=None, against_libcosim=False, executors=False, runs=None,
+                        workers=None) -> None:
+    """The option combinations of ``navfmu bench`` that mean something: one measurement
+    (``--libcosim`` and ``--executors`` exclude each other) and ``--runs``/``--workers`` only
+    with ``--executors``, which they are for; refused before anything runs."""
+    if against_libcosim and executors:
+        raise NavfmuError("--libcosim and --executors are two measurements; give one")
+    if against_libcosim and filters is not None:
+        raise NavfmuError("--libcosim times the scenario's own filter; leave out --filters")
+    for name, value in (("--runs", runs), ("--workers", workers)):
+        if value is not None and not executors:
+            raise NavfmuError(f"{name} applies to --executors only (the campaign it times)")
+
+
+def _check_repeat(repeat) -> int:
+    """The checked ``repeat`` count of a benchmark: 1 to :data:`MAX_REPEAT` runs."""
     if int(repeat) != repeat or repeat < 1:
         raise NavfmuError(f"--repeat: the number of runs per path must be a positive integer, "
                           f"got {repeat}")
-    prechecks.check_stop_time(stop_time, model.start_time)
+    if repeat > MAX_REPEAT:
+        raise NavfmuError(f"--repeat: at most {MAX_REPEAT} alternating runs per path, got "
+                          f"{repeat}")
     return int(repeat)
+
+
+def _check_bench_run(model: SystemModel, stop_time, repeat) -> int:
+    """The checked ``repeat`` count of a benchmark and its stop time."""
+    repeat = _check_repeat(repeat)
+    prechecks.check_stop_time(stop_time, model.start_time)
+    return repeat
 
 
 def _timed_run(sim: Simulation, stop_time, progress):
@@ -206,7 +235,8 @@ def _libcosim_text(model_name, stop, out) -> str:
 
 
 def bench_command(scenario=None, stop=100.0, repeat=3, filters=None, against_libcosim=False,
-                  executors=False, runs=8, workers=2, as_json=False, log=print) -> str:
+                  executors=False, runs=BENCH_RUNS, workers=BENCH_WORKERS, as_json=False,
+                  log=print) -> str:
     """``navfmu bench``: the measurement its options choose (FMU path against direct, the
     ``filters`` against each other, our master against libcosim, or the executors), as text
     or JSON.  ``scenario`` defaults to navfmu's own models/aircraft_500s.  Every run is
@@ -218,10 +248,12 @@ def bench_command(scenario=None, stop=100.0, repeat=3, filters=None, against_lib
     from ..running.scenarios import load_scenario, paper_reference
 
     scenario = scenario or fmu_build.ROOT / "models" / "aircraft_500s"
+    check_bench_options(filters, against_libcosim, executors)
+    repeat = _check_repeat(repeat)
     if executors:
         from ..campaigns.campaign_bench import bench_executors, format_bench as format_executors
 
-        names = [f.strip() for f in (filters or "Kf").split(",") if f.strip()]
+        names = filter_names(filters or "Kf")
         with single_run_costs():
             out = bench_executors(str(scenario), names, runs=runs, stop_time=stop,
                                   workers=workers, log=log)
@@ -245,4 +277,5 @@ def bench_command(scenario=None, stop=100.0, repeat=3, filters=None, against_lib
     return json.dumps(out, indent=2) if as_json else format_bench(model.name, out)
 
 
-__all__ = ["bench", "bench_filters", "bench_command", "format_bench", "format_filter_bench"]
+__all__ = ["bench", "bench_filters", "bench_command", "check_bench_options", "format_bench",
+           "format_filter_bench", "MAX_REPEAT"]

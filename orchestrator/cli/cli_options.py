@@ -1,6 +1,6 @@
 """The command line's option values read into what the facade functions take: a metric
-window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list, a
-YAML configuration file."""
+window ``t0:t1``, ``--set Component.variable=value`` overrides, a ``--filters`` list, the
+``--train-seeds`` list, the text of ``--version``, a YAML configuration file."""
 from __future__ import annotations
 
 import math
@@ -22,11 +22,54 @@ def nonempty_path(ctx, param, value):
     return value
 
 
+def nonempty_name(ctx, param, value):
+    """click callback: a name option given as empty text is refused (it would otherwise read
+    as "not given" and run the default)."""
+    if value is not None and not str(value).strip():
+        import click
+
+        raise click.BadParameter("empty name", ctx, param)
+    return value
+
+
+def version_text() -> str:
+    """``navfmu 0.1.0 (FMI 2.0 FMUs; Python 3.x.y)``: navfmu's version (its one definition,
+    ``navcore.__version__``), the FMI standard of its FMUs and the running Python's."""
+    import platform
+
+    import navcore
+
+    return (f"navfmu {navcore.__version__} (FMI {navcore.FMI_VERSION} FMUs; Python "
+            f"{platform.python_version()})")
+
+
+def _comma_list(option: str, text: str):
+    """``a,b,c`` -> the stripped items; an empty list or an empty item (``Kf,``) is refused."""
+    items = [f.strip() for f in str(text).split(",")]
+    if not any(items):
+        raise NavfmuError(f"{option}: empty list; give at least one")
+    if not all(items):
+        raise NavfmuError(f"{option}: an empty item in {text!r}; separate the items by single "
+                          "commas")
+    return items
+
+
+def parse_train_seeds(text):
+    """``--train-seeds 101,102`` -> ``[101, 102]``; not given (None) -> ``[]`` (the model's
+    own seeds)."""
+    if text is None:
+        return []
+    items = _comma_list("--train-seeds", text)
+    try:
+        return [int(s) for s in items]
+    except ValueError:
+        raise NavfmuError(f"--train-seeds: expected comma-separated integers, got "
+                          f"{text!r}") from None
+
+
 def filter_names(text):
-    """``A,B,C`` -> names; at least one, none twice."""
-    names = [f.strip() for f in text.split(",") if f.strip()]
-    if not names:
-        raise NavfmuError("--filters: give at least one filter")
+    """``A,B,C`` -> names; at least one, none empty, none twice."""
+    names = _comma_list("--filters", text)
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise NavfmuError(f"--filters: {', '.join(twice)} listed more than once ({text})")
@@ -85,9 +128,9 @@ def parse_named_sets(items):
     return values
 
 
-__all__ = ["DEFAULT_OUT", "nonempty_path", "filter_names", "parse_window", "parse_sets",
-           "parse_named_sets"]
-
+__all__ = ["DEFAULT_OUT", "nonempty_path", "nonempty_name", "version_text", "filter_names",
+           "parse_train_seeds", "parse_window", "parse_sets", "parse_named_sets",
+           "read_yaml_mapping"]
 
 def read_yaml_mapping(path, keys: str) -> dict:
     """A command's YAML configuration file as a mapping; a file that cannot be read, is not

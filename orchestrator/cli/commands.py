@@ -11,6 +11,7 @@ Warnings for the user print once each as ``navfmu: warning: ...``
 """
 from __future__ import annotations
 
+import errno
 import signal
 import sys
 from pathlib import Path
@@ -18,8 +19,11 @@ from pathlib import Path
 import click
 
 from ..cosim import interrupts
-from .cli_options import (DEFAULT_OUT, filter_names, nonempty_path, parse_named_sets,
-                          parse_sets, parse_window)
+from ..campaigns.defaults import (BENCH_RUNS, BENCH_WORKERS, DEFAULT_RUNS, DEFAULT_SEED,
+                                  DEFAULT_WORKERS)
+from .cli_options import (DEFAULT_OUT, filter_names, nonempty_name, nonempty_path,
+                          parse_named_sets, parse_sets, parse_train_seeds, parse_window,
+                          version_text)
 from ..errors import NavfmuError, SimulationError
 from ..cosim.exchange import ALGORITHMS
 from ..cosim.isolation import DEFAULT_CALL_TIMEOUT_S, ISOLATE_MODES, Isolation
@@ -42,7 +46,21 @@ class _Group(click.Group):
                 formatter.write_dl(rows)
 
 
-@click.group(cls=_Group)
+#: the errors of a disk that cannot take the output (full, over quota, read-only): the
+#: user's to act on, not a bug
+DISK_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS)
+
+#: every command: -h as well as --help, and each option's default in its help
+CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "show_default": True}
+
+SSV_HELP = ("Bind a parameter set (.ssv) without editing the model: COMPONENT=FILE, or a FILE "
+            "whose parameter names carry the component (filter.r_pos_n); repeatable, later "
+            "over earlier, --set over all.")
+
+
+@click.group(cls=_Group, context_settings=CONTEXT_SETTINGS)
+@click.version_option(message="%(version)s", version=version_text(),
+                      help="Print navfmu's version, the FMI version of its FMUs and Python's.")
 @click.option("--debug", is_flag=True, help="Show tracebacks of internal errors.")
 @click.pass_context
 def cli(ctx, debug):
@@ -92,6 +110,8 @@ def _common_run_options(f):
     f = click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")(f)
     f = click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
                      help="Override a parameter (repeatable).")(f)
+    f = click.option("--ssv", "ssv", multiple=True, metavar="[COMPONENT=]FILE",
+                     help=SSV_HELP)(f)
     f = click.option("--format", "fmt", type=click.Choice(["csv", "npz", "parquet"]),
                      default="csv", show_default=True,
                      help="Result file format; parquet streams the rows to disk while the run "
@@ -139,13 +159,13 @@ def _isolation():
                      meta.get("call_timeout", DEFAULT_CALL_TIMEOUT_S))
 
 
-def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
+def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots, title,
              replay=None, log_sensors=None):
     from .run_command import run_scenarios
 
     meta = click.get_current_context().meta
     run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
-                  echo=click.echo,
+                  echo=click.echo, ssv=ssv,
                   algorithm=meta.get("algorithm", ALGORITHMS[0]),
                   replay=replay, log_sensors=log_sensors,
                   replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")},
@@ -154,17 +174,18 @@ def _execute(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
 
 @cli.command()
 @click.argument("scenario", type=click.Path(), callback=nonempty_path)
-@click.option("--filter", "filter_", help="Swap the 'filter' component: an FMU name (Kf, "
-              "SageHusaFading, ...) or the path of an .fmu file.")
+@click.option("--filter", "filter_", callback=nonempty_name,
+              help="Swap the 'filter' component: an FMU name (Kf, SageHusaFading, ...) or the "
+              "path of an .fmu file (default: the scenario's own filter).")
 @click.option("--log-sensors", "log_sensors", type=click.Path(file_okay=False),
               callback=nonempty_path,
               help="Also write the run's IMU, GNSS and truth signals as a sensor log to this "
               "folder (replay it with --replay).")
 @_common_run_options
-def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, no_plots,
+def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, ssv, fmt, no_plots,
         replay):
     """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
-    _execute(scenario, [filter_], out, stop, backend, window, sets, fmt, no_plots,
+    _execute(scenario, [filter_], out, stop, backend, window, sets, ssv, fmt, no_plots,
              title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors)
 
 
@@ -172,10 +193,10 @@ def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, fmt, n
 @click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
 @_common_run_options
-def compare(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, replay):
+def compare(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots, replay):
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
     names = filter_names(filters)
-    _execute(scenario, names, out, stop, backend, window, sets, fmt, no_plots,
+    _execute(scenario, names, out, stop, backend, window, sets, ssv, fmt, no_plots,
              title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
 
 
@@ -291,10 +312,11 @@ def convert_imu_csv(csv_file, dst, config, force, **options):
 @click.option("--executors", is_flag=True, help="Time a small campaign (--runs runs of the "
               "filters, default Kf) serially, on --workers pool processes and on a Dask "
               "LocalCluster: speed-up and Dask's per-run overhead.")
-@click.option("--runs", type=int, default=8, show_default=True, help="Runs per filter "
-              "(--executors).")
-@click.option("--workers", type=int, default=2, show_default=True,
-              help="Worker processes (--executors).")
+@click.option("--runs", type=int, default=None, help="Runs per filter (only with --executors; "
+              f"default {BENCH_RUNS}).")
+@click.option("--workers", type=int, default=None, help="Pool processes timed against the "
+              f"serial campaign (only with --executors; default {BENCH_WORKERS}: a pool of one "
+              "measures no speed-up).")
 @click.option("--json", "as_json", is_flag=True, help="Print the measurements as JSON.")
 def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, workers, as_json):
     """Run SCENARIO through the FMUs and through navcore directly, in one process; print the
@@ -302,8 +324,12 @@ def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, wo
     FMUs once per filter instead and print each filter's time per cycle and the ratios to the
     first filter (next to the paper's, from paper.json).  SCENARIO defaults to navfmu's own
     models/aircraft_500s."""
-    from .bench import bench_command
+    from .bench import bench_command, check_bench_options
 
+    check_bench_options(filters=filters, against_libcosim=against_libcosim,
+                        executors=executors, runs=runs, workers=workers)
+    runs = BENCH_RUNS if runs is None else runs
+    workers = BENCH_WORKERS if workers is None else workers
     click.echo(bench_command(scenario, stop=stop, repeat=repeat, filters=filters,
                              against_libcosim=against_libcosim, executors=executors, runs=runs,
                              workers=workers, as_json=as_json,
@@ -319,13 +345,13 @@ BATCH_HELP = ("Runs of one filter stepped together as one batch on the direct ba
 @click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--runs", type=int, required=True, help="Number of seeds (runs per filter).")
 @click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
-@click.option("--workers", type=int, default=1, show_default=True,
+@click.option("--workers", type=int, default=DEFAULT_WORKERS,
               help="Local worker processes (1: in this process).")
 @click.option("--out", "out", type=click.Path(file_okay=False), callback=nonempty_path,
               help="Campaign folder (default: navfmu-results/<scenario>-montecarlo).")
 @click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
-@click.option("--seed", type=int, default=1, show_default=True,
+@click.option("--seed", type=int, default=DEFAULT_SEED,
               help="Campaign seed: run i uses seed + i (+ each random component's offset).")
 @click.option("--seed-offset", "seed_offsets", multiple=True, metavar="COMP=K",
               help="Seed offset of a random component (default 1000 x its position).")
@@ -336,27 +362,30 @@ BATCH_HELP = ("Runs of one filter stepped together as one batch on the direct ba
 @click.option("--samples", type=click.Choice(["all", "fixes"]), default="all",
               show_default=True, help="Metric samples: every row, or the GNSS fix epochs.")
 @click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
-              help="Override a parameter (repeatable).")
+              help="Override a parameter (repeatable; not a random component's seed: see "
+              "--seed).")
+@click.option("--ssv", "ssv", multiple=True, metavar="[COMPONENT=]FILE", help=SSV_HELP)
 @click.option("--series", type=click.Choice(["parquet", "csv"]),
               help="Also keep every run's time series in this format.")
 @click.option("--batch", type=int, default=None, help=BATCH_HELP)
 @_isolation_options
 def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
-               seed_offsets, backend, stop, window, samples, sets, series, batch):
+               seed_offsets, backend, stop, window, samples, sets, ssv, series, batch):
     """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
     command again to finish a killed campaign)."""
     from ..campaigns import campaign, campaign_summary
     from ..running import scenarios
+    from ..running.ssv_bindings import overrides
 
-    names = tuple(f.strip() for f in filters.split(",") if f.strip())
+    names = tuple(filter_names(filters))
+    model = scenarios.load_scenario(scenario)
     spec = campaign.CampaignSpec(
         scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
         stop_time=stop, window=parse_window(window), samples=samples,
         seed_offsets=campaign.parse_seed_offsets(seed_offsets),
-        parameters=tuple(parse_sets(sets).items()), series=series, batch=batch,
-        isolation=_isolation())
-    model_name = scenarios.load_scenario(scenario).name
-    out = Path(out) if out else DEFAULT_OUT / f"{model_name}-montecarlo"
+        parameters=tuple(overrides(ssv, model, parse_sets(sets)).items()), series=series,
+        batch=batch, isolation=_isolation())
+    out = Path(out) if out else DEFAULT_OUT / f"{model.name}-montecarlo"
     with progress_bars() as progress_bar:
         summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
                                         local_cluster=local_cluster,
@@ -371,12 +400,15 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
 
 @cli.command()
 @click.option("--out", "out", type=click.Path(file_okay=False), callback=nonempty_path,
-              default="navfmu-report",
-              show_default=True, help="Report folder (report.md, figures/, campaigns/).")
-@click.option("--runs", type=int, default=None,
-              help="Runs per filter and scenario (default 3; more: narrower intervals).")
-@click.option("--workers", type=int, default=2, show_default=True,
-              help="Local worker processes.")
+              default=str(DEFAULT_OUT / "report"),
+              help="Report folder (report.md, figures/, campaigns/).")
+@click.option("--scenario", "scenario_names", multiple=True, metavar="NAME",
+              help="Report this scenario only: a name of models/ or a scenario folder "
+              "(repeatable; default: every scenario of models/).")
+@click.option("--runs", type=int, default=DEFAULT_RUNS,
+              help="Runs per filter and scenario (more: narrower intervals).")
+@click.option("--workers", type=int, default=DEFAULT_WORKERS,
+              help="Local worker processes (1: in this process).")
 @click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
 @click.option("--stop", type=float, help="Stop time of every run [s] (default: each SSD's; "
@@ -384,7 +416,8 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
 @click.option("--only-finished", is_flag=True, help="Run nothing: report the runs the "
               "campaigns in --out have finished (the first runs every filter has).")
 @click.option("--batch", type=int, default=None, help=BATCH_HELP)
-def report(out, runs, workers, scheduler, local_cluster, stop, only_finished, batch):
+def report(out, scenario_names, runs, workers, scheduler, local_cluster, stop, only_finished,
+           batch):
     """Campaigns of every scenario of models/ with every filter that fits it, and one
     Markdown report: the papers' tables with our numbers and intervals, figures,
     NEES/NIS consistency, the cross matrix.  Resumes the campaigns it finds in --out."""
@@ -392,8 +425,8 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished, ba
 
     with progress_bars() as progress_bar:
         path = report_module.build_report(
-            out, runs=report_module.DEFAULT_RUNS if runs is None else runs, workers=workers,
-            scheduler=scheduler, local_cluster=local_cluster, stop_time=stop,
+            out, runs=runs, workers=workers, scenarios=scenario_names, scheduler=scheduler,
+            local_cluster=local_cluster, stop_time=stop,
             progress_factory=lambda name: progress_bar(name, unit="run"),
             log=lambda m: click.echo(m, err=True), only_finished=only_finished, batch=batch)
     click.echo(f"wrote {path}")
@@ -410,12 +443,12 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished, ba
               help="Generations (paper 003: 500).")
 @click.option("--population", type=int, default=10, show_default=True,
               help="Individuals per generation (paper 003: 100).")
-@click.option("--workers", type=int, default=1, show_default=True,
-              help="Local processes evaluating candidates.")
+@click.option("--workers", type=int, default=DEFAULT_WORKERS,
+              help="Local processes evaluating candidates (1: in this process).")
 @click.option("--scheduler", help="Dask scheduler address tcp://HOST:PORT (instead of a "
               "local pool).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the GA.")
-@click.option("--train-seeds", default="", help="Comma-separated values given to every "
+@click.option("--seed", type=int, default=DEFAULT_SEED, help="Seed of the GA.")
+@click.option("--train-seeds", default=None, help="Comma-separated values given to every "
               "component's 'seed' parameter; the cost is the mean over them (default: the "
               "model's own seeds).")
 @click.option("--backend", type=click.Choice(["fmu", "direct"]), default="direct",
@@ -424,50 +457,46 @@ def report(out, runs, workers, scheduler, local_cluster, stop, only_finished, ba
 @click.option("--stop", type=float, help="Stop time of each run [s] (default: the SSD's).")
 @click.option("--window", help="Fitness window t0:t1 [s] (default: the whole run).")
 @click.option("--out", type=click.Path(file_okay=False), callback=nonempty_path,
-              help="Output folder (default: navfmu-results/<scenario>/tune).")
-@click.option("--ssv", type=click.Path(dir_okay=False), callback=nonempty_path,
-              help="Write the tuned parameter set here (default: OUT/<component>_tuned.ssv).")
+              help="Output folder, the only place written: <component>_tuned.ssv, tune.json, "
+              "fitness.png (default: navfmu-results/<scenario>-tune).")
+@click.option("--ssv", "ssv", multiple=True, metavar="[COMPONENT=]FILE", help=SSV_HELP)
 @click.option("--batch", type=int, default=None, help=BATCH_HELP.replace(
     "Runs of one filter", "Candidates of a generation (all their training runs)"))
 def tune(scenario, component, params, ranges, generations, population, workers, scheduler,
          seed, train_seeds, backend, stop, window, out, ssv, batch):
     """Tune numeric parameters of a component of SCENARIO with paper 003's genetic
-    algorithm; each cost evaluation is a co-simulation (attitude RMS, eq. 20)."""
+    algorithm; each cost evaluation is a co-simulation (attitude RMS, eq. 20).  Writes
+    only into --out and prints the --ssv option that applies the result."""
     from ..campaigns import tune as tuner
 
     from ..campaigns.batching import check_batch
 
     check_batch(batch, backend)
     names = [p.strip() for p in params.split(",") if p.strip()]
-    try:
-        seeds = [int(s) for s in train_seeds.split(",") if s.strip()]
-    except ValueError:
-        raise NavfmuError(f"--train-seeds: expected comma-separated integers, got "
-                          f"{train_seeds!r}") from None
+    seeds = parse_train_seeds(train_seeds)
     from ..running import scenarios
+    from ..running.ssv_bindings import overrides
     from ..results.outputs import check_writable
 
-    model_name = scenarios.load_scenario(scenario).name
-    out = Path(out) if out else DEFAULT_OUT / model_name / "tune"
+    model = scenarios.load_scenario(scenario)
+    fixed = overrides(ssv, model)
+    out = Path(out) if out else DEFAULT_OUT / f"{model.name}-tune"
     check_writable(out, "--out", folder=True)
-    if ssv:
-        check_writable(ssv, "--ssv")
     with progress_bars() as progress_bar:
         summary = tuner.run_tune(scenario, component, names, generations=generations,
                                  population=population, workers=workers, seed=seed,
                                  ranges=tuner.parse_ranges(ranges), train_seeds=seeds,
                                  backend=backend, stop_time=stop, window=parse_window(window),
-                                 scheduler=scheduler, batch=batch,
+                                 scheduler=scheduler, batch=batch, parameters=fixed,
                                  progress=progress_bar("tune", unit="individual"),
                                  log=lambda m: click.echo(m, err=True))
     click.echo(f"best cost {summary['best_cost']:.5f} deg after {summary['evaluations']} "
                f"evaluations; tuned values:")
     for k, v in summary["best_values"].items():
         click.echo(f"  {component}.{k} = {v!r}")
-    written = tuner.write_tune_outputs(summary, out, ssv)
+    written = tuner.write_tune_outputs(summary, out)
     click.echo(f"wrote {', '.join(str(p) for p in written)}")
-    click.echo(f"bind it with: <ssd:ParameterBinding source=\"{written[0].name}\"/> (in place "
-               f"of the component's bindings: it holds them too)")
+    click.echo(f"apply it with: navfmu run {scenario} --ssv {component}={written[0]}")
 
 
 @cli.command()
@@ -477,26 +506,30 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
               help="Force the role (default: detected from the FMU's variables).")
 @click.option("--scenario", "scenario_names", multiple=True, help="Scenario of the "
               "consistency runs (a models/ name or .ssd; repeatable; default: the role's).")
-@click.option("--runs", type=int, default=None, help="Seeds per case (default 3).")
+@click.option("--runs", type=int, default=DEFAULT_RUNS, help="Seeds per case.")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="A parameter of "
               "the FMU, or datasheet.NAME=VALUE: a declared value the FMU does not carry.")
+@click.option("--ssv", "ssv", multiple=True, metavar="FILE", help="A parameter set (.ssv) of "
+              "the FMU's parameters (repeatable, later over earlier, --set over all).")
 @click.option("--out", type=click.Path(file_okay=False),
               help="Report folder (default: navfmu-results/verify-<model>).")
 @click.option("--junit", type=click.Path(dir_okay=False), help="Also write JUnit XML here.")
-@click.option("--workers", type=int, default=2, show_default=True,
-              help="Local worker processes.")
+@click.option("--workers", type=int, default=DEFAULT_WORKERS,
+              help="Local worker processes (1: in this process).")
 @click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask scheduler.")
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
 @click.pass_context
-def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, scheduler,
+def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers, scheduler,
            local_cluster):
     """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
     checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
+    from ..running.ssv_bindings import read_fmu_bindings
     from ..verification.verify import verify as verify_fmu
 
+    bound = {**read_fmu_bindings(ssv), **parse_named_sets(sets)}
     with progress_bars() as progress_bar:
         summary = verify_fmu(fmu, role=role, scenario_names=scenario_names, runs=runs,
-                             sets=parse_named_sets(sets), out=out, junit=junit,
+                             sets=bound, out=out, junit=junit,
                              workers=workers, scheduler=scheduler, local_cluster=local_cluster,
                              progress=progress_bar("runs", unit="run"),
                              log=lambda m: click.echo(m, err=True), default_root=DEFAULT_OUT)
@@ -588,6 +621,11 @@ def main(argv=None):
     except Exception as exc:  # a bug: say so in one line unless --debug
         if debug:
             raise
+        if isinstance(exc, OSError) and exc.errno in DISK_ERRNOS:
+            # a full disk where no caller named the file: the file the system names, if any
+            where = f"{exc.filename}: " if exc.filename else ""
+            click.echo(f"navfmu: error: {where}cannot write: {exc.strerror}", err=True)
+            sys.exit(2)
         click.echo(f"navfmu: internal error: {exc!r} (run with --debug for the traceback)",
                    err=True)
         sys.exit(3)

@@ -14,6 +14,7 @@ from ..running.comparison_text import format_comparison
 from ..errors import NavfmuError
 from .progress import progress_bars
 from ..running.run_outputs import write_outputs
+from ..running.ssv_bindings import overrides
 
 
 def _consistency_line(run, m) -> str:
@@ -99,20 +100,24 @@ def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm,
 
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
                   fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
-                  replay=None, log_sensors=None, replay_options=None, isolation=None) -> None:
+                  replay=None, log_sensors=None, replay_options=None, isolation=None,
+                  ssv=()) -> None:
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
     ``navfmu-results/<model>``), each run with its progress bar.  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
     ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
-    process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones)."""
+    process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones).
+    ``ssv``: the ``--ssv`` items (:mod:`orchestrator.running.ssv_bindings`), under ``sets``."""
     replay_options = {k: v for k, v in (replay_options or {}).items() if v is not None}
     if replay_options and replay is None:
         raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
                           "applies to a sensor log)")
     model = scenarios.load_scenario(scenario)
+    scenarios.paper_reference(model)       # a malformed paper.json is refused before the run
+    prechecks.check_connected(model)
     window = parse_window(window)
-    parameters = parse_sets(sets)
+    parameters = overrides(ssv, model, parse_sets(sets))
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,

@@ -107,7 +107,9 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    (a filter swap keeps the scenario's parameters that still apply) and listed in
    :attr:`Simulation.skipped_parameters`; those of a swap variant file written for the new
    FMU (``file.MODEL.ssv`` next to a bound ``file.ssv``, :mod:`orchestrator.model.ssp`) are never
-   skipped.
+   skipped.  Units (:mod:`orchestrator.model.units`): a connector's declared unit and the
+   variable's, and the two ends of a connection, must be one unit (no connection converts);
+   a bound Real given with a ``unit`` is converted to the variable's unit, or refused.
 
 9. **Failures.**  A component failing mid-run (FMU status Discard/Error/Fatal, or a Python
    component raising ParameterError/InputError) raises
@@ -140,6 +142,8 @@ from .isolation import Isolation
 from ..results.recorder import Recording
 from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
+from ..model import units
+from ..model.suggestions import did_you_mean
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 
@@ -177,6 +181,12 @@ def _column_blocks(sources):
 
 # ----------------------------------------------------------------------------------------
 # Simulation
+def _parameter_hint(d, name: str) -> str:
+    """The component's parameters close to the unknown ``name``, or all of them."""
+    names = sorted(v.name for v in d.variables.values() if v.causality == "parameter")
+    return did_you_mean(name, names) or f" (its parameters: {', '.join(names)})"
+
+
 # ----------------------------------------------------------------------------------------
 class Simulation:
     """Run a :class:`SystemModel` by the rules of the module docstring.
@@ -264,6 +274,17 @@ class Simulation:
                 if var.type not in NUMERIC_TYPES:
                     raise WiringError(f"{where}: variable '{var_name}' is a {var.type}; only Real, "
                                       f"Integer and Boolean variables can be connected")
+                units.check_same(d.spec.units.get(var_name, ""), var.unit,
+                                 f"{where}: the system structure's connector '{var_name}' "
+                                 "against the FMU's variable")
+            self._check_connection_units(conn)
+
+    def _check_connection_units(self, conn: Connection) -> None:
+        """Both ends of ``conn`` in one unit (rule 8: the value passes unchanged)."""
+        ends = [self.components[self._index[c]].variables[v] for c, v in (
+            (conn.start_component, conn.start_connector),
+            (conn.end_component, conn.end_connector))]
+        units.check_same(ends[0].unit, ends[1].unit, f"connection {conn}")
 
     def _parameters(self, overrides: Mapping[str, Any]):
         values: Dict[str, Dict[str, Any]] = {n: {} for n in self.names}
@@ -283,6 +304,11 @@ class Simulation:
                         + ("does not exist" if var is None else
                            f"has causality '{var.causality}' (not settable)")
                     )
+                unit = d.spec.parameter_units.get(pname)
+                if unit:
+                    value = units.convert(value, unit, var.unit,
+                                          f"component '{d.spec.name}' ({d.source}): parameter "
+                                          f"'{pname}' = {value!r} {unit}")
                 values[d.spec.name][pname] = value
         if skipped:
             warnings.warn("parameters not present in the swapped-in component(s), skipped: "
@@ -294,8 +320,8 @@ class Simulation:
             if var is None or var.causality not in settable:
                 raise WiringError(
                     f"parameter override '{key}': component '{comp}' ({d.source}) has no "
-                    f"parameter '{var_name}'" + ("" if var is None else
-                                                 f" (it is an {var.causality})")
+                    f"parameter '{var_name}'" + (_parameter_hint(d, var_name) if var is None
+                                                 else f" (it is an {var.causality})")
                 )
             values[comp][var_name] = value
         return values, skipped
@@ -304,7 +330,8 @@ class Simulation:
         comp, dot, var = key.partition(".")
         if comp not in self._index:
             raise WiringError(f"{what} '{key}': no component named '{comp}' "
-                              f"(components: {', '.join(self.names)})")
+                              f"(components: {', '.join(self.names)})"
+                              + did_you_mean(comp, self.names))
         return comp, var if dot else ""
 
     def _recorded(self, record: Optional[Iterable[str]]) -> Dict[str, List[str]]:

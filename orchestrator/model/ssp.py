@@ -80,6 +80,9 @@ class ComponentSpec:
     parameter_files: List[Path] = field(default_factory=list)
     #: names set by a swap variant file: meant for this FMU, so never skipped as absent
     variant_parameters: Tuple[str, ...] = ()
+    #: parameter name -> the unit its bound Real value is given in (``<ssv:Real unit=..>``),
+    #: converted to the FMU variable's unit when the master sets it
+    parameter_units: Dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -132,13 +135,14 @@ class SystemModel:
         """
         old = self.component(component_name)
         new_path = Path(new_source).expanduser().resolve()
-        variant = _swap_variant(old, new_path.stem)
+        units = dict(old.parameter_units)
+        variant = _swap_variant(old, new_path.stem, units)
         components = [
             dataclasses.replace(c, source=new_path,
                                 connectors=dict(c.connectors),
                                 parameters={**c.parameters, **variant},
                                 units=dict(c.units), parameter_files=list(c.parameter_files),
-                                variant_parameters=tuple(variant))
+                                variant_parameters=tuple(variant), parameter_units=units)
             if c.name == component_name else c
             for c in self.components
         ]
@@ -149,18 +153,22 @@ class SystemModel:
                                    replaced_sources=replaced)
 
 
-def _swap_variant(comp: ComponentSpec, model_name: str) -> Dict[str, Tuple[str, object]]:
-    """Values of ``file.MODEL.ssv`` next to each ``file.ssv`` bound to ``comp`` (in order)."""
+def _swap_variant(comp: ComponentSpec, model_name: str,
+                  units: Dict[str, str]) -> Dict[str, Tuple[str, object]]:
+    """Values of ``file.MODEL.ssv`` next to each ``file.ssv`` bound to ``comp`` (in order);
+    their units replace those of the names in ``units``."""
     values: Dict[str, Tuple[str, object]] = {}
     for ssv in comp.parameter_files:
         variant = ssv.with_name(f"{ssv.stem}.{model_name}{ssv.suffix}")
         if variant.is_file():
-            values.update(_read_ssv(variant))
+            values.update(read_ssv(variant, units))
     return values
 
 
-def _read_parameter_set(path: Path, parameter_set: ET.Element,
-                        where: str) -> Dict[str, Tuple[str, object]]:
+def _read_parameter_set(path: Path, parameter_set: ET.Element, where: str,
+                        units: Optional[Dict[str, str]] = None) -> Dict[str, Tuple[str, object]]:
+    """name -> (type, value) of a parameter set; ``units`` receives, per Real given with a
+    ``unit`` attribute, that unit (and loses any earlier unit of a name given without)."""
     result: Dict[str, Tuple[str, object]] = {}
     parameters = parameter_set.find(_tag(SSV_NS, "Parameters"))
     if parameters is None:
@@ -171,21 +179,36 @@ def _read_parameter_set(path: Path, parameter_set: ET.Element,
         if name in result:
             raise SspError(f"{path}: {pwhere} is given twice")
         result[name] = _typed_value(path, p, pwhere)
+        if units is not None:
+            units.pop(name, None)
+            unit = _value_unit(p)
+            if unit:
+                units[name] = unit
     return result
 
 
-def _read_ssv(path: Path) -> Dict[str, Tuple[str, object]]:
+def _value_unit(parameter: ET.Element) -> str:
+    """The ``unit`` attribute of a parameter's ``<ssv:Real>`` ('' when none)."""
+    real = parameter.find(_tag(SSV_NS, "Real"))
+    return (real.get("unit") or "").strip() if real is not None else ""
+
+
+def read_ssv(path: Path, units: Optional[Dict[str, str]] = None
+             ) -> Dict[str, Tuple[str, object]]:
+    """A ``.ssv`` parameter set: name -> (type, value), each error naming the file;
+    ``units``: as in :func:`_read_parameter_set`."""
     root = _parse(path)
     if root.tag != _tag(SSV_NS, "ParameterSet"):
         raise SspError(
             f"{path}: root element is <{_pretty(root.tag)}>, expected <ssv:ParameterSet>"
         )
-    return _read_parameter_set(path, root, "<ssv:ParameterSet>")
+    return _read_parameter_set(path, root, "<ssv:ParameterSet>", units)
 
 
-def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str,
-                   files: List[Path]) -> Dict[str, Tuple[str, object]]:
-    """The bound parameters; the ``.ssv`` files bound by ``source=`` are appended to ``files``."""
+def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str, files: List[Path],
+                   units: Dict[str, str]) -> Dict[str, Tuple[str, object]]:
+    """The bound parameters; the ``.ssv`` files bound by ``source=`` are appended to ``files``,
+    the units of the values given with one go into ``units``."""
     params: Dict[str, Tuple[str, object]] = {}
     bindings = comp_elem.find(_tag(SSD_NS, "ParameterBindings"))
     if bindings is None:
@@ -201,7 +224,7 @@ def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str,
             ssv_path = (path.parent / source).resolve()
             if not ssv_path.is_file():
                 raise SspError(f"{path}: {bwhere} source=\"{source}\": file not found ({ssv_path})")
-            values = _read_ssv(ssv_path)
+            values = read_ssv(ssv_path, units)
             files.append(ssv_path)
         else:
             pv = binding.find(_tag(SSD_NS, "ParameterValues"))
@@ -211,7 +234,7 @@ def _read_bindings(path: Path, comp_elem: ET.Element, cwhere: str,
             pset = pv.find(_tag(SSV_NS, "ParameterSet"))
             if pset is None:
                 raise SspError(f"{path}: {bwhere} <ssd:ParameterValues> lacks <ssv:ParameterSet>")
-            values = _read_parameter_set(path, pset, bwhere)
+            values = _read_parameter_set(path, pset, bwhere, units)
         # later bindings override earlier ones, as in SSP
         params.update(values)
     return params
@@ -245,7 +268,8 @@ def _read_component(path: Path, elem: ET.Element) -> ComponentSpec:
             comp.connectors[cname] = (kind, typ)
             if typ == "Real" and typed[0].get("unit"):
                 comp.units[cname] = typed[0].get("unit")
-    comp.parameters = _read_bindings(path, elem, cwhere, comp.parameter_files)
+    comp.parameters = _read_bindings(path, elem, cwhere, comp.parameter_files,
+                                     comp.parameter_units)
     osp = _osp_annotation(elem)
     if osp is not None:
         hint = osp.find(_tag(OSP_NS, "StepSizeHint"))
@@ -413,5 +437,5 @@ def load_ssd(path) -> SystemModel:
                        stop_time=stop, components=components, connections=connections)
 
 
-__all__ = ["SystemModel", "ComponentSpec", "Connection", "load_ssd", "FMU_TYPE", "SSD_NS",
-           "SSC_NS", "SSV_NS", "OSP_NS"]
+__all__ = ["SystemModel", "ComponentSpec", "Connection", "load_ssd", "read_ssv", "FMU_TYPE",
+           "SSD_NS", "SSC_NS", "SSV_NS", "OSP_NS"]

@@ -21,6 +21,7 @@ from typing import Dict, Tuple
 
 from ..errors import SspError
 from .ssp import SystemModel, load_ssd
+from .suggestions import did_you_mean
 
 #: bounds of an archive (ours: 4-7 members, 20-40 MB uncompressed)
 MAX_MEMBERS = 1000
@@ -62,9 +63,23 @@ def _extract(archive: Path) -> Path:
     return target
 
 
+def _models_beside(path: Path):
+    """The names of the models in ``path``'s folder (folders with a ``SystemStructure.ssd``,
+    ``.ssd`` and ``.ssp`` files): what a mistyped model name may have meant."""
+    folder = path.parent
+    if not folder.is_dir():
+        return []
+    return [p.name for p in folder.iterdir()
+            if (p.is_dir() and (p / "SystemStructure.ssd").is_file())
+            or p.suffix.lower() in (".ssd", ".ssp")]
+
+
 def load_model(path) -> SystemModel:
     """Load a model folder, its ``.ssd`` file or an ``.ssp`` archive."""
     path = Path(path).expanduser()
+    if not path.exists():
+        raise SspError(f"{path}: no such model folder, .ssd or .ssp file"
+                       + did_you_mean(path.name, _models_beside(path)))
     if path.suffix.lower() == ".ssp" and not path.is_dir():
         if not path.is_file():
             raise SspError(f"{path}: file not found")

@@ -21,7 +21,7 @@ import platform
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Sequence
 
 from ..building import build as fmu_build
 from ..campaigns import campaign as camp
@@ -32,16 +32,16 @@ from ..campaigns import statistics as st
 from ..campaigns.campaign_summary import AXES, per_run_values
 from ..campaigns.batching import check_batch
 from ..campaigns.executor import Executor
+from ..model.suggestions import did_you_mean
 from ..errors import NavfmuError, SkippedParametersWarning, WiringError
 from ..results import mission_metrics
 from ..results.metric_comparisons import (GROUP_KEYS, improvement_percent, per_axis_enu, rms_3d,
     rms_ratio)
 from ..results.run_results import atomic_write
 from ..running.prechecks import check_stop_time
+from ..campaigns.defaults import DEFAULT_RUNS, DEFAULT_WORKERS
 
 MODELS = fmu_build.ROOT / "models"
-#: runs per filter and scenario by default (README: how long it takes)
-DEFAULT_RUNS = 3
 
 
 def fitting_filters(model) -> List[str]:
@@ -68,16 +68,35 @@ def fitting_filters(model) -> List[str]:
     return names
 
 
-def discover(models: Path = MODELS) -> List[Dict[str, Any]]:
-    """Scenarios of ``models/`` (sorted by name): dict ``path``, ``model``, ``reference``
-    (paper.json or None), ``filters`` (fitting, the paper's first, in its table's order),
-    ``random`` (its components with a ``seed``)."""
+def scenario_folders(models: Path = MODELS, names: Sequence[str] = ()) -> List[Path]:
+    """The scenario folders of ``models`` (sorted by name), or those ``names`` chooses (in
+    their order, each once): a scenario name of ``models`` or the path of a scenario folder.
+    An unknown name is refused before anything runs, with the names close to it."""
+    found = sorted(p for p in Path(models).iterdir() if (p / "SystemStructure.ssd").is_file())
+    if not names:
+        return found
+    by_name = {p.name: p for p in found}
+    chosen: List[Path] = []
+    for name in names:
+        folder = by_name.get(name) or Path(name)
+        if not (folder / "SystemStructure.ssd").is_file():
+            raise NavfmuError(f"--scenario {name}: no scenario of that name in {models} and "
+                              "no scenario folder at that path (scenarios: "
+                              f"{', '.join(by_name)}){did_you_mean(name, by_name)}")
+        if folder.resolve() not in [c.resolve() for c in chosen]:
+            chosen.append(folder)
+    return chosen
+
+
+def discover(models: Path = MODELS, names: Sequence[str] = ()) -> List[Dict[str, Any]]:
+    """Scenarios of ``models/`` (sorted by name; or those of ``names``,
+    :func:`scenario_folders`): dict ``path``, ``model``, ``reference`` (paper.json or None),
+    ``filters`` (fitting, the paper's first, in its table's order), ``random`` (its components
+    with a ``seed``)."""
     from ..running.scenarios import load_scenario, paper_reference, swap_filter
 
     plans = []
-    for folder in sorted(
-        p for p in Path(models).iterdir() if (p / "SystemStructure.ssd").is_file()
-    ):
+    for folder in scenario_folders(models, names):
         model = load_scenario(folder)
         reference = paper_reference(model)
         fitting = fitting_filters(model)
@@ -92,15 +111,17 @@ def discover(models: Path = MODELS) -> List[Dict[str, Any]]:
     return plans
 
 
-def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None,
-                 local_cluster=False, stop_time: Optional[float] = None, models: Path = MODELS,
-                 progress_factory=None, log=print, only_finished: bool = False,
-                 batch: Optional[int] = None) -> Path:
+def build_report(out, runs: int = DEFAULT_RUNS, workers: int = DEFAULT_WORKERS,
+                 scheduler=None, local_cluster=False, stop_time: Optional[float] = None,
+                 models: Path = MODELS, progress_factory=None, log=print,
+                 only_finished: bool = False, batch: Optional[int] = None,
+                 scenarios: Sequence[str] = ()) -> Path:
     """Run (or resume) the campaigns and write ``out/report.md`` with ``out/figures/``.
 
     ``only_finished``: run nothing; report, per scenario, the first runs every filter of its
     campaign in ``out`` has finished (a campaign cut short or still running), and the
-    figures whose run-0 series exist."""
+    figures whose run-0 series exist.  ``scenarios``: report only these (names of ``models``
+    or scenario folders, :func:`scenario_folders`; default: every scenario of ``models``)."""
     out = Path(out)
     if not str(out).strip():
         raise NavfmuError("--out: empty path; give a folder")
@@ -115,15 +136,16 @@ def build_report(out, runs: int = DEFAULT_RUNS, workers: int = 1, scheduler=None
     with warnings.catch_warnings():
         # every filter is swapped into every scenario here: skipped parameters are expected
         warnings.simplefilter("ignore", SkippedParametersWarning)
-        return _build_report(out, runs, workers, scheduler, local_cluster, stop_time, models,
-                             progress_factory, log, only_finished, batch)
+        plans = discover(models, scenarios)     # an unknown scenario is refused before any run
+        return _build_report(out, runs, workers, scheduler, local_cluster, stop_time, plans,
+                             progress_factory, log, only_finished, batch, scenarios)
 
 
-def _build_report(out, runs, workers, scheduler, local_cluster, stop_time, models,
-                  progress_factory, log, only_finished, batch) -> Path:
+def _build_report(out, runs, workers, scheduler, local_cluster, stop_time, plans,
+                  progress_factory, log, only_finished, batch, scenarios=()) -> Path:
     t0 = time.perf_counter()
     sections = []
-    for plan in discover(models):
+    for plan in plans:
         name = plan["model"].name
         # a scenario without a random source (a replayed log) gives the same run every time
         spec = camp.CampaignSpec(scenario=str(plan["path"]), filters=tuple(plan["filters"]),
@@ -153,7 +175,8 @@ def _build_report(out, runs, workers, scheduler, local_cluster, stop_time, model
         sections.append(plan)
     if not sections:
         raise NavfmuError(f"{out}: no scenario to report")
-    command = f"navfmu report --runs {runs}" + (" --only-finished" if only_finished else "")
+    command = (f"navfmu report --runs {runs}" + "".join(f" --scenario {n}" for n in scenarios)
+               + (" --only-finished" if only_finished else ""))
     text = _markdown(sections, command, time.perf_counter() - t0, workers, scheduler,
                      local_cluster)
     return atomic_write(out / "report.md", lambda f: f.write(text))

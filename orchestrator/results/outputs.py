@@ -164,12 +164,21 @@ def _commit(stage: Path, target: Path, names) -> None:
 @contextlib.contextmanager
 def staged(target) -> Iterator[Path]:
     """``with staged(out) as folder:`` write the files into ``folder``; when the block ends
-    normally they replace ``out`` together, otherwise they are deleted."""
+    normally they replace ``out`` together, otherwise they are deleted (a write that fails
+    for the disk, e.g. full, is one :class:`NavfmuError` naming ``out``)."""
     target = check_target(target).absolute()
     stage = _temporary(target, ".partial")
     try:
-        yield stage
-        _commit(stage, target, [p.name for p in stage.iterdir()])
+        try:
+            yield stage
+            _commit(stage, target, [p.name for p in stage.iterdir()])
+        except (OSError, NavfmuError) as exc:
+            cause = exc if isinstance(exc, OSError) else exc.__cause__
+            if not isinstance(cause, OSError):
+                raise
+            # a full disk while writing: the target named, not the hidden staging folder
+            raise NavfmuError(f"--out {target}: cannot write the results: "
+                              f"{cause.strerror or cause}; nothing was written") from None
     finally:
         if stage.exists():
             shutil.rmtree(stage, ignore_errors=True)

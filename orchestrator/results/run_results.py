@@ -44,7 +44,9 @@ def _umask() -> int:
 def atomic_write(path, write: Callable[[Any], None], binary: bool = False) -> Path:
     """Call ``write(file)`` on a temporary file next to ``path``, then move it onto ``path``.
 
-    On any failure the temporary file is removed and ``path`` is left untouched.
+    On any failure the temporary file is removed and ``path`` is left untouched; an
+    :class:`OSError` (a full disk) becomes a :class:`NavfmuError` naming ``path`` (the
+    ``OSError`` as its cause).
     """
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
@@ -55,15 +57,15 @@ def atomic_write(path, write: Callable[[Any], None], binary: bool = False) -> Pa
     except OSError as exc:
         raise NavfmuError(f"cannot write {path}: {exc.strerror or exc}") from None
     try:
-        with os.fdopen(fd, "wb" if binary else "w", newline=None if binary else "") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual permissions
         try:
+            with os.fdopen(fd, "wb" if binary else "w", newline=None if binary else "") as f:
+                write(f)
+                f.flush()
+                os.fsync(f.fileno())
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; the usual permissions
             os.replace(tmp, path)
-        except OSError as exc:
-            raise NavfmuError(f"cannot write {path}: {exc.strerror or exc}") from None
+        except OSError as exc:      # a full disk, a quota: the file named, the cause kept
+            raise NavfmuError(f"cannot write {path}: {exc.strerror or exc}") from exc
     except BaseException:
         try:
             os.unlink(tmp)

@@ -1,4 +1,5 @@
-"""What can be checked before a run starts: its stop time and the memory it will need.
+"""What can be checked before a run starts: its stop time, the memory it will need, and that
+the scenario's components are connected at all.
 
 The master preallocates the recording (one float64 per recorded variable and row), and the
 result files and metrics need copies of it; a run whose recording cannot fit is refused up
@@ -30,6 +31,16 @@ def check_stop_time(stop_time: Optional[float], start_time: float) -> None:
     if not stop_time > start_time:
         raise NavfmuError(f"--stop: the stop time {stop_time:g} s must be after the start "
                           f"time {start_time:g} s")
+
+
+def check_connected(model) -> None:
+    """A scenario run for its metrics needs connections: without any, the filter receives no
+    sensor data and its "errors" would be measured on nothing (all zero, inside 3 sigma).
+    Refused by the file's name."""
+    if not model.connections:
+        raise NavfmuError(f"{model.path}: the system structure has no <ssd:Connections>: no "
+                          "component receives another's output, so a run would measure "
+                          "nothing; connect the sensors to the filter")
 
 
 def available_memory() -> Optional[int]:
@@ -70,4 +81,5 @@ def check_simulation(sim, stop_time: Optional[float]) -> None:
     check_memory(n_rows, sum(len(v) for v in sim.recorded.values()))
 
 
-__all__ = ["check_stop_time", "check_memory", "check_simulation", "available_memory"]
+__all__ = ["check_stop_time", "check_connected", "check_memory", "check_simulation",
+           "available_memory"]

@@ -21,6 +21,7 @@ from ..building.build import ensure_fmus
 from ..results import metrics as nav_metrics
 from ..results import mission_metrics
 from . import prechecks
+from .paper_shape import check_reference
 from ..results import recorder
 from ..results import windows as paper_windows
 from ..errors import NavfmuError, NavfmuWarning
@@ -28,6 +29,7 @@ from ..cosim.master import Simulation
 from ..results.run_results import Results
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
+from ..model.suggestions import did_you_mean
 
 #: name of the component a ``--filter`` swap replaces
 FILTER_COMPONENT = "filter"
@@ -48,8 +50,9 @@ def resolve_filter(name_or_path: str) -> Path:
             raise NavfmuError(f"filter FMU file not found: {p}")
         return p.resolve()
     if not (fmu_build.FMU_SOURCES / f"{name_or_path}.py").is_file():
-        raise NavfmuError(f"unknown filter '{name_or_path}' (our filters: "
-                          f"{', '.join(filter_fmus())}; or give the path of an .fmu file)")
+        ours = filter_fmus()
+        raise NavfmuError(f"unknown filter '{name_or_path}' (our filters: {', '.join(ours)}; "
+                          f"or give the path of an .fmu file){did_you_mean(name_or_path, ours)}")
     return fmu_build.fmu_path(name_or_path)
 
 
@@ -79,9 +82,10 @@ def paper_reference(model: SystemModel) -> Optional[Dict[str, Any]]:
     if not ref.is_file():
         return None
     try:
-        return json.loads(ref.read_text(encoding="utf-8"))
+        data = json.loads(ref.read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError) as exc:
         raise NavfmuError(f"{ref}: cannot read the paper's reference numbers: {exc}") from None
+    return check_reference(data, ref)
 
 
 def mission_baseline(model: SystemModel) -> Optional[Dict[str, Any]]:

@@ -30,6 +30,7 @@ import numpy as np
 from ..running import scenarios
 from ..building.build import ROOT
 from ..errors import NavfmuError
+from ..model.suggestions import did_you_mean
 from .roles import FmuFacts
 
 MODELS = ROOT / "models"
@@ -101,6 +102,19 @@ def _check_fits(facts: FmuFacts, role: str, path: Path) -> None:
                           f"which {facts.path.name} does not have")
 
 
+def _datasheet_value(key: str, value) -> float:
+    """A datasheet value of ``--set datasheet.NAME=VALUE``: a finite number >= 0 (a noise
+    density, a bias instability or a correlation time)."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = float("nan")
+    if not (np.isfinite(number) and number >= 0):
+        raise NavfmuError(f"--set {key}={value}: a datasheet value must be a finite number "
+                          ">= 0")
+    return number
+
+
 def make_setting(facts: FmuFacts, role: str, scenario_names=(), sets=None) -> Setting:
     """The setting of ``facts`` in ``role`` (:class:`NavfmuError` for a scenario that does
     not fit, or a ``--set`` of a parameter the FMU does not have)."""
@@ -115,9 +129,10 @@ def make_setting(facts: FmuFacts, role: str, scenario_names=(), sets=None) -> Se
     datasheet, user_sets = {}, {}
     for key, value in (sets or {}).items():
         if key.startswith(DATASHEET):
-            datasheet[key[len(DATASHEET):]] = float(value)
+            datasheet[key[len(DATASHEET):]] = _datasheet_value(key, value)
         elif key not in declared:
-            raise NavfmuError(f"--set {key}: {facts.path.name} has no parameter '{key}'")
+            raise NavfmuError(f"--set {key}: {facts.path.name} has no parameter '{key}'"
+                              + did_you_mean(key, declared))
         else:
             values[key] = user_sets[key] = value
     return Setting(facts, role, paths, component, values, user_sets, datasheet)

@@ -27,9 +27,8 @@ from .report_writing import counts, write_report
 from .roles import detect_role, read_fmu
 from .scenario_run import run_job
 from .setting import make_setting
+from ..campaigns.defaults import DEFAULT_RUNS, DEFAULT_WORKERS
 
-#: seeds per case when --runs is not given
-DEFAULT_RUNS = 3
 #: our FMUs the checks run as references or sources
 REFERENCE_FMUS = ("Kf", "InsOnly", "UkfAhrs", "TrajectoryImu", "GnssReceiver")
 
@@ -47,7 +46,7 @@ def _role_checks(setting, runs, executor, progress, workdir):
 
 def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
            runs: Optional[int] = None, sets: Optional[Dict[str, Any]] = None, out=None,
-           junit=None, workers: int = 1, scheduler: Optional[str] = None,
+           junit=None, workers: int = DEFAULT_WORKERS, scheduler: Optional[str] = None,
            local_cluster: bool = False, progress=None,
            log: Callable[[str], None] = print, default_root=Path(".")) -> Dict[str, Any]:
     """Verify ``fmu``; returns the summary with ``checks``, ``counts``, ``report`` and
@@ -60,6 +59,8 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
     setting = make_setting(facts, found_role, scenario_names, sets)
     out = Path(out) if out else Path(default_root) / f"verify-{facts.model_name}"
     outputs.check_target(out)
+    if junit is not None:
+        outputs.check_writable(junit, "--junit")     # before the checks, not after them
     executor = Executor(workers=workers, scheduler=scheduler, local_cluster=local_cluster)
     fmu_build.build([n for n in REFERENCE_FMUS if (fmu_build.FMU_SOURCES / f"{n}.py").is_file()],
                     log=log)

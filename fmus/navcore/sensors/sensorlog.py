@@ -440,6 +440,8 @@ def write_log(folder, log: SensorLog) -> Path:
                 os.replace(tmp / name, folder / name)
             elif (folder / name).exists():
                 os.unlink(folder / name)
+    except OSError as exc:          # a full disk: the log named, nothing of it left
+        raise LogError(f"cannot write the sensor log {folder}: {exc.strerror or exc}") from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return folder
