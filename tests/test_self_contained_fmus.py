@@ -309,3 +309,19 @@ def test_verify_checks_a_changed_copy_s_own_code(dist, tmp_path):
                                                           (), None))}
     assert checks["fmi.state"].verdict == "fail"
     assert checks["fmi.validate"].verdict == "pass"
+
+
+def test_the_kernel_cache_knows_a_module_of_its_package_in_another_folder(tmp_path):
+    """The FMUs of one build share their packages, and a module may be imported from the
+    second FMU's folder: the compiled-kernel cache must still take it as its own (else it
+    compiled every kernel of that module at every run), but never a changed copy."""
+    from navcore.core import kernels
+
+    own = kernels._PACKAGE / "ins" / "mrp.py"
+    copy = tmp_path / "unpacked" / kernels._PACKAGE.name / "ins" / "mrp.py"
+    copy.parent.mkdir(parents=True)
+    copy.write_bytes(own.read_bytes())
+    assert kernels._in_package(copy) == Path("ins/mrp.py")
+    copy.write_bytes(own.read_bytes() + b"# changed\n")
+    assert kernels._in_package(copy) is None
+    assert kernels._in_package(tmp_path / "elsewhere" / "mrp.py") is None

@@ -89,6 +89,9 @@ def build_one(script: Path, dist: Path = DIST, library: Path = None) -> Path:
 
     dist.mkdir(parents=True, exist_ok=True)
     target = fmu_path(script.stem, dist)
+    # the sources' identity taken before they are read: a file edited during the build makes
+    # the FMU stale, never an FMU of half-edited code stamped as current
+    build, stamp = source_hash(script), build_stamp(script, library is not None)
     with tempfile.TemporaryDirectory(prefix="navfmu_build_") as tmp:
         built = FmuBuilder.build_FMU(
             script, dest=tmp,
@@ -103,10 +106,10 @@ def build_one(script: Path, dist: Path = DIST, library: Path = None) -> Path:
                                   "(its installation lacks the FMI wrapper libraries)")
         if library is not None:
             native_library.replace_in_fmu(built, script.stem, library)
-        private_names.make_private(built, script.stem, source_hash(script), navfmu_version)
+        private_names.make_private(built, script.stem, build, navfmu_version)
         with open(built, "rb") as src:  # atomic_write: the user's umask, not mkstemp's 0600
             atomic_write(target, lambda f: shutil.copyfileobj(src, f), binary=True)
-    target.with_suffix(".fmu.sha256").write_text(build_stamp(script, library is not None) + "\n")
+    target.with_suffix(".fmu.sha256").write_text(stamp + "\n")
     return target
 
 

@@ -88,6 +88,25 @@ def _prune(base: Path) -> None:
 
 
 _ROOT = _cache_root()
+def _in_package(py_file) -> Optional[Path]:
+    """The path of ``py_file`` inside this navcore package, or None.  Matched on the package's
+    folder name, not its place: in a built FMU the package's later modules may be imported from
+    another FMU's copy of the same build (``fmushell.private_paths``), the same content in
+    another folder."""
+    parts = Path(py_file).resolve().parts
+    if _PACKAGE.name not in parts:
+        return None
+    last = len(parts) - 1 - parts[::-1].index(_PACKAGE.name)
+    if last + 1 >= len(parts):
+        return None
+    relative = Path(*parts[last + 1:])
+    try:           # the same content as this package's own file, or not this package's
+        same = Path(py_file).read_bytes() == (_PACKAGE / relative).read_bytes()
+    except OSError:
+        return None
+    return relative if same else None
+
+
 # public names since numba 0.59 or so, underscored before
 _LOCATOR_BASE = getattr(caching, "UserProvidedCacheLocator", None) or getattr(
     caching, "_UserProvidedCacheLocator")
@@ -100,7 +119,7 @@ class _ContentCacheLocator(_LOCATOR_BASE):
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        relative = Path(py_file).resolve().relative_to(_PACKAGE)
+        relative = _in_package(py_file)
         self._cache_path = str(_ROOT / "_".join(relative.with_suffix("").parts))
 
     def get_source_stamp(self):
@@ -110,9 +129,7 @@ class _ContentCacheLocator(_LOCATOR_BASE):
     def from_function(cls, py_func, py_file):
         if _ROOT is None:
             return None
-        try:
-            Path(py_file).resolve().relative_to(_PACKAGE)
-        except ValueError:
+        if _in_package(py_file) is None:
             return None
         locator = cls(py_func, py_file)
         try:
