@@ -4,7 +4,6 @@ r), in the Kf and the UKF family; the receiver's offset antenna against the same
 aircraft_500s flown with an offset antenna, with and without the lever arm in the filter."""
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -15,7 +14,7 @@ from navcore.ins import earth
 from navcore.ins.rotations import euler_to_dcm
 from navcore.ins.strapdown import Strapdown
 from orchestrator.building import build as fmu_build
-from orchestrator.model.ssp import Connection
+from orchestrator.model.receiver_wiring import connect_receiver_attitude
 from orchestrator.results import metrics
 from orchestrator.running import scenarios
 
@@ -67,24 +66,12 @@ def test_receiver_puts_its_fixes_at_the_antenna():
     assert got == pytest.approx(v_antenna, abs=1e-9)
 
 
-def _with_attitude_to_receiver(model):
-    """aircraft_500s with the truth attitude connected to the receiver (its lever arm's input)."""
-    names = ("truth_roll", "truth_pitch", "truth_yaw")
-    gnss = model.component("gnss")
-    gnss = dataclasses.replace(gnss, connectors={**gnss.connectors,
-                                                 **{n: ("input", "Real") for n in names}})
-    components_ = [gnss if c.name == "gnss" else c for c in model.components]
-    connections = list(model.connections) + [Connection("trajectory", n, "gnss", n)
-                                             for n in names]
-    return dataclasses.replace(model, components=components_, connections=connections)
-
-
 def test_offset_antenna_in_aircraft_500s():
     """The receiver's antenna 4 m ahead, 1 m right and 2 m above the IMU: a filter without
     the lever arm is off by the lever arm (its mean position error over 100-200 s moves by
     it: 4.1 m horizontally, 2 m up), with it the RMS errors are those of an antenna at the
     IMU within 10 % (+0.1 m)."""
-    model = _with_attitude_to_receiver(scenarios.load_scenario(
+    model = connect_receiver_attitude(scenarios.load_scenario(
         fmu_build.ROOT / "models" / "aircraft_500s"))
     arm = {"lever_arm_x": 4.0, "lever_arm_y": 1.0, "lever_arm_z": -2.0}
     rx = {f"gnss.{k}": v for k, v in arm.items()}

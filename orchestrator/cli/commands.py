@@ -501,11 +501,11 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, sche
                              progress=progress_bar("runs", unit="run"),
                              log=lambda m: click.echo(m, err=True), default_root=DEFAULT_OUT)
     for check in summary["checks"]:
-        click.echo(f"  {check.verdict:4s}  {check.id}: {check.measured}"
+        click.echo(f"  {check.verdict:5s} {check.id}: {check.measured}"
                    + (f" ({check.reason})" if check.reason and check.verdict != "pass" else ""))
     n = summary["counts"]
-    click.echo(f"{n['pass']} pass, {n['fail']} fail, {n['warn']} warn, {n['skip']} skip; "
-               f"wrote {summary['report']}")
+    click.echo(f"{n['pass']} pass, {n['fail']} fail, {n['warn']} warn, {n['skip']} skip"
+               + (f", {n['crash']} crash" if n["crash"] else "") + f"; wrote {summary['report']}")
     ctx.exit(summary["exit_status"])
 
 

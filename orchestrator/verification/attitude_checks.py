@@ -19,7 +19,8 @@ from typing import List
 from ..campaigns import campaign
 from ..running import scenarios
 from ..results.metric_comparisons import pooled_rms
-from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN, failed_run
+from .filter_cases import failed_run
+from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN
 from .setting import Setting
 from .verdicts import Check
 

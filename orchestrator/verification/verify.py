@@ -23,7 +23,7 @@ from ..errors import NavfmuError
 from ..campaigns.executor import Executor, Task
 from . import attitude_checks, filter_checks, sensor_checks
 from .fmi_checks import run_fmi_checks
-from .report_writing import counts, write_report
+from .report_writing import counts, failing, write_report
 from .roles import detect_role, read_fmu
 from .scenario_run import run_job
 from .setting import make_setting
@@ -79,7 +79,8 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
                        str(facts.path), validate=False))}
         report = write_report(out, summary, checks, figures, junit)
     n = counts(checks)
-    summary.update(checks=checks, counts=n, report=report, exit_status=1 if n["fail"] else 0)
+    summary.update(checks=checks, counts=n, report=report,
+                   exit_status=1 if failing(checks) else 0)
     return summary
 
 
