@@ -38,6 +38,8 @@ class Case:
     skip: str = ""
     #: parameters only the filter under test and the references get (not the scenario's)
     filter_parameters: Dict[str, Any] = field(default_factory=dict)
+    #: a robustness ratio above this warns, above it fails (None: the common bounds)
+    ratio_warn: Optional[float] = None
 
 
 def _failure(run) -> Optional[Dict[str, Any]]:

@@ -202,12 +202,15 @@ def _judge_robustness(case, results) -> Check:
     what = {"velocity": "3-D velocity RMS", "position": "3-D position RMS",
             "growth": "growth of the 3-D position error"}[case.metric]
     where = f" over {case.window[0]:g}-{case.window[1]:g} s" if case.window else ""
+    warn_up_to = RATIO_WARN if case.ratio_warn is None else case.ratio_warn
     if case.metric == "growth":
         crit = (f"{what}{where} <= {OUTAGE_FACTOR:g} x max(Kf's, InsOnly's) + "
                 f"{OUTAGE_SLACK_M:g} m (means over {case.seeds} seeds); finite outputs")
     else:
         crit = (f"{what}{where} over Kf's on the same {case.seeds} seeds: pass <= "
-                f"{RATIO_PASS:g}, warn <= {RATIO_WARN:g}; finite outputs, no refused step")
+                f"{RATIO_PASS:g}, " + (f"warn <= {warn_up_to:g}; " if warn_up_to > RATIO_PASS
+                                       else "fail beyond; ")
+                + "finite outputs, no refused step")
     runs = case_runs(results, case, "filter") if not case.skip else []
     unrun = not_judged(cid, case, crit, runs)
     if unrun:
@@ -233,7 +236,7 @@ def _judge_robustness(case, results) -> Check:
     value, ref = pooled_rms(mine), pooled_rms(theirs[REFERENCE])
     ratio = value / ref if ref > 0 else math.inf
     measured = f"{value:.3g} {unit} vs Kf {ref:.3g} {unit}: ratio {ratio:.2f}"
-    verdict = "pass" if ratio <= RATIO_PASS else ("warn" if ratio <= RATIO_WARN else "fail")
+    verdict = "pass" if ratio <= RATIO_PASS else ("warn" if ratio <= warn_up_to else "fail")
     reason = "" if verdict == "pass" else f"{ratio:.2f} times Kf's {what}"
     return Check(cid, case.title, crit, measured, verdict, reason, details)
 
