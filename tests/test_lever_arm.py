@@ -96,3 +96,28 @@ def test_offset_antenna_in_aircraft_500s():
     for a in "ned":
         assert errors["modelled"][1][a] == pytest.approx(errors["centred"][1][a], rel=0.1,
                                                          abs=0.1), a
+
+
+def test_receiver_attitude_is_connected_or_refused_by_name():
+    """The lever-arm wiring adds the truth attitude to the receiver once, from its truth
+    source; a source without attitude outputs is an error naming it."""
+    import dataclasses
+
+    from orchestrator.errors import NavfmuError
+    from orchestrator.model.receiver_wiring import ATTITUDE, receiver_has_attitude
+
+    model = scenarios.load_scenario(fmu_build.ROOT / "models" / "aircraft_500s")
+    assert not receiver_has_attitude(model)
+    wired = connect_receiver_attitude(model)
+    assert receiver_has_attitude(wired)
+    assert connect_receiver_attitude(wired).connections == wired.connections
+    added = [c for c in wired.connections if c.end_component == "gnss"
+             and c.end_connector in ATTITUDE]
+    assert {c.start_component for c in added} == {"trajectory"} and len(added) == 3
+    src = model.component("trajectory")
+    blind = dataclasses.replace(src, connectors={k: v for k, v in src.connectors.items()
+                                                 if k not in ATTITUDE})
+    model = dataclasses.replace(model, components=[blind if c.name == "trajectory" else c
+                                                   for c in model.components])
+    with pytest.raises(NavfmuError, match="'trajectory' does not output truth_roll"):
+        connect_receiver_attitude(model)

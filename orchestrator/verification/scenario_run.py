@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 import warnings
 from typing import Any, Dict
@@ -184,6 +185,11 @@ def main(job_file):
     with open(job_file, encoding="utf-8") as f:
         job = json.load(f)
     print(json.dumps(jsonable(summarize_run(job))), flush=True)
+    sys.stderr.flush()
+    # the answer is out: end here, without the interpreter's finalization, which a failed
+    # pythonfmu instance's leftover objects can crash (SIGSEGV after a Python exception in
+    # its do_step), turning a reported failure into a host crash
+    os._exit(0)
 
 
 if __name__ == "__main__":
