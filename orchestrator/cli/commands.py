@@ -360,7 +360,7 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     with progress_bars() as progress_bar:
         summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
                                         local_cluster=local_cluster,
-                                        progress=progress_bar("runs", unit="run"),
+                                        progress=progress_bar("runs", unit="run"), quick=quick,
                                         log=lambda m: click.echo(m, err=True))
     counts = summary["counts"]
     click.echo(f"{summary['runs']} runs x {len(names)} filters = {counts['total']} filter "
@@ -478,6 +478,8 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @click.option("--scenario", "scenario_names", multiple=True, help="Scenario of the "
               "consistency runs (a models/ name or .ssd; repeatable; default: the role's).")
 @click.option("--runs", type=int, default=None, help="Seeds per case (default 3).")
+@click.option("--quick", is_flag=True, help="A filter's cases on one seed, but its "
+              "consistency runs (about half the time).")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="A parameter of "
               "the FMU, or datasheet.NAME=VALUE: a declared value the FMU does not carry.")
 @click.option("--out", type=click.Path(file_okay=False),
@@ -489,7 +491,7 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
 @click.pass_context
 def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, scheduler,
-           local_cluster):
+           local_cluster, quick):
     """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
     checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
     from ..verification.verify import verify as verify_fmu
@@ -498,7 +500,7 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, out, junit, workers, sche
         summary = verify_fmu(fmu, role=role, scenario_names=scenario_names, runs=runs,
                              sets=parse_named_sets(sets), out=out, junit=junit,
                              workers=workers, scheduler=scheduler, local_cluster=local_cluster,
-                             progress=progress_bar("runs", unit="run"),
+                             progress=progress_bar("runs", unit="run"), quick=quick,
                              log=lambda m: click.echo(m, err=True), default_root=DEFAULT_OUT)
     for check in summary["checks"]:
         click.echo(f"  {check.verdict:5s} {check.id}: {check.measured}"

@@ -37,7 +37,8 @@ class Plan:
     jobs: list
 
 
-def plan(setting: Setting, runs: int) -> Plan:
+def plan(setting: Setting, runs: int, quick: bool = False) -> Plan:
+    """The runs of the attitude checks (one case: ``quick`` changes nothing)."""
     model = setting.model()
     spec = campaign.CampaignSpec(scenario=str(setting.scenario), filters=(REFERENCE,),
                                  runs=runs)

@@ -16,6 +16,9 @@ STOP_S = 200.0
 TAIL_S = 10.0
 SHORT_S = 120.0
 REFERENCE, FREE_INERTIAL = "Kf", "InsOnly"
+#: the window of the first SHORT_S seconds every consistency run also reports: the
+#: cases of that length compare with it (the lever arm)
+FIRST = "first"
 #: a receiver with white noise only (no noise steps, outlier patches or periodic outliers)
 CLEAN_GNSS = {"gnss.noise_steps": "", "gnss.outlier_patches": "", "gnss.outlier_period": 0.0}
 
@@ -40,6 +43,8 @@ class Case:
     filter_parameters: Dict[str, Any] = field(default_factory=dict)
     #: a robustness ratio above this warns, above it fails (None: the common bounds)
     ratio_warn: Optional[float] = None
+    #: more named windows [start, end] [s] whose metrics every run reports
+    windows: Dict[str, List[float]] = field(default_factory=dict)
 
 
 def _failure(run) -> Optional[Dict[str, Any]]:
@@ -88,10 +93,15 @@ def not_judged(cid: str, case: Case, criterion: str, runs) -> Optional[Check]:
     return failure_check(cid, case.title, criterion, runs)
 
 
+def first_window(model) -> Dict[str, List[float]]:
+    """The :data:`FIRST` window of a run of ``model``: its first :data:`SHORT_S` seconds."""
+    return {FIRST: [model.start_time, model.start_time + SHORT_S]}
+
+
 def case_runs(results, case, who):
     """The results of ``who`` ("filter" or a reference) on every seed of ``case``."""
     return [results[(case.name, who, i)] for i in range(case.seeds)]
 
 
-__all__ = ["Case", "failed_run", "failure_check", "not_judged", "case_runs", "STOP_S",
-           "TAIL_S", "SHORT_S", "REFERENCE", "FREE_INERTIAL", "CLEAN_GNSS"]
+__all__ = ["Case", "failed_run", "failure_check", "not_judged", "case_runs", "first_window",
+           "STOP_S", "TAIL_S", "SHORT_S", "REFERENCE", "FREE_INERTIAL", "CLEAN_GNSS", "FIRST"]

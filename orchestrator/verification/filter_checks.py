@@ -41,7 +41,7 @@ from ..results.metrics import nis_band95
 from .setting import MODELS, Setting
 from .error_source_cases import error_source_cases, judge_lever_arm
 from .filter_cases import (CLEAN_GNSS, FREE_INERTIAL, REFERENCE, SHORT_S, STOP_S, TAIL_S, Case,
-                           case_runs, failed_run, failure_check, not_judged)
+                           case_runs, failed_run, failure_check, first_window, not_judged)
 from .verdicts import Check
 
 #: noiseless closure bounds: position [m], velocity [m/s], attitude [deg] (largest |error|)
@@ -79,7 +79,8 @@ def cases(setting: Setting, runs: int) -> List[Case]:
         found.append(Case("consistency" if path == setting.scenario else
                           f"consistency_{path.parent.name}",
                           f"consistency on {path.parent.name}", str(path), dict(CLEAN_GNSS),
-                          "consistency", seeds=runs, references=(), stop=STOP_S))
+                          "consistency", seeds=runs, references=(), stop=STOP_S,
+                          windows=first_window(model)))
     robust = [
         ("noise_step", "GNSS velocity-noise step", {"gnss.noise_steps": "60,120,vel,3,3,3"},
          "velocity", [60.0, 130.0]),
@@ -119,7 +120,8 @@ def jobs(setting: Setting, case_list: List[Case], seed: int = 1):
             seeds = {f"{c}.seed": s for c, s in campaign.run_seeds(spec, offsets, i).items()}
             base = {"ssd": case.ssd, "component": setting.component, "stop": case.stop,
                     "parameters": {**case.parameters, **case.filter_parameters, **seeds},
-                    "windows": {"case": case.window} if case.window else {},
+                    "windows": {**({"case": case.window} if case.window else {}),
+                                **case.windows},
                     "growth": case.window if case.metric == "growth" else None,
                     **case.extra}
             mine = dict(base, fmu=str(setting.facts.path), parameters={
@@ -265,9 +267,14 @@ class Plan:
     jobs: list
 
 
-def plan(setting: Setting, runs: int) -> Plan:
-    """The cases of ``setting`` and the runs they need."""
+def plan(setting: Setting, runs: int, quick: bool = False) -> Plan:
+    """The cases of ``setting`` and the runs they need; ``quick``: every case but the
+    consistency runs on one seed (``navfmu verify --quick``)."""
     found = cases(setting, runs)
+    if quick:
+        for case in found:
+            if case.metric != "consistency":
+                case.seeds = 1
     return Plan(found, jobs(setting, found))
 
 

@@ -25,7 +25,7 @@ BUGS = {
     "": "none",
     "lever_sign": "the lever arm with its sign flipped",
     "no_bias_feedback": "the gyro-bias estimate never compensates the gyro increments",
-    "ne_swap": "north and east swapped in the position innovation",
+    "ne_swap": "the fix's north and east velocity swapped (read as east, north, down)",
     "time_tag": "a fix applied at its arrival, its gnss_time ignored",
     "overconfident": "output sigmas x0.3",
     "underconfident": "output sigmas x3",
@@ -244,11 +244,11 @@ class RefEkf(Fmi2Slave):
         z[0] = (self.lat - self.gnss_lat) * (rn + self.h)
         z[1] = (self.lon - self.gnss_lon) * (re + self.h) * math.cos(self.lat)
         z[2] = -(self.h - self.gnss_h)
-        if BUG == "ne_swap":
-            z[0], z[1] = z[1], z[0]
         z[0:3] += arm - self.v * age
-        z[3:6] = (self.v + self.C @ np.cross(self.rate, lever) - np.cross(w_ie, arm)
-                  - np.array([self.gnss_vn, self.gnss_ve, self.gnss_vd]))
+        fix_v = np.array([self.gnss_vn, self.gnss_ve, self.gnss_vd])
+        if BUG == "ne_swap":      # the receiver's velocity read as east, north, down
+            fix_v = fix_v[[1, 0, 2]]
+        z[3:6] = self.v + self.C @ np.cross(self.rate, lever) - np.cross(w_ie, arm) - fix_v
         H = np.zeros((6, 15))
         H[:, :6] = np.eye(6)
         R = np.diag([self.r_pos_n ** 2, self.r_pos_e ** 2, self.r_pos_d ** 2,
