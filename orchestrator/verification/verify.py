@@ -4,8 +4,9 @@ usage errors raise :class:`~orchestrator.errors.NavfmuError`, status 2).
 
 The runs of a role's checks are tasks of the campaign executor (serial, process pool or
 Dask, :mod:`orchestrator.executor`); each run of the FMU under test happens in a child
-process of its worker (:mod:`.scenario_run`), so an FMU that crashes its host fails the
-checks that needed it and the report is still written.
+process of its worker (:mod:`.scenario_run`), so an FMU that crashes its host gets the
+verdict ``crash`` on the checks that needed it (retried once) and the report is still
+written; the exit status is 1 on a fail or a crash.
 """
 from __future__ import annotations
 
