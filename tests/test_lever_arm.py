@@ -4,7 +4,6 @@ r), in the Kf and the UKF family; the receiver's offset antenna against the same
 aircraft_500s flown with an offset antenna, with and without the lever arm in the filter."""
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -15,7 +14,7 @@ from navcore.ins import earth
 from navcore.ins.rotations import euler_to_dcm
 from navcore.ins.strapdown import Strapdown
 from orchestrator.building import build as fmu_build
-from orchestrator.model.ssp import Connection
+from orchestrator.model.receiver_wiring import connect_receiver_attitude
 from orchestrator.results import metrics
 from orchestrator.running import scenarios
 
@@ -67,24 +66,12 @@ def test_receiver_puts_its_fixes_at_the_antenna():
     assert got == pytest.approx(v_antenna, abs=1e-9)
 
 
-def _with_attitude_to_receiver(model):
-    """aircraft_500s with the truth attitude connected to the receiver (its lever arm's input)."""
-    names = ("truth_roll", "truth_pitch", "truth_yaw")
-    gnss = model.component("gnss")
-    gnss = dataclasses.replace(gnss, connectors={**gnss.connectors,
-                                                 **{n: ("input", "Real") for n in names}})
-    components_ = [gnss if c.name == "gnss" else c for c in model.components]
-    connections = list(model.connections) + [Connection("trajectory", n, "gnss", n)
-                                             for n in names]
-    return dataclasses.replace(model, components=components_, connections=connections)
-
-
 def test_offset_antenna_in_aircraft_500s():
     """The receiver's antenna 4 m ahead, 1 m right and 2 m above the IMU: a filter without
     the lever arm is off by the lever arm (its mean position error over 100-200 s moves by
     it: 4.1 m horizontally, 2 m up), with it the RMS errors are those of an antenna at the
     IMU within 10 % (+0.1 m)."""
-    model = _with_attitude_to_receiver(scenarios.load_scenario(
+    model = connect_receiver_attitude(scenarios.load_scenario(
         fmu_build.ROOT / "models" / "aircraft_500s"))
     arm = {"lever_arm_x": 4.0, "lever_arm_y": 1.0, "lever_arm_z": -2.0}
     rx = {f"gnss.{k}": v for k, v in arm.items()}
@@ -109,3 +96,28 @@ def test_offset_antenna_in_aircraft_500s():
     for a in "ned":
         assert errors["modelled"][1][a] == pytest.approx(errors["centred"][1][a], rel=0.1,
                                                          abs=0.1), a
+
+
+def test_receiver_attitude_is_connected_or_refused_by_name():
+    """The lever-arm wiring adds the truth attitude to the receiver once, from its truth
+    source; a source without attitude outputs is an error naming it."""
+    import dataclasses
+
+    from orchestrator.errors import NavfmuError
+    from orchestrator.model.receiver_wiring import ATTITUDE, receiver_has_attitude
+
+    model = scenarios.load_scenario(fmu_build.ROOT / "models" / "aircraft_500s")
+    assert not receiver_has_attitude(model)
+    wired = connect_receiver_attitude(model)
+    assert receiver_has_attitude(wired)
+    assert connect_receiver_attitude(wired).connections == wired.connections
+    added = [c for c in wired.connections if c.end_component == "gnss"
+             and c.end_connector in ATTITUDE]
+    assert {c.start_component for c in added} == {"trajectory"} and len(added) == 3
+    src = model.component("trajectory")
+    blind = dataclasses.replace(src, connectors={k: v for k, v in src.connectors.items()
+                                                 if k not in ATTITUDE})
+    model = dataclasses.replace(model, components=[blind if c.name == "trajectory" else c
+                                                   for c in model.components])
+    with pytest.raises(NavfmuError, match="'trajectory' does not output truth_roll"):
+        connect_receiver_attitude(model)

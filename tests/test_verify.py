@@ -171,17 +171,20 @@ def test_filter_written_without_navfmu_is_verified_end_to_end(broken, navfmu_cli
     assert junit.read_text().count("<testcase") == len(checks)
 
 
-def test_crashing_fmu_fails_its_checks_and_the_report_is_written(broken, navfmu_cli,
-                                                                 tmp_path):
+def test_crashing_fmu_crashes_its_checks_and_the_report_is_written(broken, navfmu_cli,
+                                                                   tmp_path):
     out = tmp_path / "report"
     status, stdout, err = navfmu_cli("verify", broken / "CrashingKf.fmu", "--runs", 1,
                                      "--out", out)
     assert status == 1
     checks = {c["id"]: c for c in json.loads((out / "verify.json").read_text())["checks"]}
+    # a probe or run whose host dies (twice: retried once) is a crash, not a fail on merits
     for cid in ("fmi.state", "fmi.variable_step", "filter.closure", "filter.consistency",
                 "robust.outage"):
-        assert checks[cid]["verdict"] == "fail"
-        assert "SIGABRT" in checks[cid]["reason"], checks[cid]
+        assert checks[cid]["verdict"] == "crash", checks[cid]
+        assert "SIGABRT" in checks[cid]["reason"] and "retried once" in checks[cid]["reason"]
+    assert checks["filter.closure"]["details"]["failure"]["crashed"]
+    assert "crash" in stdout.splitlines()[-1]
     assert (out / "verify.md").is_file()
 
 

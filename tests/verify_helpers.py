@@ -30,6 +30,41 @@ for name in sys.argv[4].split(","):
 """
 
 
+_BUILD_PLAIN = """
+import sys
+from pathlib import Path
+from pythonfmu.builder import FmuBuilder
+src, dist = Path(sys.argv[1]), Path(sys.argv[2])
+for name in sys.argv[3].split(","):
+    FmuBuilder.build_FMU(src / f"{name}.py", dest=dist, canGetAndSetFMUstate=True,
+                         canSerializeFMUstate=True)
+"""
+
+
+def reference_name(bug: str) -> str:
+    """The model name of the reference filter with ``bug`` (``RefEkf`` without one)."""
+    return "RefEkf" + "".join(part.capitalize() for part in bug.split("_"))
+
+
+def build_reference_filters(folder: Path, bugs) -> Path:
+    """The independent reference filter (tests/verify_fmus/RefEkf.py) once per bug of
+    ``bugs`` ("" = none), each its own FMU with its own module and class name, into
+    ``folder/dist``; returns that folder."""
+    src, dist = folder / "src", folder / "dist"
+    src.mkdir(parents=True)
+    template = (SCRIPTS / "RefEkf.py").read_text()
+    names = []
+    for bug in bugs:
+        name = reference_name(bug)
+        text = template.replace('BUG = ""', f"BUG = {bug!r}", 1)
+        text = text.replace("class RefEkf(Fmi2Slave)", f"class {name}(Fmi2Slave)", 1)
+        (src / f"{name}.py").write_text(text)
+        names.append(name)
+    subprocess.run([sys.executable, "-c", _BUILD_PLAIN, str(src), str(dist), ",".join(names)],
+                   check=True, cwd=str(folder), capture_output=True, text=True)
+    return dist
+
+
 def build_test_fmus(folder: Path) -> Path:
     """Build every test FMU into ``folder/dist``; returns that folder."""
     src, dist = folder / "src", folder / "dist"

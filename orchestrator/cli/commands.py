@@ -389,7 +389,7 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     with progress_bars() as progress_bar:
         summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
                                         local_cluster=local_cluster,
-                                        progress=progress_bar("runs", unit="run"),
+                                        progress=progress_bar("runs", unit="run"), quick=quick,
                                         log=lambda m: click.echo(m, err=True))
     counts = summary["counts"]
     click.echo(f"{summary['runs']} runs x {len(names)} filters = {counts['total']} filter "
@@ -507,6 +507,8 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @click.option("--scenario", "scenario_names", multiple=True, help="Scenario of the "
               "consistency runs (a models/ name or .ssd; repeatable; default: the role's).")
 @click.option("--runs", type=int, default=DEFAULT_RUNS, help="Seeds per case.")
+@click.option("--quick", is_flag=True, help="A filter's cases on one seed, but its "
+              "consistency runs (about half the time).")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="A parameter of "
               "the FMU, or datasheet.NAME=VALUE: a declared value the FMU does not carry.")
 @click.option("--ssv", "ssv", multiple=True, metavar="FILE", help="A parameter set (.ssv) of "
@@ -520,7 +522,7 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @click.option("--local-cluster", is_flag=True, help="Start a Dask LocalCluster of --workers.")
 @click.pass_context
 def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers, scheduler,
-           local_cluster):
+           local_cluster, quick):
     """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
     checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
     from ..running.ssv_bindings import read_fmu_bindings
@@ -531,14 +533,14 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers,
         summary = verify_fmu(fmu, role=role, scenario_names=scenario_names, runs=runs,
                              sets=bound, out=out, junit=junit,
                              workers=workers, scheduler=scheduler, local_cluster=local_cluster,
-                             progress=progress_bar("runs", unit="run"),
+                             progress=progress_bar("runs", unit="run"), quick=quick,
                              log=lambda m: click.echo(m, err=True), default_root=DEFAULT_OUT)
     for check in summary["checks"]:
-        click.echo(f"  {check.verdict:4s}  {check.id}: {check.measured}"
+        click.echo(f"  {check.verdict:5s} {check.id}: {check.measured}"
                    + (f" ({check.reason})" if check.reason and check.verdict != "pass" else ""))
     n = summary["counts"]
-    click.echo(f"{n['pass']} pass, {n['fail']} fail, {n['warn']} warn, {n['skip']} skip; "
-               f"wrote {summary['report']}")
+    click.echo(f"{n['pass']} pass, {n['fail']} fail, {n['warn']} warn, {n['skip']} skip"
+               + (f", {n['crash']} crash" if n["crash"] else "") + f"; wrote {summary['report']}")
     ctx.exit(summary["exit_status"])
 
 

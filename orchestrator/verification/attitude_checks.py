@@ -19,7 +19,8 @@ from typing import List
 from ..campaigns import campaign
 from ..running import scenarios
 from ..results.metric_comparisons import pooled_rms
-from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN, failed_run
+from .filter_cases import failed_run
+from .filter_checks import RATIO_PASS, RATIO_WARN, TIME_RATIO_WARN
 from .setting import Setting
 from .verdicts import Check
 
@@ -36,7 +37,8 @@ class Plan:
     jobs: list
 
 
-def plan(setting: Setting, runs: int) -> Plan:
+def plan(setting: Setting, runs: int, quick: bool = False) -> Plan:
+    """The runs of the attitude checks (one case: ``quick`` changes nothing)."""
     model = setting.model()
     spec = campaign.CampaignSpec(scenario=str(setting.scenario), filters=(REFERENCE,),
                                  runs=runs)

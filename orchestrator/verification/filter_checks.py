@@ -21,7 +21,9 @@ exactly one disturbance:
 * ``late_fixes``: every fix published 0.5 s after it was taken (``output_delay``), with its
   ``gnss_time``;
 * ``stationary_start``: the vehicle stands still the whole run (profile ``static``);
-* ``high_dynamics``: the scenario ``uav_maneuver`` (its strong manoeuvres), when it fits.
+* ``high_dynamics``: the scenario ``uav_maneuver`` (its strong manoeuvres), when it fits;
+* ``lever_arm`` and ``mems_imu``: an antenna lever arm, a MEMS IMU through an outage
+  (:mod:`.error_source_cases`).
 
 The random components get the campaign seeds (:func:`orchestrator.campaign.run_seeds`):
 run i of every filter sees the same truth, IMU and GNSS noise.
@@ -29,21 +31,19 @@ run i of every filter sees the same truth, IMU and GNSS noise.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional
+from dataclasses import dataclass
+from typing import Any, Dict, List
 
 from ..campaigns import campaign
 from ..running import scenarios
 from ..results.metric_comparisons import pooled_rms, rms_3d
 from ..results.metrics import nis_band95
 from .setting import MODELS, Setting
+from .error_source_cases import error_source_cases, judge_lever_arm
+from .filter_cases import (CLEAN_GNSS, FREE_INERTIAL, REFERENCE, SHORT_S, STOP_S, TAIL_S, Case,
+                           case_runs, failed_run, failure_check, first_window, not_judged)
 from .verdicts import Check
 
-#: length of the consistency runs [s]; the other cases end :data:`TAIL_S` after their
-#: disturbance (or at :data:`SHORT_S`)
-STOP_S = 200.0
-TAIL_S = 10.0
-SHORT_S = 120.0
 #: noiseless closure bounds: position [m], velocity [m/s], attitude [deg] (largest |error|)
 CLOSURE_BOUNDS = {"position_max_m": 0.1, "velocity_max_mps": 0.01, "attitude_max_deg": 0.01}
 _UNITS = {"position_max_m": "m", "velocity_max_mps": "m/s", "attitude_max_deg": "deg"}
@@ -57,24 +57,8 @@ RATIO_PASS, RATIO_WARN = 2.0, 5.0
 OUTAGE_FACTOR, OUTAGE_SLACK_M = 2.0, 1.0
 #: time per step over Kf's above which the timing check warns
 TIME_RATIO_WARN = 20.0
-REFERENCE, FREE_INERTIAL = "Kf", "InsOnly"
-CLEAN_GNSS = {"gnss.noise_steps": "", "gnss.outlier_patches": "", "gnss.outlier_period": 0.0}
 #: trajectory parameters a noiseless IMU keeps (everything else bound is an error term)
 _KEPT = ("profile", "imu_period", "seed", "extend_profile", "level_reference_g")
-
-
-@dataclass
-class Case:
-    name: str
-    title: str
-    ssd: str
-    parameters: Dict[str, Any]
-    metric: str                       # how the case is judged, see _judge_robustness
-    window: Optional[List[float]] = None
-    stop: float = SHORT_S
-    seeds: int = 1
-    references: tuple = (REFERENCE,)
-    extra: Dict[str, Any] = field(default_factory=dict)
 
 
 def _noiseless(model) -> Dict[str, Any]:
@@ -95,7 +79,8 @@ def cases(setting: Setting, runs: int) -> List[Case]:
         found.append(Case("consistency" if path == setting.scenario else
                           f"consistency_{path.parent.name}",
                           f"consistency on {path.parent.name}", str(path), dict(CLEAN_GNSS),
-                          "consistency", seeds=runs, references=(), stop=STOP_S))
+                          "consistency", seeds=runs, references=(), stop=STOP_S,
+                          windows=first_window(model)))
     robust = [
         ("noise_step", "GNSS velocity-noise step", {"gnss.noise_steps": "60,120,vel,3,3,3"},
          "velocity", [60.0, 130.0]),
@@ -116,7 +101,7 @@ def cases(setting: Setting, runs: int) -> List[Case]:
     if dynamic.is_file() and setting.scenario != dynamic.resolve():
         found.append(Case("high_dynamics", "high-dynamics profile (uav_maneuver)",
                           str(dynamic), {}, "position", seeds=runs))
-    return found
+    return found + error_source_cases(setting, runs)
 
 
 def jobs(setting: Setting, case_list: List[Case], seed: int = 1):
@@ -125,6 +110,8 @@ def jobs(setting: Setting, case_list: List[Case], seed: int = 1):
     closure's Kf, which runs through its FMU for the timing check)."""
     out = []
     for case in case_list:
+        if case.skip:
+            continue
         model = scenarios.load_scenario(case.ssd)
         spec = campaign.CampaignSpec(scenario=case.ssd, filters=(REFERENCE,), runs=case.seeds,
                                      seed=seed)
@@ -132,9 +119,11 @@ def jobs(setting: Setting, case_list: List[Case], seed: int = 1):
         for i in range(case.seeds):
             seeds = {f"{c}.seed": s for c, s in campaign.run_seeds(spec, offsets, i).items()}
             base = {"ssd": case.ssd, "component": setting.component, "stop": case.stop,
-                    "parameters": {**case.parameters, **seeds},
-                    "windows": {"case": case.window} if case.window else {},
-                    "growth": case.window if case.metric == "growth" else None}
+                    "parameters": {**case.parameters, **case.filter_parameters, **seeds},
+                    "windows": {**({"case": case.window} if case.window else {}),
+                                **case.windows},
+                    "growth": case.window if case.metric == "growth" else None,
+                    **case.extra}
             mine = dict(base, fmu=str(setting.facts.path), parameters={
                 **base["parameters"], **setting.component_parameters()})
             out.append(((case.name, "filter", i), mine, True))
@@ -147,29 +136,14 @@ def jobs(setting: Setting, case_list: List[Case], seed: int = 1):
 
 
 # -- judging -----------------------------------------------------------------------------------
-def _runs(results, case, who):
-    return [results[(case.name, who, i)] for i in range(case.seeds)]
-
-
-def failed_run(runs) -> Optional[str]:
-    """Why the first of ``runs`` that failed did so (its error or its non-finite outputs), or
-    None when every run finished with finite outputs."""
-    for i, r in enumerate(runs):
-        if "error" in r:
-            return f"seed {i}: {r['error']}"
-        if r.get("nonfinite"):
-            return f"seed {i}: non-finite outputs {', '.join(r['nonfinite'][:6])}"
-    return None
-
-
 def _judge_closure(case, results) -> Check:
     crit = ("perfect IMU and GNSS, filter started at the truth: largest |error| <= "
             + ", ".join(f"{v:g} {_UNITS[k]} ({k.split('_')[0]})"
                         for k, v in CLOSURE_BOUNDS.items()))
-    run = _runs(results, case, "filter")[0]
-    failed = failed_run([run])
-    if failed:
-        return Check("filter.closure", case.title, crit, "run failed", "fail", failed)
+    run = case_runs(results, case, "filter")[0]
+    broken = failure_check("filter.closure", case.title, crit, [run])
+    if broken:
+        return broken
     m = run["metrics"]
     worst = {k: max(m[k].values()) for k in CLOSURE_BOUNDS if k in m}
     over = [f"{k.split('_')[0]} {worst[k]:.3g} > {CLOSURE_BOUNDS[k]:g}" for k in worst
@@ -183,10 +157,10 @@ def _judge_consistency(case, results) -> Check:
     crit = (f"mean NEES per 3-state group in [{NEES_BAND[0]:.2f}, {NEES_BAND[1]:.2f}] over "
             f"{case.seeds} seeds; pooled mean NIS in its chi-square 95 % band")
     cid = "filter." + case.name
-    runs = _runs(results, case, "filter")
-    failed = failed_run(runs)
-    if failed:
-        return Check(cid, case.title, crit, "run failed", "fail", failed)
+    runs = case_runs(results, case, "filter")
+    broken = failure_check(cid, case.title, crit, runs)
+    if broken:
+        return broken
     ms = [r["metrics"] for r in runs]
     parts, problems, details = [], [], {}
     if all("nees" in m for m in ms):
@@ -230,17 +204,20 @@ def _judge_robustness(case, results) -> Check:
     what = {"velocity": "3-D velocity RMS", "position": "3-D position RMS",
             "growth": "growth of the 3-D position error"}[case.metric]
     where = f" over {case.window[0]:g}-{case.window[1]:g} s" if case.window else ""
+    warn_up_to = RATIO_WARN if case.ratio_warn is None else case.ratio_warn
     if case.metric == "growth":
         crit = (f"{what}{where} <= {OUTAGE_FACTOR:g} x max(Kf's, InsOnly's) + "
                 f"{OUTAGE_SLACK_M:g} m (means over {case.seeds} seeds); finite outputs")
     else:
         crit = (f"{what}{where} over Kf's on the same {case.seeds} seeds: pass <= "
-                f"{RATIO_PASS:g}, warn <= {RATIO_WARN:g}; finite outputs, no refused step")
-    runs = _runs(results, case, "filter")
-    failed = failed_run(runs)
-    if failed:
-        return Check(cid, case.title, crit, "run failed", "fail", failed)
-    refs = {ref: _runs(results, case, ref) for ref in case.references}
+                f"{RATIO_PASS:g}, " + (f"warn <= {warn_up_to:g}; " if warn_up_to > RATIO_PASS
+                                       else "fail beyond; ")
+                + "finite outputs, no refused step")
+    runs = case_runs(results, case, "filter") if not case.skip else []
+    unrun = not_judged(cid, case, crit, runs)
+    if unrun:
+        return unrun
+    refs = {ref: case_runs(results, case, ref) for ref in case.references}
     broken = [f"{ref}: {why}" for ref, rr in refs.items() if (why := failed_run(rr))]
     if broken:
         return Check(cid, case.title, crit, "reference failed", "fail",
@@ -261,7 +238,7 @@ def _judge_robustness(case, results) -> Check:
     value, ref = pooled_rms(mine), pooled_rms(theirs[REFERENCE])
     ratio = value / ref if ref > 0 else math.inf
     measured = f"{value:.3g} {unit} vs Kf {ref:.3g} {unit}: ratio {ratio:.2f}"
-    verdict = "pass" if ratio <= RATIO_PASS else ("warn" if ratio <= RATIO_WARN else "fail")
+    verdict = "pass" if ratio <= RATIO_PASS else ("warn" if ratio <= warn_up_to else "fail")
     reason = "" if verdict == "pass" else f"{ratio:.2f} times Kf's {what}"
     return Check(cid, case.title, crit, measured, verdict, reason, details)
 
@@ -290,9 +267,14 @@ class Plan:
     jobs: list
 
 
-def plan(setting: Setting, runs: int) -> Plan:
-    """The cases of ``setting`` and the runs they need."""
+def plan(setting: Setting, runs: int, quick: bool = False) -> Plan:
+    """The cases of ``setting`` and the runs they need; ``quick``: every case but the
+    consistency runs on one seed (``navfmu verify --quick``)."""
     found = cases(setting, runs)
+    if quick:
+        for case in found:
+            if case.metric != "consistency":
+                case.seeds = 1
     return Plan(found, jobs(setting, found))
 
 
@@ -338,6 +320,9 @@ def judge(case_list: List[Case], results) -> List[Check]:
             checks.append(_judge_closure(case, results))
         elif case.metric == "consistency":
             checks.append(_judge_consistency(case, results))
+        elif case.metric == "lever_arm":
+            without = next((c for c in case_list if c.name == "consistency"), None)
+            checks.append(judge_lever_arm(case, results, without))
         else:
             checks.append(_judge_robustness(case, results))
     checks.append(_judge_timing(results))

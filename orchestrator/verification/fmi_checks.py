@@ -2,7 +2,8 @@
 state and variable-step capabilities, and hostile host calls.
 
 The checks that load the FMU run in a child process (:mod:`.fmi_probe`), so an FMU that
-crashes its host fails them and the verification goes on.
+crashes its host gets the verdict ``crash`` on them (retried once; for ``fmi.hostile``,
+whose criterion is that the host lives on, it fails) and the verification goes on.
 """
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from .roles import ROLE_TITLES, contract
 from .setting import Setting, input_table
+from .run_failures import crash_failure
 from .verdicts import Check, run_child
 
 PROBE_MODULE = "orchestrator.verification.fmi_probe"
@@ -74,7 +76,22 @@ def check_ports(setting: Setting) -> Check:
 def _probe(setting: Setting, probe: str, table_file: Path, h: float, **extra):
     job = {"fmu": str(setting.facts.path), "probe": probe, "table": str(table_file), "h": h,
            "parameters": setting.parameters, **extra}
-    return run_child(PROBE_MODULE, job)
+    result = run_child(PROBE_MODULE, job)
+    if result.get("crashed") and probe != "hostile":    # a crash is retried once
+        result = run_child(PROBE_MODULE, job)
+        if result.get("crashed"):
+            result["error"] += " (twice: retried once)"
+    return result
+
+
+def _probe_failed(cid: str, title: str, criterion: str, result) -> Check:
+    """The check of a probe that did not finish: ``crash`` when its host died (twice), not a
+    judgement of the criterion; ``fail`` when the FMU refused or raised."""
+    if result.get("crashed"):
+        failure = crash_failure(result["error"])
+        return Check(cid, title, criterion, "host crashed", "crash",
+                     f"{result['error']}; try: {failure['hint']}", result)
+    return Check(cid, title, criterion, "probe failed", "fail", result["error"], result)
 
 
 def _state_check(setting: Setting, result) -> Check:
@@ -85,8 +102,7 @@ def _state_check(setting: Setting, result) -> Check:
         return Check("fmi.state", "FMU state restore", criterion, "not declared", "skip",
                      "canGetAndSetFMUstate is false: nothing to check")
     if "error" in result:
-        return Check("fmi.state", "FMU state restore", criterion, "probe failed", "fail",
-                     result["error"], result)
+        return _probe_failed("fmi.state", "FMU state restore", criterion, result)
     bad = [f"{what}: {result[what]['what']}" for what in ("set_state", "deserialize")
            if result.get(what)]
     measured = ("bit-identical" if not bad else "differs") + (
@@ -107,8 +123,8 @@ def _variable_step_check(setting: Setting, result) -> Check:
         return Check("fmi.variable_step", "variable communication step", criterion,
                      "not declared", "skip", "canHandleVariableCommunicationStepSize is false")
     if "error" in result:
-        return Check("fmi.variable_step", "variable communication step", criterion,
-                     "probe failed", "fail", result["error"], result)
+        return _probe_failed("fmi.variable_step", "variable communication step", criterion,
+                             result)
     diff = result["difference"]
     return Check("fmi.variable_step", "variable communication step", criterion,
                  "equal" if diff is None else "differs", "pass" if diff is None else "fail",

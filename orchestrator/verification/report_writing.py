@@ -14,13 +14,18 @@ from ..results import outputs
 from ..results.jsonsafe import jsonable
 from ..results.run_results import atomic_write
 from .roles import ROLE_TITLES
-from .verdicts import Check
+from .verdicts import FAILING, VERDICTS, Check
 
 FORMAT = "navfmu-verify-1"
 
 
 def counts(checks: List[Check]) -> Dict[str, int]:
-    return {v: sum(c.verdict == v for c in checks) for v in ("pass", "fail", "warn", "skip")}
+    return {v: sum(c.verdict == v for c in checks) for v in VERDICTS}
+
+
+def failing(checks: List[Check]) -> bool:
+    """Whether a check failed or crashed (the exit status is then 1)."""
+    return any(c.verdict in FAILING for c in checks)
 
 
 def _cell(text: str) -> str:
@@ -47,8 +52,9 @@ def markdown(summary: Dict[str, Any], checks: List[Check]) -> str:
              + (", forced with --role)" if summary.get("role_forced") else ", detected)"),
              f"- scenario(s): {', '.join(summary['scenarios'])}; seeds per case: "
              f"{summary['runs']}",
-             f"- verdict: **{'FAIL' if n['fail'] else 'PASS'}** ({n['pass']} pass, "
-             f"{n['fail']} fail, {n['warn']} warn, {n['skip']} skip)", "",
+             f"- verdict: **{'FAIL' if failing(checks) else 'PASS'}** ({n['pass']} pass, "
+             f"{n['fail']} fail, {n['warn']} warn, {n['skip']} skip"
+             + (f", {n['crash']} crash" if n["crash"] else "") + ")", "",
              "| check | criterion | measured | verdict |", "|---|---|---|---|"]
     for c in checks:
         lines.append(f"| {c.id} | {_cell(c.criterion)} | {_cell(c.measured)} | "
@@ -58,6 +64,8 @@ def markdown(summary: Dict[str, Any], checks: List[Check]) -> str:
         lines += [f"## {c.id}: {c.title}", "",
                   f"Criterion: {c.criterion}. Measured: {c.measured}. Verdict: "
                   f"**{c.verdict}**" + (f": {c.reason}." if c.reason else "."), ""]
+        if c.details.get("failure_text"):
+            lines += ["```", c.details["failure_text"], "```", ""]
         if c.figure:
             lines += [f"![{c.id}]({c.figure})", ""]
     return "\n".join(lines)
@@ -66,14 +74,19 @@ def markdown(summary: Dict[str, Any], checks: List[Check]) -> str:
 def junit_xml(summary: Dict[str, Any], checks: List[Check]) -> bytes:
     n = counts(checks)
     suite = ET.Element("testsuite", name=f"navfmu verify {summary['model_name']}",
-                       tests=str(len(checks)), failures=str(n["fail"]), errors="0",
+                       tests=str(len(checks)), failures=str(n["fail"]),
+                       errors=str(n["crash"]),
                        skipped=str(n["skip"]))
     for c in checks:
         case = ET.SubElement(suite, "testcase", classname=f"navfmu.verify.{summary['model_name']}",
                              name=c.id)
         text = f"{c.criterion}; measured: {c.measured}"
+        if c.details.get("failure_text"):
+            text += "\n" + c.details["failure_text"]
         if c.verdict == "fail":
             ET.SubElement(case, "failure", message=c.reason or "failed").text = text
+        elif c.verdict == "crash":
+            ET.SubElement(case, "error", message=c.reason or "crashed").text = text
         elif c.verdict == "skip":
             ET.SubElement(case, "skipped", message=c.reason or "skipped")
         elif c.verdict == "warn":
@@ -100,4 +113,4 @@ def write_report(out, summary: Dict[str, Any], checks: List[Check],
     return Path(out) / "verify.md"
 
 
-__all__ = ["write_report", "markdown", "junit_xml", "counts"]
+__all__ = ["write_report", "markdown", "junit_xml", "counts", "failing"]

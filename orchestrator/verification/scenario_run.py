@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 import warnings
 from typing import Any, Dict
@@ -22,9 +23,11 @@ from navcore.ins.earth import radii
 
 from ..cosim.isolation import ISOLATE_MODES, Isolation
 from ..errors import NavfmuError
+from ..model.receiver_wiring import connect_receiver_attitude
 from ..results import metrics
 from ..results.jsonsafe import jsonable
 from ..running import scenarios
+from .run_failures import crash_failure, failure_of
 from .sensor_checks import allan_curves
 from .verdicts import run_child
 
@@ -32,9 +35,17 @@ MODULE = "orchestrator.verification.scenario_run"
 
 
 def run_isolated(job: Dict[str, Any]) -> Dict[str, Any]:
-    """The summary of ``job`` computed in a child process (``{"error": ...}`` on a failure);
-    that child is the FMU's host already, so it runs every FMU in its own process."""
-    return run_child(MODULE, dict(job, isolation="never"))
+    """The summary of ``job`` computed in a child process (``{"error": ..., "failure": ...}``
+    on a failure); that child is the FMU's host already, so it runs every FMU in its own
+    process.  A child that dies (a crash, not a refused step) is run once more; a second
+    death is the run's ``failure`` with ``crashed`` set."""
+    job = dict(job, isolation="never")
+    result = run_child(MODULE, job)
+    if result.get("crashed"):
+        result = run_child(MODULE, job)
+        if result.get("crashed"):
+            result["failure"] = crash_failure(result["error"] + " (twice: retried once)")
+    return result
 
 
 def run_job(job: Dict[str, Any], isolated: bool) -> Dict[str, Any]:
@@ -45,7 +56,7 @@ def run_job(job: Dict[str, Any], isolated: bool) -> Dict[str, Any]:
     try:
         return summarize_run(job)
     except NavfmuError as exc:
-        return {"error": str(exc).splitlines()[0]}
+        return {"error": str(exc).splitlines()[0], "failure": failure_of(exc)}
 
 
 def _position_error_norm(errors):
@@ -134,6 +145,8 @@ def summarize_run(job: Dict[str, Any]) -> Dict[str, Any]:
     model = scenarios.load_scenario(job["ssd"])
     if job.get("fmu"):
         model = model.replace_source(job["component"], job["fmu"])
+    if job.get("receiver_attitude"):
+        model = connect_receiver_attitude(model, job["receiver_attitude"])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
@@ -144,7 +157,7 @@ def summarize_run(job: Dict[str, Any]) -> Dict[str, Any]:
                                               isolation=Isolation(job.get("isolation",
                                                                           ISOLATE_MODES[0])))
         except NavfmuError as exc:
-            return {"error": str(exc).splitlines()[0]}
+            return {"error": str(exc).splitlines()[0], "failure": failure_of(exc)}
     results = run.results
     component = job["component"]
     out: Dict[str, Any] = {}
@@ -152,6 +165,9 @@ def summarize_run(job: Dict[str, Any]) -> Dict[str, Any]:
     bad = [n for n, ok in zip(results.columns[component], np.isfinite(data).all(axis=0))
            if not ok]
     out["nonfinite"] = bad
+    if bad:
+        rows = np.nonzero(~np.isfinite(data).all(axis=1))[0]
+        out["nonfinite_time"] = float(results.time[rows[0]])
     if job.get("kind") == "receiver":
         out["fixes"] = _fix_errors(results, component)
         return out
@@ -169,6 +185,11 @@ def main(job_file):
     with open(job_file, encoding="utf-8") as f:
         job = json.load(f)
     print(json.dumps(jsonable(summarize_run(job))), flush=True)
+    sys.stderr.flush()
+    # the answer is out: end here, without the interpreter's finalization, which a failed
+    # pythonfmu instance's leftover objects can crash (SIGSEGV after a Python exception in
+    # its do_step), turning a reported failure into a host crash
+    os._exit(0)
 
 
 if __name__ == "__main__":

@@ -75,7 +75,8 @@ def _declared(setting: Setting, name: str):
     return None, None
 
 
-def plan(setting: Setting, runs: int) -> Plan:
+def plan(setting: Setting, runs: int, quick: bool = False) -> Plan:
+    """The one run of a sensor's checks (``quick`` changes nothing)."""
     fmu = str(setting.facts.path)
     if setting.role == "imu_sensor":
         params = dict(setting.parameters)

@@ -2,7 +2,11 @@
 (:func:`run_child`, shared with the master's FMU host: :mod:`orchestrator.cosim.host_process`).
 
 Verdicts: ``pass``, ``fail``, ``warn`` (worth a look, does not fail the verification) and
-``skip`` (the FMU lacks what the check needs, e.g. an optional output; never a fail).
+``skip`` (the FMU lacks what the check needs, e.g. an optional output; never a fail) and
+``crash`` (the process hosting the FMU died, twice: retried once; not a judgement of the
+check's criterion, though the verification fails).  A fail or crash from a run that did not
+finish says where (simulated time, FMI call), why (the FMU's message and exception) and what
+to try (:mod:`.run_failures`).
 """
 from __future__ import annotations
 
@@ -11,7 +15,9 @@ from typing import Any, Dict, Optional
 
 from ..cosim.host_process import run_child
 
-VERDICTS = ("pass", "fail", "warn", "skip")
+VERDICTS = ("pass", "fail", "warn", "skip", "crash")
+#: verdicts that make the verification's exit status 1
+FAILING = ("fail", "crash")
 
 
 @dataclass
@@ -36,4 +42,4 @@ class Check:
         return asdict(self)
 
 
-__all__ = ["Check", "VERDICTS", "run_child"]
+__all__ = ["Check", "VERDICTS", "FAILING", "run_child"]

@@ -4,8 +4,9 @@ usage errors raise :class:`~orchestrator.errors.NavfmuError`, status 2).
 
 The runs of a role's checks are tasks of the campaign executor (serial, process pool or
 Dask, :mod:`orchestrator.executor`); each run of the FMU under test happens in a child
-process of its worker (:mod:`.scenario_run`), so an FMU that crashes its host fails the
-checks that needed it and the report is still written.
+process of its worker (:mod:`.scenario_run`), so an FMU that crashes its host gets the
+verdict ``crash`` on the checks that needed it (retried once) and the report is still
+written; the exit status is 1 on a fail or a crash.
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from ..errors import NavfmuError
 from ..campaigns.executor import Executor, Task
 from . import attitude_checks, filter_checks, sensor_checks
 from .fmi_checks import run_fmi_checks
-from .report_writing import counts, write_report
+from .report_writing import counts, failing, write_report
 from .roles import detect_role, read_fmu
 from .scenario_run import run_job
 from .setting import make_setting
@@ -33,11 +34,11 @@ from ..campaigns.defaults import DEFAULT_RUNS, DEFAULT_WORKERS
 REFERENCE_FMUS = ("Kf", "InsOnly", "UkfAhrs", "TrajectoryImu", "GnssReceiver")
 
 
-def _role_checks(setting, runs, executor, progress, workdir):
+def _role_checks(setting, runs, executor, progress, workdir, quick=False):
     """The checks of the role: plan the runs, run them on ``executor``, judge them."""
     module = {"ins_gnss_filter": filter_checks, "attitude_filter": attitude_checks,
               "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks}[setting.role]
-    plan = module.plan(setting, runs)
+    plan = module.plan(setting, runs, quick=quick)
     tasks = [Task(key=key, func=run_job, args=(job, isolated))
              for key, job, isolated in plan.jobs]
     results = dict(executor.run(tasks, progress=progress))
@@ -48,9 +49,11 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
            runs: Optional[int] = None, sets: Optional[Dict[str, Any]] = None, out=None,
            junit=None, workers: int = DEFAULT_WORKERS, scheduler: Optional[str] = None,
            local_cluster: bool = False, progress=None,
-           log: Callable[[str], None] = print, default_root=Path(".")) -> Dict[str, Any]:
+           log: Callable[[str], None] = print, default_root=Path("."),
+           quick: bool = False) -> Dict[str, Any]:
     """Verify ``fmu``; returns the summary with ``checks``, ``counts``, ``report`` and
-    ``exit_status``.  Without ``out`` the report goes to ``default_root/verify-<model>``."""
+    ``exit_status``.  Without ``out`` the report goes to ``default_root/verify-<model>``;
+    ``quick``: a filter's cases on one seed, but its consistency runs."""
     runs = DEFAULT_RUNS if runs is None else runs
     if isinstance(runs, bool) or not isinstance(runs, int) or runs < 1:
         raise NavfmuError(f"--runs: expected a whole number >= 1, got {runs!r}")
@@ -69,18 +72,20 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
     log(f"verifying {facts.path.name} as {found_role}")
     checks = run_fmi_checks(setting)
     with executor, tempfile.TemporaryDirectory(prefix="navfmu_verify_figures_") as tmp:
-        role_checks, figures = _role_checks(setting, runs, executor, progress, Path(tmp))
+        role_checks, figures = _role_checks(setting, runs, executor, progress, Path(tmp),
+                                            quick)
         checks += role_checks
         summary = {"fmu": str(facts.path), "model_name": facts.model_name,
                    "role": found_role, "role_forced": role is not None,
                    "scenarios": [p.parent.name for p in setting.scenario_paths],
-                   "runs": runs, "parameters": setting.user_sets,
+                   "runs": runs, "quick": quick, "parameters": setting.user_sets,
                    "datasheet": setting.datasheet, "executor": executor.mode,
                    "build": fmu_builds.build_info(facts.path, read_model_description(
                        str(facts.path), validate=False))}
         report = write_report(out, summary, checks, figures, junit)
     n = counts(checks)
-    summary.update(checks=checks, counts=n, report=report, exit_status=1 if n["fail"] else 0)
+    summary.update(checks=checks, counts=n, report=report,
+                   exit_status=1 if failing(checks) else 0)
     return summary
 
 
