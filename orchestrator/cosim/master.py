@@ -107,7 +107,8 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    (a filter swap keeps the scenario's parameters that still apply) and listed in
    :attr:`Simulation.skipped_parameters`; those of a swap variant file written for the new
    FMU (``file.MODEL.ssv`` next to a bound ``file.ssv``, :mod:`orchestrator.model.ssp`) are never
-   skipped.
+   skipped.  A component given a lever arm whose attitude inputs no connection feeds is named
+   in a warning (:mod:`.lever_arm_wiring`).
 
 9. **Failures.**  A component failing mid-run (FMU status Discard/Error/Fatal, or a Python
    component raising ParameterError/InputError) raises
@@ -134,9 +135,10 @@ from navcore.core.timing import TIME_TOLERANCE
 
 from .backends import NUMERIC_TYPES, Instance
 from .component_description import describe_direct, describe_fmu
-from ..errors import NavfmuError, SkippedParametersWarning, WiringError
+from ..errors import NavfmuError, NavfmuWarning, SkippedParametersWarning, WiringError
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from .isolation import Isolation
+from .lever_arm_wiring import unconnected_lever_arms
 from ..results.recorder import Recording
 from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
@@ -222,6 +224,9 @@ class Simulation:
         self.decimation = {c.spec.name: self._decimation(c.spec) for c in self.components}
         self._check_wiring()
         self.parameter_values, self.skipped_parameters = self._parameters(parameters or {})
+        for message in unconnected_lever_arms(self.components, self.parameter_values,
+                                              model.connections):
+            warnings.warn(message, NavfmuWarning, stacklevel=2)
         self.recorded = self._recorded(record)
         edges = [(self._index[c.start_component], self._index[c.end_component], c)
                  for c in model.connections]
