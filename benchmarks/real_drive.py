@@ -1,7 +1,7 @@
 """Every INS/GNSS filter on a real drive, from the raw files to one table.
 
-The drive is the folder of RTKLIB's files of a car (``/work``-independent: any folder laid out
-as the public drive_0708 of rtklibexplorer/GNSS_IMU, see ``docs/guide/your_real_log.md``): an
+The drive is a folder of RTKLIB's files of a car, laid out as the public drive_0708 of
+rtklibexplorer/GNSS_IMU (``docs/guide/your_real_log.md``): an
 RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger's IMU file
 ``imu_*.csv`` (accel in g, gyro in deg/s, a millisecond counter) and its RTKLIB time-tag file
 ``imu_*.csv.tag``.  The script
@@ -17,13 +17,14 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
 3. cuts GNSS outages into the fixes (``--outages``, seconds after the first fix) and keeps
    the uncut fixes as the truth;
 4. replays the log through every filter (direct backend, ``models/replay_gnss_ins_sim``,
-   the parameters of ``--params`` and ``--set``) and scores each at the epochs of the
-   reference fixes: RMS N/E/D over the run, RMS with fixes (outside the outages), the 3-D error
-   five fixes after each outage, the share of epochs inside +/-3 sigma per axis, the mean
-   position NEES (diagonal sigmas) and the warnings of the run.
+   the drive's parameters :data:`DRIVE_PARAMETERS` with ``--set`` over them) and scores each
+   at the epochs of the reference fixes: RMS N/E/D over the run, RMS with fixes (outside the
+   outages), the 3-D error five fixes after each outage, the share of epochs inside +/-3
+   sigma per axis, the mean position NEES (diagonal sigmas) and the warnings of the run.
 
-    python benchmarks/real_drive.py /work/shared/data/rtklib-drive
-    python benchmarks/real_drive.py DRIVE --filters Kf,Iakf --set filter.r_max_scale=9 --json out.json
+    python benchmarks/real_drive.py DRIVE
+    python benchmarks/real_drive.py DRIVE --filters Kf,Iakf --set filter.gnss_corr_time=8 \\
+        --json out.json
 """
 from __future__ import annotations
 
@@ -206,12 +207,33 @@ def score(t, err, std, outages):
         after.append(float(np.linalg.norm(err[k[AFTER_FIXES - 1]])) if len(k) >= AFTER_FIXES
                      else float("nan"))
     ratio2 = (err / std) ** 2
+    inside = ratio2 <= 9.0
     return {"rms": np.sqrt(np.mean(err ** 2, axis=0)).tolist(),
             "rms_fix": np.sqrt(np.mean(err[~in_outage] ** 2, axis=0)).tolist(),
             "after": after,
-            "inside_3sigma_pct": (100.0 * np.mean(ratio2 <= 9.0, axis=0)).tolist(),
+            "inside_3sigma_pct": (100.0 * np.mean(inside, axis=0)).tolist(),
+            "inside_3sigma_fix_pct": (100.0 * np.mean(inside[~in_outage], axis=0)).tolist(),
+            "inside_3sigma_outage_pct": (100.0 * np.mean(inside[in_outage], axis=0)).tolist(),
             "nees": float(np.mean(ratio2.sum(axis=1))),
             "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t))}
+
+
+def correlation_time(t, err, outages) -> float:
+    """[s] the median over the axes and the stretches between outages of the 1/e time of the
+    autocorrelation of the filter's error at the fixes: run on the Kf without
+    ``gnss_corr_time``, the correlation time of what the fixes' errors leave in the solution
+    (the value the guide's recipe gives ``gnss_corr_time``)."""
+    interval = float(np.median(np.diff(t)))     # the fix interval
+    edges = [t[0] - 1.0] + [x for a, b in outages for x in (a, b + 5.0)] + [t[-1] + 1.0]
+    times = []
+    for a, b in zip(edges[::2], edges[1::2]):
+        part = err[(t > a) & (t <= b)]
+        if len(part) < 40:
+            continue
+        for y in (part - part.mean(axis=0)).T:
+            ac = np.correlate(y, y, "full")[len(y) - 1:]
+            times.append(float(np.argmax(ac / ac[0] < math.exp(-1.0))) * interval)
+    return float(np.median(times))
 
 
 def short_warning(text: str) -> str:
@@ -227,7 +249,8 @@ def table(rows) -> str:
     """The markdown table of every filter, ratios to the Kf where it ran."""
     kf = rows.get("Kf")
     head = ("| filter | RMS N/E/D [m] | x Kf | RMS with fixes N/E/D [m] | after 10/30/60 s [m] "
-            "| x Kf | inside 3 sigma N/E/D [%] | NEES | warnings |\n|---|---|---|---|---|---|---|---|---|")
+            "| x Kf | inside 3 sigma N/E/D [%] | NEES | warnings |\n"
+            + "|---" * 9 + "|")
     lines = [head]
     for name, r in rows.items():
         if "error" in r:
@@ -265,7 +288,8 @@ def main(argv=None) -> int:
                    help="sensor-to-body Euler angles roll,pitch,yaw [deg]")
     p.add_argument("--time-offset", type=float, default=-0.125, help="[s] added to the IMU times")
     p.add_argument("--rate", type=float, default=100.0, help="[Hz] the IMU grid")
-    p.add_argument("--work", type=Path, default=None, help="folder for the logs (default: temporary)")
+    p.add_argument("--work", type=Path, default=None,
+                   help="folder for the logs (default: temporary)")
     p.add_argument("--json", type=Path, default=None, help="write the numbers here too")
     args = p.parse_args(argv)
     outages = parse_outages(args.outages)
@@ -281,7 +305,9 @@ def main(argv=None) -> int:
     for name in args.filters.split(","):
         try:
             run, said = run_filter(work / "log", name, parameters)
-            rows[name] = {**score(*fix_epoch_errors(run, first), outages), "warnings": said}
+            t, err, std = fix_epoch_errors(run, first)
+            rows[name] = {**score(t, err, std, outages), "warnings": said,
+                          "residual_corr_time_s": correlation_time(t, err, outages)}
         except Exception as exc:  # a filter that stops is a row of the table, not the end
             rows[name] = {"error": str(exc).splitlines()[0][:120]}
         print(name, json.dumps(rows[name]), flush=True)
