@@ -195,7 +195,7 @@ def test_replay_swap_rewires_by_output_names():
     new, notes = replay.replay_model(model, GIS_MODEL / "log")
     assert [c.name for c in new.components] == ["replay", "filter"]
     assert {c.start_component for c in new.connections} == {"replay"}
-    assert len(new.connections) == 17  # the 24 minus the 7 truth -> receiver connections
+    assert len(new.connections) == 17  # the 27 minus the 10 truth -> receiver connections
     assert (new.start_time, new.base_step) == (0.0, 0.01)
     assert new.stop_time == pytest.approx(80.05)
     assert notes["has_truth"] and notes["replaced"] == ["trajectory", "gnss"]

@@ -110,6 +110,8 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    skipped.  Units (:mod:`orchestrator.model.units`): a connector's declared unit and the
    variable's, and the two ends of a connection, must be one unit (no connection converts);
    a bound Real given with a ``unit`` is converted to the variable's unit, or refused.
+   A component given a lever arm whose attitude inputs no connection feeds is named in a
+   warning (:mod:`.lever_arm_wiring`).
 
 9. **Failures.**  A component failing mid-run (FMU status Discard/Error/Fatal, or a Python
    component raising ParameterError/InputError) raises
@@ -136,9 +138,10 @@ from navcore.core.timing import TIME_TOLERANCE
 
 from .backends import NUMERIC_TYPES, Instance
 from .component_description import describe_direct, describe_fmu
-from ..errors import NavfmuError, SkippedParametersWarning, WiringError
+from ..errors import NavfmuError, NavfmuWarning, SkippedParametersWarning, WiringError
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from .isolation import Isolation
+from .lever_arm_wiring import unconnected_lever_arms
 from ..results.recorder import Recording
 from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
@@ -232,6 +235,9 @@ class Simulation:
         self.decimation = {c.spec.name: self._decimation(c.spec) for c in self.components}
         self._check_wiring()
         self.parameter_values, self.skipped_parameters = self._parameters(parameters or {})
+        for message in unconnected_lever_arms(self.components, self.parameter_values,
+                                              model.connections):
+            warnings.warn(message, NavfmuWarning, stacklevel=2)
         self.recorded = self._recorded(record)
         edges = [(self._index[c.start_component], self._index[c.end_component], c)
                  for c in model.connections]

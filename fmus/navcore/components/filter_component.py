@@ -28,6 +28,7 @@ from ..filters.initial_biases import (INITIAL_BIAS_PARAMETERS, StaticBiasEstimat
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
 from ..filters.latency import SolutionHistory
 from .filter_batch import InsGnssFilterBatch
+from ..filters.correlated_gnss import CORRELATION_PARAMETERS, CorrelatedFixes
 from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
 from ..filters.recovery import RECOVERY_PARAMETERS
 from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
@@ -100,6 +101,7 @@ _FILTER_PARAMETERS = (
     boolean("r_from_receiver", "take the receiver's own per-fix position sigmas (inputs "
             "gnss_std_n/e/d, a replayed log's std_n/e/d) as the position part of R instead "
             "of r_pos_*", False),
+    *CORRELATION_PARAMETERS,
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -136,7 +138,8 @@ class InsGnssFilter(Component):
     inputs = signals.FILTER_INPUTS
     default_experiment = (0.0, 500.0, 0.01)
     state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
-                    "n_stale", "late_fixes", "nis_monitor", "initializer", "static_bias")
+                    "n_stale", "late_fixes", "nis_monitor", "initializer", "static_bias",
+                    "correlated")
     derived_fields = ("max_fix_age",)
 
     def __init_subclass__(cls, **kwargs):
@@ -195,6 +198,7 @@ class InsGnssFilter(Component):
         self.n_stale = 0
         self.late_fixes = False      # a fix was applied in the past: dense checkpoints
         self.nis_monitor = NisMonitor(p["nis_warning_s"])
+        self.correlated = CorrelatedFixes(p["gnss_corr_time"])
         self.out = {q.name: q.default() for q in self.outputs}
         self.require("init_mode", p["init_mode"] in INIT_MODES, f"is not one of {INIT_MODES}")
         self.initializer = Initializer(p["init_mode"], p["init_speed_min"], p["align_time"],
@@ -429,8 +433,7 @@ class InsGnssFilter(Component):
         """The measurement ``z`` of ``fix`` (:meth:`_apply` before the engine's update)."""
         gnss_time, lat, lon, h, v, std = fix
         engine = self.engine
-        if self.params["r_from_receiver"]:
-            self._receiver_r(engine, std, gnss_time)
+        self._position_r(engine, std, gnss_time)
         z = engine.measurement(lat, lon, h, v, self.nav_time - gnss_time)
         if self.out["nis_dof"] == 0:   # the first fix applied
             self._check_first_fix(gnss_time, float(np.linalg.norm(z[:3])))
@@ -463,9 +466,26 @@ class InsGnssFilter(Component):
                         "such as the trajectory's 'profile', by a host that does not apply it?); "
                         "the solution is off until the filter converges to the fixes")
 
-    def _receiver_r(self, engine, std, gnss_time):
-        """The receiver's sigmas of this fix as the position part of the engine's nominal R
-        (``r_from_receiver``; the velocity part stays r_vel_*)."""
+    def _position_r(self, engine, std, gnss_time):
+        """The position part of the engine's nominal R for this fix: the receiver's sigmas
+        (``r_from_receiver``; else ``r_pos_*``), each variance scaled for the errors'
+        correlation with the last fix's (``gnss_corr_time``,
+        :mod:`navcore.filters.correlated_gnss`); the velocity part stays r_vel_*.  With
+        neither set, R stays the configured one."""
+        p = self.params
+        factor = self.correlated.factor(gnss_time)
+        if p["r_from_receiver"]:
+            variances = self._receiver_sigmas(std, gnss_time) ** 2
+        elif factor != 1.0:
+            variances = np.array([p["r_pos_n"], p["r_pos_e"], p["r_pos_d"]]) ** 2
+        else:
+            return
+        R = engine.R0.copy()
+        R[[0, 1, 2], [0, 1, 2]] = variances * factor
+        engine.R0 = R
+
+    def _receiver_sigmas(self, std, gnss_time):
+        """The receiver's sigmas of this fix (``r_from_receiver``), refused when not positive."""
         bad = np.flatnonzero(~(std > 0))
         if bad.size:
             name = _STD_INPUT_NAMES[int(bad[0])]
@@ -474,9 +494,7 @@ class InsGnssFilter(Component):
                              "'r_from_receiver' "
                              "= true: the receiver gives no sigma (a log without std_n/e/d "
                              "columns, or the input is not connected)")
-        R = engine.R0.copy()
-        R[[0, 1, 2], [0, 1, 2]] = std ** 2
-        engine.R0 = R
+        return std
 
     def write_diagnostics(self, result):
         """The extra outputs, after every update (``result``) and once at initialization

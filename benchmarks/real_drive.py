@@ -1,0 +1,321 @@
+"""Every INS/GNSS filter on a real drive, from the raw files to one table.
+
+The drive is a folder of RTKLIB's files of a car, laid out as the public drive_0708 of
+rtklibexplorer/GNSS_IMU (``docs/guide/your_real_log.md``): an
+RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger's IMU file
+``imu_*.csv`` (accel in g, gyro in deg/s, a millisecond counter) and its RTKLIB time-tag file
+``imu_*.csv.tag``.  The script
+
+1. writes ``gnss.csv`` with ``navfmu convert rtklib --time unix`` (the receiver's per-epoch
+   sigmas);
+2. prepares the IMU as the drive's own filter does (its ``convert_imu_file.py``): times from
+   the tag file (the counter stretched to the tag's first and last record), a zero-phase
+   4th-order Butterworth low pass (10 Hz; 5 Hz on the vertical accelerometer), the sensor to
+   body rotation ``--misalign`` (Groves' Euler angles) and the logging delay
+   ``--time-offset``; resampled to a uniform grid (``--rate``) and written as ``imu.csv`` by
+   ``navfmu convert imu-csv`` (rates to increments by the trapezoid rule);
+3. cuts GNSS outages into the fixes (``--outages``, seconds after the first fix) and keeps
+   the uncut fixes as the truth;
+4. replays the log through every filter (direct backend, ``models/replay_gnss_ins_sim``,
+   the drive's parameters :data:`DRIVE_PARAMETERS` with ``--set`` over them) and scores each
+   at the epochs of the reference fixes: RMS N/E/D over the run, RMS with fixes (outside the
+   outages), the 3-D error five fixes after each outage, the share of epochs inside +/-3
+   sigma per axis, the mean position NEES (diagonal sigmas) and the warnings of the run.
+
+    python benchmarks/real_drive.py DRIVE
+    python benchmarks/real_drive.py DRIVE --filters Kf,Iakf --set filter.gnss_corr_time=8 \\
+        --json out.json
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import struct
+import sys
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+from scipy.signal import butter, filtfilt
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "fmus")]
+
+from navcore.ins import earth  # noqa: E402
+from navcore.ins.rotations import euler_to_dcm  # noqa: E402
+from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
+from orchestrator.cli.convert import convert_imu_csv, convert_rtklib, imu_csv_spec  # noqa: E402
+from orchestrator.errors import NavfmuWarning  # noqa: E402
+from orchestrator.running import scenarios  # noqa: E402
+
+G0 = 9.80665                       # m/s^2 per g (the logger's unit)
+GPS_EPOCH_UNIX = 315964800.0       # 1980-01-06 in UNIX seconds
+FILTERS = ("Kf", "SageHusaFading", "Iakf", "NewtonRobustKf", "Igg3RobustKf", "Ukf",
+           "CtfaUkf", "ImmUkf")
+#: the drive's configuration as a user sets it (docs/guide/your_real_log.md says why)
+DRIVE_PARAMETERS = {
+    "filter.init_mode": "gnss", "filter.r_from_receiver": True,
+    "filter.measurement": "position", "filter.lever_arm_y": -0.05,
+    "filter.p0_att_level": 0.1745, "filter.p0_att_yaw": 1.745,
+    "filter.p0_gyro_bias_dph": 720.0, "filter.p0_accel_bias_ug": 20000.0,
+    "filter.q_gyro_arw_dpsh": 0.228, "filter.q_accel_vrw_ugpsHz": 140.0,
+    "filter.q_gyro_bias_instability_dph": 10.0, "filter.q_gyro_bias_tau_s": 100.0,
+    "filter.q_accel_bias_instability_ug": 200.0, "filter.q_accel_bias_tau_s": 100.0,
+    "filter.r_vel_n": 0.1, "filter.r_vel_e": 0.1, "filter.r_vel_d": 0.1,
+}
+OUTAGES = "120:130,220:250,440:500"
+AFTER_FIXES = 5
+
+
+# -- the IMU ----------------------------------------------------------------------------
+def tag_times(tag_file: Path):
+    """(UNIX start time on GPST [s], first and last record's milliseconds) of an RTKLIB
+    time-tag file: 60-byte header, uint32 tick, uint32 seconds, float64 fraction, then
+    (uint32 ms, uint32 byte offset) records, little-endian."""
+    raw = tag_file.read_bytes()
+    _, seconds = struct.unpack_from("<II", raw, 60)
+    fraction, = struct.unpack_from("<d", raw, 68)
+    records = np.frombuffer(raw[76:76 + (len(raw) - 76) // 8 * 8], dtype="<u4").reshape(-1, 2)
+    return seconds + fraction, float(records[0, 0]), float(records[-1, 0])
+
+
+def imu_samples(csv_file: Path, tag_file: Path):
+    """(UNIX GPST times [s], accel [m/s^2], gyro [rad/s]) in the sensor's axes: the counter
+    of the logger (column 7, ms) stretched to the tag file's first and last record; lines
+    without seven numbers (a cut-off last line) are left out."""
+    rows = []
+    for line in csv_file.read_text().splitlines():
+        parts = line.split(",")
+        try:
+            rows.append([float(p) for p in parts]) if len(parts) == 7 else None
+        except ValueError:
+            continue
+    rows = np.array(rows)
+    start, ms0, ms1 = tag_times(tag_file)
+    counter = rows[:, 6]
+    ms = ms0 + (counter - counter[0]) * (ms1 - ms0) / (counter[-1] - counter[0])
+    return start + ms / 1000.0, rows[:, :3] * G0, np.radians(rows[:, 3:6])
+
+
+def body_imu(t, acc, gyr, misalign_deg, time_offset, fs=100.0):
+    """The drive's own preparation: zero-phase 4th-order Butterworth low pass (10 Hz; 5 Hz on
+    the vertical accelerometer), the sensor-to-body rotation of Groves' Euler angles
+    ``misalign_deg`` (its Euler-to-matrix, the transpose of navcore's body-to-NED DCM) and
+    the logging delay ``time_offset`` added to the times."""
+    b, a = butter(4, 10.0, fs=fs)
+    bz, az = butter(4, 5.0, fs=fs)
+    acc = np.column_stack([filtfilt(b, a, acc[:, 0]), filtfilt(b, a, acc[:, 1]),
+                           filtfilt(bz, az, acc[:, 2])])
+    gyr = filtfilt(b, a, gyr, axis=0)
+    C = euler_to_dcm(*np.radians(misalign_deg)).T
+    return t + time_offset, acc @ C.T, gyr @ C.T
+
+
+def write_uniform_csv(path: Path, t, acc, gyr, rate: float) -> None:
+    """Rates on a uniform grid of ``rate`` Hz (exact decimal times) by linear interpolation,
+    one line per sample: time [s], gyro x/y/z [rad/s], accel x/y/z [m/s^2]."""
+    k0, k1 = math.ceil(t[0] * rate), math.floor(t[-1] * rate)
+    ticks = np.arange(k0, k1 + 1)
+    grid = ticks / rate
+    values = np.column_stack([np.interp(grid, t, col) for col in (*gyr.T, *acc.T)])
+    digits = max(0, math.ceil(math.log10(rate)))
+    with open(path, "w") as f:
+        for k, row in zip(ticks, values):
+            f.write(f"{k / rate:.{digits}f}," + ",".join(f"{v:.9g}" for v in row) + "\n")
+
+
+# -- the log ----------------------------------------------------------------------------
+def parse_outages(text: str):
+    """``"120:130,220:250"`` -> [(120.0, 130.0), (220.0, 250.0)]."""
+    return [tuple(float(x) for x in part.split(":")) for part in text.split(",") if part]
+
+
+def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate) -> SensorLog:
+    """The sensor log of ``drive`` in ``dst`` with ``outages`` (s after the first fix) cut
+    into the fixes and the uncut fixes as its truth."""
+    pos = next(drive.glob("*.pos"))
+    imu_csv = next(p for p in drive.glob("imu*.csv"))
+    raw = dst / "raw"
+    raw.mkdir(parents=True, exist_ok=True)
+    print(convert_rtklib(pos, raw, time_scale="unix", force=True))
+    t, acc, gyr = body_imu(*imu_samples(imu_csv, imu_csv.with_suffix(".csv.tag")), misalign,
+                           time_offset, fs=rate)
+    with tempfile.TemporaryDirectory() as tmp:
+        body = Path(tmp) / "imu_body.csv"
+        write_uniform_csv(body, t, acc, gyr, rate)
+        spec = imu_csv_spec(None, {"time": 1, "gyro": "x=col2,y=col3,z=col4",
+                                   "accel": "x=col5,y=col6,z=col7", "gyro_unit": "rad/s",
+                                   "accel_unit": "m/s^2"})
+        print(convert_imu_csv(body, raw, spec, force=True))
+    log = read_log(raw)
+    g = dict(log.gnss)
+    first = math.floor(log.time_origin + g["time"][0])
+    rel = log.time_origin + g["time"] - first
+    inside = (g["time"] > log.imu["time"][0]) & (g["time"] < log.imu["time"][-1])
+    g = {k: v[inside] for k, v in g.items()}
+    rel = rel[inside]
+    truth = {"time": g["time"].copy(), "lat": g["lat"].copy(), "lon": g["lon"].copy(),
+             "h": g["h"].copy(), "vn": g["vn"].copy(), "ve": g["ve"].copy(),
+             "vd": g["vd"].copy(), "roll": 0 * rel, "pitch": 0 * rel, "yaw": 0 * rel}
+    for a, b in outages:
+        g["valid"] = np.where((rel > a) & (rel <= b), 0.0, g["valid"])
+    cut = dst / "log"
+    write_log(cut, SensorLog(log.imu, g, truth, log.time_origin))
+    return read_log(cut), first
+
+
+# -- the runs ---------------------------------------------------------------------------
+def run_filter(log_dir: Path, name: str, parameters):
+    """One replay of ``log_dir`` through filter ``name``: (run, the warnings it raised)."""
+    model = scenarios.load_scenario(ROOT / "models" / "replay_gnss_ins_sim")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run = scenarios.simulate_scenario(model, filter=name, backend="direct", log=None,
+                                          replay=log_dir, parameters=parameters)
+    said = [str(w.message) for w in caught if issubclass(w.category, NavfmuWarning)]
+    return run, list(dict.fromkeys(said))
+
+
+def fix_epoch_errors(run, first: float):
+    """(seconds after the first fix, NED position error [m], reported sigmas [m]) at the
+    rows where a new reference fix has just arrived (the truth holds between fixes)."""
+    col = run.results.column
+    tt = col("replay", "truth_time")
+    fresh = np.r_[False, np.diff(tt) != 0]
+    ok = fresh & (col("filter", "aligned") > 0.5) & np.isfinite(col("replay", "truth_lat"))
+    ok &= np.abs(col("filter", "nav_time") - tt) < 0.5 * run.model.base_step + 1e-9
+    lat, h = col("replay", "truth_lat")[ok], col("replay", "truth_h")[ok]
+    rn, re = earth.radii(lat)
+    err = np.column_stack([(col("filter", "nav_lat")[ok] - lat) * (rn + h),
+                           (col("filter", "nav_lon")[ok] - col("replay", "truth_lon")[ok])
+                           * (re + h) * np.cos(lat),
+                           -(col("filter", "nav_h")[ok] - h)])
+    std = np.column_stack([col("filter", f"std_p{a}")[ok] for a in "ned"])
+    return run.time_origin + tt[ok] - first, err, std
+
+
+def score(t, err, std, outages):
+    """The table's numbers of one run (module docstring)."""
+    in_outage = np.zeros(len(t), bool)
+    for a, b in outages:
+        in_outage |= (t > a) & (t <= b)
+    after = []
+    for _, b in outages:
+        k = np.flatnonzero(t > b)
+        after.append(float(np.linalg.norm(err[k[AFTER_FIXES - 1]])) if len(k) >= AFTER_FIXES
+                     else float("nan"))
+    ratio2 = (err / std) ** 2
+    inside = ratio2 <= 9.0
+    return {"rms": np.sqrt(np.mean(err ** 2, axis=0)).tolist(),
+            "rms_fix": np.sqrt(np.mean(err[~in_outage] ** 2, axis=0)).tolist(),
+            "after": after,
+            "inside_3sigma_pct": (100.0 * np.mean(inside, axis=0)).tolist(),
+            "inside_3sigma_fix_pct": (100.0 * np.mean(inside[~in_outage], axis=0)).tolist(),
+            "inside_3sigma_outage_pct": (100.0 * np.mean(inside[in_outage], axis=0)).tolist(),
+            "nees": float(np.mean(ratio2.sum(axis=1))),
+            "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t))}
+
+
+def correlation_time(t, err, outages) -> float:
+    """[s] the median over the axes and the stretches between outages of the 1/e time of the
+    autocorrelation of the filter's error at the fixes: run on the Kf without
+    ``gnss_corr_time``, the correlation time of what the fixes' errors leave in the solution
+    (the value the guide's recipe gives ``gnss_corr_time``)."""
+    interval = float(np.median(np.diff(t)))     # the fix interval
+    edges = [t[0] - 1.0] + [x for a, b in outages for x in (a, b + 5.0)] + [t[-1] + 1.0]
+    times = []
+    for a, b in zip(edges[::2], edges[1::2]):
+        part = err[(t > a) & (t <= b)]
+        if len(part) < 40:
+            continue
+        for y in (part - part.mean(axis=0)).T:
+            ac = np.correlate(y, y, "full")[len(y) - 1:]
+            times.append(float(np.argmax(ac / ac[0] < math.exp(-1.0))) * interval)
+    return float(np.median(times))
+
+
+def short_warning(text: str) -> str:
+    """A run's warning as a table cell: the NIS warning's time, the inconsistency share."""
+    if "NIS above" in text:
+        return "NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+    if "is inconsistent" in text:
+        return "inconsistent " + text.split(": ")[1].split(" of")[0]
+    return text[:60]
+
+
+def table(rows) -> str:
+    """The markdown table of every filter, ratios to the Kf where it ran."""
+    kf = rows.get("Kf")
+    head = ("| filter | RMS N/E/D [m] | x Kf | RMS with fixes N/E/D [m] | after 10/30/60 s [m] "
+            "| x Kf | inside 3 sigma N/E/D [%] | NEES | warnings |\n"
+            + "|---" * 9 + "|")
+    lines = [head]
+    for name, r in rows.items():
+        if "error" in r:
+            lines.append(f"| {name} | failed: {r['error']} | | | | | | | |")
+            continue
+        x = (f"{np.linalg.norm(r['rms']) / np.linalg.norm(kf['rms']):.2f}" if kf and "rms" in kf
+             else "-")
+        xa = ("/".join(f"{a / b:.1f}" for a, b in zip(r["after"], kf["after"]))
+              if kf and "after" in kf else "-")
+        lines.append(
+            f"| {name} | {'/'.join(f'{v:.2f}' for v in r['rms'])} | {x} | "
+            f"{'/'.join(f'{v:.3f}' for v in r['rms_fix'])} | "
+            f"{'/'.join(f'{v:.2f}' for v in r['after'])} | {xa} | "
+            f"{'/'.join(f'{v:.0f}' for v in r['inside_3sigma_pct'])} | {r['nees']:.3g} | "
+            f"{'; '.join(short_warning(w) for w in r['warnings']) or '-'} |")
+    return "\n".join(lines)
+
+
+def _value(text: str):
+    """A ``--set`` value: a JSON number or true/false, else the text."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("drive", type=Path, help="folder with the .pos, imu csv and .tag files")
+    p.add_argument("--outages", default=OUTAGES, help="a:b,... seconds after the first fix")
+    p.add_argument("--filters", default=",".join(FILTERS))
+    p.add_argument("--set", action="append", default=[], metavar="COMPONENT.NAME=VALUE",
+                   help="a parameter over the drive's (repeatable)")
+    p.add_argument("--misalign", default="180,-6.79,185.35",
+                   help="sensor-to-body Euler angles roll,pitch,yaw [deg]")
+    p.add_argument("--time-offset", type=float, default=-0.125, help="[s] added to the IMU times")
+    p.add_argument("--rate", type=float, default=100.0, help="[Hz] the IMU grid")
+    p.add_argument("--work", type=Path, default=None,
+                   help="folder for the logs (default: temporary)")
+    p.add_argument("--json", type=Path, default=None, help="write the numbers here too")
+    args = p.parse_args(argv)
+    outages = parse_outages(args.outages)
+    parameters = dict(DRIVE_PARAMETERS)
+    for item in args.set:
+        key, _, value = item.partition("=")
+        parameters[key] = _value(value)
+    work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
+    log, first = build_log(args.drive, work, outages,
+                           [float(x) for x in args.misalign.split(",")], args.time_offset,
+                           args.rate)
+    rows = {}
+    for name in args.filters.split(","):
+        try:
+            run, said = run_filter(work / "log", name, parameters)
+            t, err, std = fix_epoch_errors(run, first)
+            rows[name] = {**score(t, err, std, outages), "warnings": said,
+                          "residual_corr_time_s": correlation_time(t, err, outages)}
+        except Exception as exc:  # a filter that stops is a row of the table, not the end
+            rows[name] = {"error": str(exc).splitlines()[0][:120]}
+        print(name, json.dumps(rows[name]), flush=True)
+    print(table(rows))
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
