@@ -147,3 +147,125 @@ def test_adaptive_plot_only_when_something_adapts(figures, tmp_path):
     assert [ax.get_ylabel() for ax in fig.axes] == ["r_scale"]
     assert ("constant over the run: q_scale = 1 (Kf, Iakf); fading_factor = 1 (Kf)"
             in [t.get_text() for t in fig.texts])
+
+
+def _outside_axes(fig, ax):
+    """True if the legend of ``ax`` lies entirely right of the axes' frame."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    return legend.x0 >= ax.get_window_extent(renderer).x1
+
+
+def test_errors_before_the_filter_starts_are_not_drawn(figures, tmp_path):
+    """Rows without an estimate (valid False) are NaN in the plotted series, not 0; the
+    others equal the errors and 3 sigma."""
+    label, res, name, e = _entry("Kf", np.cos(T), 0.5)
+    e["valid"] = T >= 20.0
+    plots.plot_errors([(label, res, name, e)], tmp_path / "e.png")
+    pos_e = figures[0].axes[0]
+    err, s3 = pos_e.lines[0].get_ydata(), pos_e.lines[1].get_ydata()
+    assert np.all(np.isnan(err[T < 20.0])) and np.all(np.isnan(s3[T < 20.0]))
+    np.testing.assert_allclose(err[T >= 20.0], np.cos(T[T >= 20.0]))
+    np.testing.assert_allclose(s3[T >= 20.0], 1.5)
+
+
+def test_report_caption_names_the_sigma_the_figure_draws(figures, tmp_path):
+    one, two = [_entry("Kf", np.sin(T), 1.0)], [_entry("Kf", np.sin(T), 1.0),
+                                                _entry("Iakf", np.sin(T), 2.0)]
+    assert "+-3 sigma" in plots.errors_caption(one)
+    assert "1 sigma" in plots.errors_caption(two) and "3 sigma" not in plots.errors_caption(two)
+    plots.plot_errors(one, tmp_path / "a.png")
+    plots.plot_errors(two, tmp_path / "b.png")
+    assert "+-3 sigma" in figures[0].axes[0].get_legend_handles_labels()[1][1]
+    assert all("1 sigma" in lab for lab in figures[1].axes[0].get_legend_handles_labels()[1]
+               if "sigma" in lab)
+
+
+def test_chi2_and_nis_legends_sit_outside_the_data(figures, tmp_path):
+    nis = np.linspace(1.0, 20.0, N)
+    extra = {"updated": np.ones(N), "nis": nis, "nis_dof": np.full(N, 6.0), "nav_time": T,
+             "chi2": nis}
+    entry = _entry("CtfaUkf", np.sin(T), 1.0, extra=extra)
+    plots.plot_chi2([entry], tmp_path / "c.png", title="aircraft_outliers")
+    plots.plot_nis([entry], tmp_path / "n.png")
+    for fig in figures:
+        ax = fig.axes[0]
+        assert _outside_axes(fig, ax)
+        np.testing.assert_allclose(ax.lines[0].get_ydata(), nis)  # the series is the results'
+    assert figures[0].axes[0].get_title() == "aircraft_outliers"
+
+
+def test_trajectory_title_carries_the_runs_profile(figures, tmp_path):
+    cols = ["truth_time", "truth_lat", "truth_lon", "truth_h", "truth_vn", "truth_ve",
+            "truth_vd", "truth_roll", "truth_pitch", "truth_yaw"]
+    lat = 0.7 + 1e-5 * T
+    data = np.column_stack([T, lat, np.full(N, 2.0), np.full(N, 100.0)]
+                           + [np.zeros(N)] * 6)
+    res = Results(time=T, data={"trajectory": data}, columns={"trajectory": cols},
+                  units={"trajectory": [""] * len(cols)},
+                  metadata={"model": "aircraft_500s",
+                            "parameters": {"trajectory": {"profile": "uav_maneuver"}}})
+    plots.plot_trajectory(res, "trajectory", tmp_path / "t.png", "aircraft_500s")
+    title = figures[0]._suptitle.get_text()
+    assert "profile 'uav_maneuver'" in title and "0-200 s" in title
+    np.testing.assert_allclose(figures[0].axes[1].lines[0].get_ydata(), 100.0)
+
+
+def test_mission_frame_is_around_the_route_at_equal_aspect(monkeypatch, tmp_path):
+    """An estimate 50 km off does not set the frame: the route's 2 km square does, with
+    equal scales on both axes; the plotted true path equals the results'."""
+    from navcore.ins import earth
+    from orchestrator.results import mission_plots
+
+    kept = []
+    monkeypatch.setattr(mission_plots, "_save", lambda fig, path: kept.append(fig) or path)
+    lat0, lon0 = 0.7, 2.0
+    rn, re = earth.radii(lat0)
+    north, east = 2000.0 * T / 200.0, 1000.0 * np.sin(T / 50.0)
+    lat, lon = lat0 + north / rn, lon0 + east / (re * np.cos(lat0))
+    cols = {"vehicle": ["truth_lat", "truth_lon", "truth_h", "cross_track"],
+            "filter": ["nav_lat", "nav_lon"], "gnss": ["gnss_valid"]}
+    data = {"vehicle": np.column_stack([lat, lon, np.full(N, 100.0), np.zeros(N)]),
+            "filter": np.column_stack([lat + 50000.0 / rn * (T > 100), lon]),
+            "gnss": (T < 100).astype(float)[:, None]}
+    res = Results(time=T, data=data, columns=cols,
+                  units={k: [""] * len(v) for k, v in cols.items()},
+                  metadata={"parameters": {"vehicle": {
+                      "origin_lat": lat0, "origin_lon": lon0,
+                      "route": "0,0,100;2000,0,100;2000,2000,100"}}})
+    mission_plots.plot_mission([("Kf", res, "filter")], "vehicle", tmp_path / "m.png")
+    ax = kept[0].axes[0]
+    try:
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        assert x1 - x0 == pytest.approx(y1 - y0) and ax.get_aspect() == 1.0
+        # km: the larger extent of the route and the true path (east -0.76..2), with the
+        # margin on both sides; the 50 km of the estimate do not count
+        extent = max(2.0, 2.0 - 1.0 * np.sin(T / 50.0).min())
+        framed = extent * (1 + 2 * mission_plots.FRAME_MARGIN)
+        assert y1 - y0 == pytest.approx(framed, rel=1e-4)
+        assert x0 < east.min() / 1e3 and x1 > 2.0 and y0 < 0.0 and y1 > 2.0
+        true_path = ax.lines[1]
+        # the plane's radii are at the route's 100 m height
+        np.testing.assert_allclose(true_path.get_ydata(), north / 1e3, rtol=1e-4)
+    finally:
+        plt.close(kept[0])
+
+
+def test_robustness_figure_has_whole_seed_ticks():
+    from orchestrator.verification.filter_checks import robustness_plot
+    from orchestrator.verification.verdicts import Check
+
+    checks = [Check("robust.outage", "t", "c", "m", "pass",
+                    details={"filter": [3.1, 2.0], "Kf": [2.9, 2.5]}),
+              Check("robust.bias", "t", "c", "m", "pass", details={"filter": [0.4], "Kf": [0.5]})]
+    fig = robustness_plot(checks)
+    try:
+        for ax, c in zip(fig.axes, checks):
+            seeds = len(c.details["filter"])
+            assert list(ax.get_xticks()) == list(range(seeds))
+            assert ax.get_xlim() == (-0.5, seeds - 0.5)
+            heights = [p.get_height() for p in ax.patches]
+            assert heights == c.details["filter"] + c.details["Kf"]
+    finally:
+        plt.close(fig)

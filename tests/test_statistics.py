@@ -137,3 +137,27 @@ def test_positive_interval_of_one_run_and_of_zeros():
     assert one["mean"] == 2.0 and math.isnan(one["half_width"])
     zeros = st.positive_interval([0.0, 0.0, 3.0])          # t interval, clipped at 0
     assert zeros["low"] == 0.0 and zeros["high"] == st.t_interval([0.0, 0.0, 3.0])["high"]
+
+
+def test_log_interval_of_ratios_is_positive_and_reciprocal():
+    """Ratios spread so widely that their t interval reaches below zero: the log-scale
+    interval stays positive, equals exp of the t interval of the logs (computed here with
+    scipy.stats), and the inverse ratios get exactly the reciprocal interval."""
+    from scipy import stats
+
+    ratios = [0.3, 4.0, 0.5, 6.0, 0.8]
+    assert st.t_interval(ratios)["low"] < 0.0
+    got = st.log_interval(ratios)
+    logs = [math.log(r) for r in ratios]
+    m, s = sum(logs) / 5, stats.tstd(logs)
+    half = stats.t.ppf(0.975, 4) * s / math.sqrt(5)
+    assert got["low"] > 0.0
+    assert (got["mean"], got["low"], got["high"]) == pytest.approx(
+        (math.exp(m), math.exp(m - half), math.exp(m + half)), rel=1e-12)
+    inverse = st.log_interval([1.0 / r for r in ratios])
+    assert (inverse["low"], inverse["high"]) == pytest.approx(
+        (1.0 / got["high"], 1.0 / got["low"]), rel=1e-12)
+    left_out = st.log_interval(ratios + [0.0, float("nan"), None])
+    assert left_out["dropped"] == 3 and left_out["low"] == pytest.approx(got["low"])
+    with pytest.raises(NavfmuError):
+        st.log_interval([])

@@ -18,6 +18,13 @@ Definitions (one each; the per-run numbers come from :mod:`orchestrator.results.
   an RMS is skewed to the right like a log-normal one.  The printed centre stays the mean
   of the values.  Values not above 0 (an error that is exactly zero) fall back to the t
   interval, its lower end clipped at 0.
+* :func:`log_interval`: a positive ratio (an RMS of one filter over another's, per run):
+  its geometric mean with the t interval of the logarithms taken back,
+  ``exp(m +- t_{(1+level)/2, n-1} s / sqrt(n))`` (``m``, ``s``: mean and sample standard
+  deviation of ``log r_i``).  Computed on the log scale, the bounds are positive like the
+  ratio, and the ratio the other way round (``1 / r_i``) gets exactly the reciprocal
+  interval; a t interval of the ratios themselves reaches below zero when they spread.
+  A ratio not above 0 (or not finite) is left out and counted in ``dropped``.
 * :func:`paired_difference`: the t-interval of the per-run differences ``a_i - b_i`` of two
   filters run on the same seeds (paired: the truth, IMU and GNSS noise of run ``i`` are the
   same for both, so the noise they share cancels in the difference).
@@ -41,6 +48,8 @@ LEVEL = 0.95
 METHOD = ("Cox's log-normal interval over the runs (n - 1 dof; positive, "
           "statistics.positive_interval)")
 T_METHOD = "two-sided Student t interval over the runs (n - 1 dof)"
+LOG_METHOD = ("t interval of the per-run logarithms taken back (geometric mean; positive, "
+              "statistics.log_interval)")
 PAIRED_METHOD = "paired t interval of the per-run differences (same seeds)"
 
 
@@ -88,6 +97,23 @@ def positive_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str
     return {**t, "low": low, "high": high, "half_width": (high - low) / 2.0}
 
 
+def log_interval(values: Sequence[float], level: float = LEVEL) -> Dict[str, float]:
+    """:func:`t_interval`'s dict for a positive ratio, computed on the log scale (module
+    docstring): ``mean`` the geometric mean, ``low``/``high`` the interval taken back from
+    the logarithms, ``half_width`` half its length, ``sd`` the standard deviation of the
+    logarithms; ``dropped`` counts the values not finite or not above 0."""
+    x = np.array([math.nan if v is None else v for v in values], dtype=float)
+    if x.ndim != 1 or x.size == 0:
+        raise NavfmuError("log_interval: needs a non-empty list of per-run values")
+    positive = x[np.isfinite(x) & (x > 0.0)]
+    logs = t_interval(np.log(positive) if positive.size else [math.nan], level)
+    out = {"mean": math.exp(logs["mean"]) if positive.size else math.nan,
+           "low": math.exp(logs["low"]), "high": math.exp(logs["high"]),
+           "sd": logs["sd"], "n": int(positive.size), "dropped": int(x.size - positive.size)}
+    out["half_width"] = (out["high"] - out["low"]) / 2.0
+    return out
+
+
 def paired_difference(a: Sequence[float], b: Sequence[float],
                       level: float = LEVEL) -> Dict[str, float]:
     """:func:`t_interval` of ``a_i - b_i`` (same runs, same order)."""
@@ -133,6 +159,6 @@ def ordering_holds(per_run: Mapping[str, Sequence[float]], ordering: List[str],
                for a, b in combinations(ordering, 2))
 
 
-__all__ = ["t_quantile", "t_interval", "positive_interval", "paired_difference", "verdict",
-           "supported_orderings", "ordering_holds", "LEVEL", "METHOD", "T_METHOD",
-           "PAIRED_METHOD"]
+__all__ = ["t_quantile", "t_interval", "positive_interval", "log_interval",
+           "paired_difference", "verdict", "supported_orderings", "ordering_holds", "LEVEL",
+           "METHOD", "T_METHOD", "LOG_METHOD", "PAIRED_METHOD"]

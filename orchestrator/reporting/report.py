@@ -9,7 +9,8 @@ connected with fits that scenario (INS/GNSS filters on the INS/GNSS scenarios, a
 filters on an attitude scenario).  Each scenario gets one campaign
 (:mod:`orchestrator.campaigns.campaign`, folder ``campaigns/<scenario>/``) of every fitting filter,
 so re-running the report only runs what is missing.  Figures of the papers' kind (errors with
-+-3 sigma and NIS over time) come from run 0 of the paper's filters, streamed to Parquet.
+their sigma, as the text under them says, and NIS over time) come from run 0 of the paper's
+filters, streamed to Parquet.
 """
 from __future__ import annotations
 
@@ -228,9 +229,11 @@ def _figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
         return figures
     title = f"{name}, run 0 ({', '.join(f'{c}.seed {s}' for c, s in seeds.items())})"
     if all("pos_n" in e for *_, e in entries):
+        plan["errors_caption"] = plots.errors_caption(entries)
         figures["errors"] = plots.plot_errors(entries, out / "figures" / f"{name}_errors.png",
                                               title)
     else:  # attitude-only filters
+        plan["errors_caption"] = plots.ATTITUDE_ERRORS_CAPTION
         figures["errors"] = plots.plot_attitude_errors(
             entries, out / "figures" / f"{name}_errors.png", title)
     figures["nis"] = plots.plot_nis(entries, out / "figures" / f"{name}_nis.png", title)
@@ -373,21 +376,23 @@ def _improvement(plan) -> List[str]:
     base, filt = imp["baseline"], imp["filter"]
     pairs = list(zip(plan["records"][base], plan["records"][filt]))
     lines = [f"**Improvement of {filt} over {base}** (per run, then mean [95 % CI]; "
-             f"{imp.get('note', '')}):", "", "| quantity | ours | paper |", "|---|---|---|"]
+             f"ratios: geometric mean with the {st.LOG_METHOD}; {imp.get('note', '')}):", "",
+             "| quantity | ours | paper |", "|---|---|---|"]
     for group in ("position", "velocity", "attitude"):
         if group in imp:
             v = [improvement_percent(rms_3d(b["metrics"], group), rms_3d(f["metrics"], group))
                  for b, f in pairs]
             lines.append(f"| {group} 3-D RMS reduction [%] | {_ci(st.t_interval(v), 1)} | "
                          f"{imp[group]} |")
-        for suffix, fn, what in (("_enu", improvement_percent, "reduction [%]"),
-                                 ("_ratio_enu", rms_ratio, "ratio base/filter")):
+        for suffix, fn, what, interval in (
+                ("_enu", improvement_percent, "reduction [%]", st.t_interval),
+                ("_ratio_enu", rms_ratio, "ratio base/filter", st.log_interval)):
             if group + suffix not in imp:
                 continue
             for i, axis in enumerate("ENU"):
                 v = [fn(per_axis_enu(b["metrics"], group)[i],
                         per_axis_enu(f["metrics"], group)[i]) for b, f in pairs]
-                lines.append(f"| {group} {axis} {what} | {_ci(st.t_interval(v), 2)} | "
+                lines.append(f"| {group} {axis} {what} | {_ci(interval(v), 2)} | "
                              f"{imp[group + suffix][i]} |")
     return lines + [""]
 
@@ -535,7 +540,8 @@ def _markdown(sections, command, seconds, workers, scheduler, local_cluster) -> 
         lines += [f"![RMS of every filter on {plan['model'].name}](figures/{figs['rms'].name})",
                   ""]
         if "errors" in figs:
-            lines += [f"Errors with the filters' own +-3 sigma and NIS of run 0 "
+            lines += [f"{plan['errors_caption'].capitalize()} "
+                      f"and NIS of run 0 "
                       f"({_provenance(plan).split(', backend')[0]}):", "",
                       f"![errors](figures/{figs['errors'].name})", "",
                       f"![NIS](figures/{figs['nis'].name})", ""]

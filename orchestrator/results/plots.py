@@ -75,6 +75,40 @@ def _sigma(results, name, key, attitude):
     return results.column(name, key) if results.has(name, key) else None
 
 
+def legend_outside(ax, **kwargs):
+    """The legend of ``ax`` right of its frame, so it never hides a point of the data."""
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                     **{"fontsize": 8, **kwargs})
+
+
+#: what :func:`plot_attitude_errors` draws, in words
+ATTITUDE_ERRORS_CAPTION = "attitude errors (solid) with the filters' own +-3 sigma (dashed)"
+
+
+def errors_caption(entries):
+    """What :func:`plot_errors` draws for ``entries``, in words for a report's text (one
+    definition, so the text and the figure agree on the sigma)."""
+    if len(entries) > 1:
+        return ("RMS of the errors over a sliding window (solid) and of the filters' own "
+                "1 sigma (dashed)")
+    return "errors (solid) with the filter's own +-3 sigma (dashed)"
+
+
+def run_title(results, title="", truth_name=None):
+    """``title`` with what the run was: its model and, for the truth, the motion profile and
+    the time span actually simulated (from ``results.metadata``), so a figure of another
+    profile or stop time never carries the name of the model's default one."""
+    meta = results.metadata or {}
+    params = (meta.get("parameters") or {}).get(truth_name) or {}
+    parts = [p for p in (title or meta.get("model"),
+                         f"profile '{params['profile']}'" if "profile" in params else "")
+             if p]
+    t = np.asarray(results.time, dtype=float)
+    if t.size:
+        parts.append(f"{t[0]:g}-{t[-1]:g} s")
+    return ", ".join(parts)
+
+
 def _error_limit(values, valid):
     """Half-height of a panel: from the errors (their 99.9 % |error| quantile, plus 30 %),
     never from a sigma, so a diverging filter's envelope cannot flatten the others."""
@@ -95,17 +129,18 @@ def plot_errors(entries, path, title=""):
         return plot_error_rms(entries, path, title)
     label, results, name, e = entries[0]
     attitude = _attitude_sigmas(results, name)
+    invalid = ~np.asarray(e["valid"], dtype=bool)   # no estimate yet: nothing drawn
     fig, axes = plt.subplots(3, 3, figsize=(14, 9.5), sharex=True)
     t = e["time"]
     for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
         for col, (axis, key, sign, std) in enumerate(axes_spec):
             ax = axes[row, col]
-            err = sign * e[key] * scale
+            err = np.where(invalid, np.nan, sign * e[key] * scale)
             ax.plot(t, err, color="C0", lw=0.8, label=f"{label} error")
             limit = _error_limit([err], e["valid"])
             sigma = _sigma(results, name, std, attitude)
             if sigma is not None:
-                s3 = 3.0 * sigma * scale
+                s3 = np.where(invalid, np.nan, 3.0 * sigma * scale)
                 off = limit is not None and bool(np.all(s3[e["valid"]] > limit))
                 ax.plot(t, s3, color="C1", lw=0.8, ls="--",
                         label=f"{label} +-3 sigma" + (" (beyond the frame)" if off else ""))
@@ -120,7 +155,7 @@ def plot_errors(entries, path, title=""):
     for ax in axes.flat:  # the first panel, and every panel whose sigma is off its scale
         if ax is axes[0, 0] or any("beyond" in t for t in ax.get_legend_handles_labels()[1]):
             ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle(title or "errors and the filter's own +-3 sigma")
+    fig.suptitle(title or errors_caption(entries))
     fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
     fig.tight_layout(rect=(0, 0.035, 1, 1))
     return _save(fig, path)
@@ -226,9 +261,9 @@ def plot_attitude_errors(entries, path, title="", angles=nav_metrics.ATTITUDE):
                 ax.plot(t, -s3, color=f"C{f_i}", lw=0.6, ls="--")
             ax.set_ylabel(f"{a} error [deg]")
             ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(fontsize=8, loc="upper left")
+    legend_outside(axes[0, 0])
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(title or "attitude errors (solid) and +-3 sigma from the filter (dashed)")
+    fig.suptitle(title or ATTITUDE_ERRORS_CAPTION)
     fig.tight_layout()
     return _save(fig, path)
 
@@ -273,7 +308,7 @@ def plot_nis(entries, path, title=""):
     ax.set_xlabel("time [s]")
     ax.set_ylabel("NIS")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     ax.set_title(title or "normalized innovation squared")
     fig.tight_layout()
     return _save(fig, path)
@@ -391,7 +426,7 @@ def plot_chi2(entries, path, title="", phases=()):
     ax.set_xlabel("time [s]")
     ax.set_ylabel("chi-square statistic")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+    legend_outside(ax)
     ax.set_title(title or "chi-square statistic of the innovations")
     fig.tight_layout()
     return _save(fig, path)
@@ -437,7 +472,7 @@ def plot_outliers(entries, path, title=""):
                    label=_gate_label(g))
     ax.set_ylabel("largest v_i^2 / S_ii")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    legend_outside(ax)
     for y, (name, times, colour, marker) in enumerate(rows):
         ax_ev.plot(times, np.full(times.shape, -y), marker, color=colour, ms=8, mew=1.5)
     ax_ev.set_yticks([-y for y in range(len(rows))])
@@ -451,7 +486,8 @@ def plot_outliers(entries, path, title=""):
 
 
 def plot_trajectory(results, truth_name, path, title=""):
-    """The truth: ground track, height, velocity east/north/up, speed, roll and pitch, yaw."""
+    """The truth: ground track, height, velocity east/north/up, speed, roll and pitch, yaw;
+    the title names the run's profile and span (:func:`run_title`)."""
     col = results.column
     t = col(truth_name, "truth_time")
     lat, lon = col(truth_name, "truth_lat"), col(truth_name, "truth_lon")
@@ -485,7 +521,7 @@ def plot_trajectory(results, truth_name, path, title=""):
         ax.set_xlabel("time [s]")
         ax.grid(True, alpha=0.3)
     axes[0, 0].grid(True, alpha=0.3)
-    fig.suptitle(title or "truth trajectory")
+    fig.suptitle(f"truth trajectory: {run_title(results, title, truth_name)}")
     fig.tight_layout()
     return _save(fig, path)
 

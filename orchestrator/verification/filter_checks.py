@@ -292,7 +292,17 @@ def judge_plan(setting: Setting, planned: Plan, results, workdir):
 
 
 def _robustness_figure(checks, path):
-    """Per robustness case, the filter's value of every seed next to the references'."""
+    """Write :func:`robustness_plot` of ``checks`` to ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig = robustness_plot(checks)
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+def robustness_plot(checks):
+    """Per robustness case, the filter's value of every seed next to the references': the
+    bars of one seed grouped around its whole-number tick (seed 0, 1, ... of the case)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -300,17 +310,20 @@ def _robustness_figure(checks, path):
     fig, axes = plt.subplots(1, len(checks), figsize=(2.6 * len(checks), 3.2), squeeze=False)
     for ax, c in zip(axes[0], checks):
         series = {k: v for k, v in c.details.items() if isinstance(v, list)}
+        width = 0.8 / max(1, len(series))
         for j, (who, values) in enumerate(series.items()):
-            x = [i + 0.8 * j / len(series) for i in range(len(values))]
-            ax.bar(x, values, width=0.8 / len(series), label=who)
+            x = [i + width * (j - (len(series) - 1) / 2) for i in range(len(values))]
+            ax.bar(x, values, width=width, label=who)
+        seeds = max((len(v) for v in series.values()), default=0)
+        ax.set_xticks(range(seeds))
+        ax.set_xlim(-0.5, seeds - 0.5)
         ax.set_title(c.id.split(".", 1)[1], fontsize=9)
         ax.set_xlabel("seed")
         ax.tick_params(labelsize=8)
     axes[0][0].set_ylabel("m or m/s (see the check)")
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    return fig
 
 
 def judge(case_list: List[Case], results) -> List[Check]:
