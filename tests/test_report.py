@@ -51,6 +51,14 @@ def test_tiny_report_has_the_papers_table_figures_and_cross_matrix(tmp_path, mon
     assert "| standard Kalman filter | paper | 8.600 | 9.414 | 3.284 |" in text
     assert re.search(r"\| Iakf \| ours \| \d+\.\d{3} \[-?\d+\.\d{3}, \d+\.\d{3}\] \|", text)
     assert "2 runs (trajectory.seed 1..2, gnss.seed 1001..1002)" in text
+    # the improvement ratios on the log scale: positive bounds around their geometric mean
+    ratios = re.findall(r"\| position [ENU] ratio base/filter \| (\S+) \[(\S+), (\S+)\] \|",
+                        text)
+    assert len(ratios) == 3
+    assert all(0.0 < float(lo) <= float(m) <= float(hi) for m, lo, hi in ratios)
+    # the text under the errors figure names the sigma it draws (several filters: 1 sigma)
+    assert "RMS of the errors over a sliding window (solid) and of the filters' own 1 sigma " \
+        "(dashed) and NIS of run 0" in text and "+-3 sigma and NIS" not in text
     matrix = text.split("## Cross matrix")[1]
     assert all(f"| {f} |" in matrix for f in shown)
     assert "## Consistency: NEES and NIS" in text

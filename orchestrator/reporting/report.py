@@ -540,7 +540,7 @@ def _markdown(sections, command, seconds, workers, scheduler, local_cluster) -> 
         lines += [f"![RMS of every filter on {plan['model'].name}](figures/{figs['rms'].name})",
                   ""]
         if "errors" in figs:
-            lines += [f"{plan['errors_caption'].capitalize()} "
+            lines += [f"{plan['errors_caption'][:1].upper()}{plan['errors_caption'][1:]} "
                       f"and NIS of run 0 "
                       f"({_provenance(plan).split(', backend')[0]}):", "",
                       f"![errors](figures/{figs['errors'].name})", "",
