@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from orchestrator.campaigns import tune as tuner
+from orchestrator.campaigns.defaults import DEFAULT_SEED
 from orchestrator.cosim.master import Simulation
 from orchestrator.errors import NavfmuError
 from orchestrator.model.ssp import load_ssd
@@ -286,7 +287,7 @@ def test_defaults_executor_options_fmu_build_and_the_current_values_first(monkey
                          ranges={"r_accel_mps2": (0.01, 0.05)}, backend="fmu", log=say.append)
     assert InlineExecutor.made == [{"workers": 3, "scheduler": "tcp://x:1"}]
     assert len(built) == 1 and built[0][0].name == "ahrs_turntable" and built[0][1] == say.append
-    assert (res["generations"], res["population"], res["seed"]) == (5, 10, 0)
+    assert (res["generations"], res["population"], res["seed"]) == (5, 10, DEFAULT_SEED)
     assert len(res["generation_best"]) == 5 and len(res["generation_mean"]) == 5
     assert res["best_cost"] == 1.0 and res["best_values"]["r_accel_mps2"] == \
         pytest.approx(current, rel=1e-12)
@@ -297,20 +298,21 @@ def test_defaults_executor_options_fmu_build_and_the_current_values_first(monkey
     again = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], batch=1, workers=3,
                            ranges={"r_accel_mps2": (0.01, 0.05)}, log=lambda m: None)
     assert again["generation_mean"] == res["generation_mean"]
-    other = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], batch=1, workers=3, seed=1,
+    other = tuner.run_tune(MODEL, "filter", ["r_accel_mps2"], batch=1, workers=3,
+                           seed=DEFAULT_SEED + 1,
                            ranges={"r_accel_mps2": (0.01, 0.05)}, log=lambda m: None)
     assert other["generation_mean"] != res["generation_mean"]
 
 
-def test_outputs_go_into_an_existing_folder_and_to_a_chosen_parameter_set(monkeypatch,
-                                                                          tmp_path):
+def test_outputs_go_into_an_existing_folder_only(monkeypatch, tmp_path):
     monkeypatch.setattr(tuner, "evaluate", StubCost())
     res = tuner.run_tune(MODEL, "filter", ["r_accel_mps2", "fuzzy_window"], batch=1, generations=1,
                          population=2, log=lambda m: None)
-    tuner.write_tune_outputs(res, tmp_path)
-    chosen = tmp_path / "elsewhere.ssv"
-    written = tuner.write_tune_outputs(res, tmp_path, ssv=chosen)      # the folder exists
-    assert written[0] == chosen and chosen.is_file()
+    (tmp_path / "kept.txt").write_text("a file of the user's")
+    written = tuner.write_tune_outputs(res, tmp_path)                  # the folder exists
+    assert sorted(p.name for p in written) == ["filter_tuned.ssv", "fitness.png", "tune.json"]
+    assert all(p.parent == tmp_path for p in written)
+    assert (tmp_path / "kept.txt").read_text() == "a file of the user's"
 
 
 def test_with_two_filters_the_cost_is_that_of_the_one_called_filter(tmp_path):

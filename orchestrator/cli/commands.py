@@ -389,7 +389,7 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     with progress_bars() as progress_bar:
         summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
                                         local_cluster=local_cluster,
-                                        progress=progress_bar("runs", unit="run"), quick=quick,
+                                        progress=progress_bar("runs", unit="run"),
                                         log=lambda m: click.echo(m, err=True))
     counts = summary["counts"]
     click.echo(f"{summary['runs']} runs x {len(names)} filters = {counts['total']} filter "
