@@ -28,8 +28,6 @@ import ast
 import hashlib
 import io
 import json
-import os
-import tempfile
 import tokenize
 import zipfile
 from pathlib import Path
@@ -38,6 +36,7 @@ from typing import Dict, List, Tuple
 from navcore.core.state_format import BUILD_FILE, packed_content_hash
 
 from ..errors import NavfmuError
+from ..results.run_results import atomic_write
 
 #: the packages an FMU ships under private names (the shell, the library, pythonfmu's Python side)
 PACKAGES = ("fmushell", "navcore", "pythonfmu")
@@ -172,68 +171,56 @@ def private_files(files: Dict[str, bytes], model: str, script: str, build: str,
     suffix = packages_suffix(files, tuple(packages))
     names = {old: f"{base}_{suffix}" for old, base in packages.items()}
     module = f"{model}_{build[:SUFFIX_LENGTH]}"
-    script_name = RESOURCES + f"{script}.py"
-    if script_name not in files:
-        raise NavfmuError(f"{model}: the FMU has no slave script {script_name}")
-    out = {}
-    for name, data in files.items():
-        if name == RESOURCES + BUILD_FILE:
-            continue
-        new_name = _renamed(name, names, script_name, module)
-        out[new_name] = _rewritten(name, data, names, script_name, module)
+    old_script, new_script = RESOURCES + f"{script}.py", RESOURCES + f"{module}.py"
+    if old_script not in files:
+        raise NavfmuError(f"{model}: the FMU has no slave script {old_script}")
+    out = {_renamed(name, names, old_script, new_script):
+           _rewritten(name, data, names, old_script, module)
+           for name, data in files.items() if name != RESOURCES + BUILD_FILE}
     shell = names[next(old for old, base in packages.items() if base == "fmushell")]
-    out[new_name_of(script_name, module)] = _with_header(
-        out[new_name_of(script_name, module)].decode("utf-8"), _adopt_header(shell),
-        script_name).encode("utf-8")
-    compile(out[new_name_of(script_name, module)], script_name, "exec")
+    text = _with_header(out[new_script].decode("utf-8"), _adopt_header(shell), old_script)
+    compile(text, old_script, "exec")
+    out[new_script] = text.encode("utf-8")
     identity = {"model": model, "version": version, "build": build, "module": module,
                 "packages": {base: names[old] for old, base in packages.items()},
                 "content_sha256": packed_content_hash(_package_files(out, tuple(names.values()))),
-                "script_sha256": hashlib.sha256(out[new_name_of(script_name, module)]).hexdigest()}
+                "script_sha256": hashlib.sha256(out[new_script]).hexdigest()}
     out[RESOURCES + BUILD_FILE] = json.dumps(identity, indent=2, sort_keys=True).encode()
     return out
-
-
-def new_name_of(script_name: str, module: str) -> str:
-    return RESOURCES + f"{module}.py"
 
 
 def make_private(fmu: Path, model: str, build: str, version: str) -> None:
     """Give the packages and the script of the freshly built ``fmu`` private names, in place,
     and write its :data:`BUILD_FILE`."""
     with zipfile.ZipFile(fmu) as src:
-        infos = {i.filename: i for i in src.infolist()}
-        files = {name: src.read(name) for name in infos}
+        files = {name: src.read(name) for name in src.namelist()}
     out = private_files(files, model, model, build, {p: p for p in PACKAGES}, version)
-    fd, partial = tempfile.mkstemp(dir=fmu.parent, prefix=f".{fmu.stem}.", suffix=".zip")
-    os.close(fd)
-    try:
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as dst:
+
+    def write(f):
+        with zipfile.ZipFile(f, "w", zipfile.ZIP_DEFLATED) as dst:
             for name, data in out.items():
                 info = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
                 info.external_attr = 0o644 << 16
                 info.compress_type = zipfile.ZIP_DEFLATED
                 dst.writestr(info, data)
-        os.replace(partial, fmu)
-    finally:
-        if os.path.exists(partial):
-            os.remove(partial)
+
+    atomic_write(fmu, write, binary=True)
 
 
-def _renamed(name: str, names: Dict[str, str], script_name: str, module: str) -> str:
-    if name == script_name:
-        return new_name_of(script_name, module)
+def _renamed(name: str, names: Dict[str, str], old_script: str, new_script: str) -> str:
+    if name == old_script:
+        return new_script
     if not name.startswith(RESOURCES):
         return name
     top, sep, tail = name[len(RESOURCES):].partition("/")
     return RESOURCES + names[top] + "/" + tail if sep and top in names else name
 
 
-def _rewritten(name: str, data: bytes, names, script_name: str, module: str) -> bytes:
+def _rewritten(name: str, data: bytes, names, old_script: str, module: str) -> bytes:
     if name == RESOURCES + "slavemodule.txt":
         return module.encode()
     top = name[len(RESOURCES):].split("/", 1)[0]
-    if not name.endswith(".py") or (top not in names and name != script_name):
+    if not name.endswith(".py") or (top not in names and name != old_script):
         return data
     return rewrite_imports(data.decode("utf-8"), names, name).encode("utf-8")
 
@@ -274,12 +261,14 @@ def repack_if_changed(unzipdir: Path) -> bool:
     resources = Path(unzipdir) / RESOURCES
     try:
         identity = json.loads((resources / BUILD_FILE).read_text(encoding="utf-8"))
-        files = {RESOURCES + p.relative_to(resources).as_posix(): p.read_bytes()
-                 for p in resources.rglob("*") if p.is_file() and "__pycache__" not in p.parts}
-        if not changed_since_build(files, identity):
+        code = _folder_files(resources, [resources / f"{identity['module']}.py"] + [
+            p for package in identity["packages"].values()
+            for p in (resources / package).rglob("*.py")])
+        if not changed_since_build(code, identity):
             return False
     except (OSError, ValueError, KeyError, TypeError):
         return False
+    files = _folder_files(resources, resources.rglob("*"))
     packages = {private: base for base, private in identity["packages"].items()}
     content = packed_content_hash(_package_files(files, tuple(packages)))
     script = hashlib.sha256(files.get(RESOURCES + f"{identity['module']}.py", b"")).hexdigest()
@@ -294,3 +283,10 @@ def repack_if_changed(unzipdir: Path) -> bool:
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_bytes(data)
     return True
+
+
+def _folder_files(resources: Path, paths) -> Dict[str, bytes]:
+    """Archive names -> bytes of the files ``paths`` in the unpacked ``resources`` folder
+    (compiled caches left out)."""
+    return {RESOURCES + p.relative_to(resources).as_posix(): p.read_bytes()
+            for p in paths if p.is_file() and "__pycache__" not in p.parts}

@@ -10,8 +10,7 @@ from typing import Any, Iterable, List, Mapping
 
 from navcore.ins.lever_arm import LEVER_ARM_PARAMETERS
 
-#: the inputs a component's lever arm is rotated with
-ATTITUDE_INPUTS = ("truth_roll", "truth_pitch", "truth_yaw")
+from ..model.receiver_wiring import ATTITUDE as ATTITUDE_INPUTS
 LEVER_ARM_NAMES = tuple(p.name for p in LEVER_ARM_PARAMETERS)
 
 

@@ -2,10 +2,10 @@
 
 A receiver with an antenna lever arm puts its fixes at the antenna, ``r + C_bn l``: it needs
 the truth attitude ``truth_roll/pitch/yaw`` (and takes the body rate of the antenna velocity
-term from the attitude change between two of its steps), which the papers' scenarios do not
-connect.  :func:`connect_receiver_attitude` adds those three connections from the component
-that feeds the receiver its ``truth_lat``, and says why not when that source does not output
-them.
+term from the attitude change between two of its steps).  Every shipped model connects them;
+for a user's model that does not, :func:`connect_receiver_attitude` (verify's lever-arm case)
+adds those three connections from the component that feeds the receiver its ``truth_lat``,
+and says why not when that source does not output them.
 """
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import dataclasses
 from ..errors import NavfmuError
 from .ssp import Connection, SystemModel
 
+#: the receiver's inputs its lever arm is rotated with
 ATTITUDE = ("truth_roll", "truth_pitch", "truth_yaw")
 
 
