@@ -54,10 +54,10 @@ def setup(slave, component_class):
     slave._vr_names = {}       # type -> {value reference: name}
     slave._settable = {}       # type -> {value reference: name} that may be set now
     slave._causality = {}
-    # the FMU's identity hashes its sources: read them now, while the folder pythonfmu loaded
-    # them from exists (a host may delete it once the first instance is freed)
-    if getattr(slave, "resources", None):
+    if getattr(slave, "resources", None):     # this build's packages, searched here first
         adopt_folder(slave.resources, sys.modules[type(slave).__module__].__dict__)
+    # the FMU's identity (its build file) read now, while the folder pythonfmu loaded the
+    # script from exists (a host may delete it once the first instance is freed)
     fmu_identity(type(slave))
     finalize_python_at_exit()
     for port in cls.parameters:
