@@ -33,25 +33,55 @@ RATES = {"imu_gyro_x": "imu_dtheta_x", "imu_gyro_y": "imu_dtheta_y",
 ERROR_STATUS = 2  # fmi2Discard or worse counts as a refusal
 
 
-class Instance:
-    """One initialized instance of the FMU, with its variables grouped by type."""
+AUTHORING = "docs/guide/authoring_fmus.md#packaging-the-slaves-own-code-a-second-instance-must-work"
 
-    def __init__(self, path, md, unzip, name, parameters):
+
+class SecondInstanceError(RuntimeError):
+    """The second instance of the FMU in this process failed where the first did not."""
+
+
+def second_instance_message(model: str, exc) -> str:
+    """What a failed instantiation after a successful one in the same process means."""
+    return (f"the second instance of {model} in one process failed to instantiate, the first "
+            f"did not ({exc}): the FMU's code shares state between its instances, typically a "
+            "pythonfmu slave importing a module of its own project, which lives in the "
+            "process's one sys.modules; package the module in the FMU's resources under a name "
+            f"private to the FMU, or keep the slave's code in its one script (see {AUTHORING})")
+
+
+class Instance:
+    """One initialized instance of the FMU, with its variables grouped by type.  A failed
+    instantiation after a successful one in this process says what that means
+    (:func:`second_instance_message`)."""
+
+    #: instances created in this process so far
+    created = 0
+
+    def __init__(self, path, md, unzip, name, parameters, in_initialization=None):
+        """``in_initialization(self)``: called in initialization mode, the parameters set."""
         from fmpy.fmi2 import FMU2Slave
 
         self.md = md
         self.vars = {v.name: v for v in md.modelVariables}
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, instanceName=name,
                              modelIdentifier=md.coSimulation.modelIdentifier)
-        self.fmu.instantiate()
+        try:
+            self.fmu.instantiate()
+        except Exception as exc:
+            if Instance.created:
+                raise SecondInstanceError(second_instance_message(md.modelName, exc)) from None
+            raise
+        Instance.created += 1
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         for key, value in parameters.items():
             self.set(key, value)
-        self.fmu.exitInitializationMode()
         self.outputs = {t: [v for v in md.modelVariables
                             if v.causality == "output" and v.type == t]
                         for t in ("Real", "Integer", "Boolean")}
+        if in_initialization is not None:
+            in_initialization(self)
+        self.fmu.exitInitializationMode()
 
     def set(self, name, value):
         v = self.vars[name]
@@ -213,7 +243,8 @@ def main(job_file):
     try:
         result = probe(job["fmu"], md, unzip, job["parameters"], table, job["h"], **extra)
     except Exception as exc:   # an FMI error status on a legal call, or a broken FMU
-        result = {"error": f"{type(exc).__name__}: {exc}"}
+        result = {"error": str(exc) if isinstance(exc, SecondInstanceError)
+                  else f"{type(exc).__name__}: {exc}"}
     print(json.dumps(result), flush=True)
     # the instances' shared libraries stay loaded; leave their files to the OS at exit
     shutil.rmtree(unzip, ignore_errors=True)

@@ -6,7 +6,9 @@ A role is detected from the variables alone (nothing inside the FMU needs navfmu
 * ``ins_gnss_filter``: outputs ``nav_lat`` and takes ``gnss_lat`` and ``imu_dtheta_x``;
 * ``attitude_filter``: outputs ``nav_roll`` but no ``nav_lat`` and takes ``imu_dtheta_x``;
 * ``imu_sensor``: outputs ``imu_dtheta_x`` and no ``gnss_lat``;
-* ``gnss_receiver``: outputs ``gnss_lat`` and takes ``truth_lat``.
+* ``gnss_receiver``: outputs ``gnss_lat`` and takes ``truth_lat``;
+* ``vehicle``: outputs ``truth_lat`` and ``truth_roll`` but no ``imu_dtheta_x`` (the truth of
+  docs/guide/vehicle_in_the_loop.md; body rates and specific force optional).
 
 The contract of each role comes from :mod:`navcore.signals`.  *Required* ports are those the
 checks cannot do without (a filter's inputs and its solution); the others are *optional*: a
@@ -19,14 +21,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, Optional, Tuple
 
+from navcore.components import imu_sensor
 from navcore.core import signals
 
 from ..errors import NavfmuError
 
-ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver")
+ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver", "vehicle")
 
 ROLE_TITLES = {"ins_gnss_filter": "INS/GNSS filter", "attitude_filter": "attitude filter",
-               "imu_sensor": "IMU sensor", "gnss_receiver": "GNSS receiver"}
+               "imu_sensor": "IMU sensor", "gnss_receiver": "GNSS receiver",
+               "vehicle": "vehicle"}
 
 
 @dataclass(frozen=True)
@@ -109,6 +113,8 @@ def detect_role(facts: FmuFacts, forced: Optional[str] = None) -> str:
         fits.append("imu_sensor")
     if "gnss_lat" in outs and "truth_lat" in ins:
         fits.append("gnss_receiver")
+    if {"truth_lat", "truth_roll"} <= outs and "imu_dtheta_x" not in outs:
+        fits.append("vehicle")
     if len(fits) == 1:
         return fits[0]
     if not fits:
@@ -153,6 +159,9 @@ def contract(role: str):
         return (_ports(truth, "input", {p.name for p in truth})
                 + _ports(signals.GNSS + signals.GNSS_INJECTED, "output",
                          {p.name for p in signals.GNSS}))
+    if role == "vehicle":
+        return (_ports(signals.TRUTH, "output", {p.name for p in signals.TRUTH})
+                + _ports(imu_sensor.RATES, "output", set()))
     raise NavfmuError(f"unknown role {role!r}")
 
 

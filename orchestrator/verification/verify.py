@@ -22,7 +22,7 @@ from ..results import outputs
 from ..running import scenarios
 from ..errors import NavfmuError
 from ..campaigns.executor import Executor, Task
-from . import attitude_checks, filter_checks, sensor_checks
+from . import attitude_checks, filter_checks, sensor_checks, vehicle_checks
 from .fmi_checks import run_fmi_checks
 from .report_writing import counts, failing, write_report
 from .roles import detect_role, read_fmu
@@ -35,13 +35,20 @@ REFERENCE_FMUS = ("Kf", "InsOnly", "UkfAhrs", "TrajectoryImu", "GnssReceiver")
 
 
 def _role_checks(setting, runs, executor, progress, workdir, quick=False):
-    """The checks of the role: plan the runs, run them on ``executor``, judge them."""
+    """The checks of the role: plan the runs, run them on ``executor`` (then the runs that
+    depend on their results, for a role that has them), judge them."""
     module = {"ins_gnss_filter": filter_checks, "attitude_filter": attitude_checks,
-              "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks}[setting.role]
+              "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks,
+              "vehicle": vehicle_checks}[setting.role]
     plan = module.plan(setting, runs, quick=quick)
-    tasks = [Task(key=key, func=run_job, args=(job, isolated))
-             for key, job, isolated in plan.jobs]
-    results = dict(executor.run(tasks, progress=progress))
+    jobs = plan.jobs
+    results = {}
+    while jobs:
+        tasks = [Task(key=key, func=run_job, args=(job, isolated)) for key, job, isolated in jobs]
+        results.update(executor.run(tasks, progress=progress))
+        follow = getattr(module, "next_jobs", None)
+        jobs = follow(setting, plan, results) if follow and len(results) == len(plan.jobs) \
+            else []
     return module.judge_plan(setting, plan, results, workdir)
 
 
