@@ -1,6 +1,7 @@
 """The recording of a vehicle FMU under test: its outputs in initialization mode (the
-parameters set), after ``fmi2ExitInitializationMode`` (before any ``doStep``) and along a flight at two
-communication steps, ``h`` and ``h / refine``, through raw fmpy calls on fresh instances.
+parameters set), after ``fmi2ExitInitializationMode`` (before any ``doStep``) and along a
+flight at two communication steps, ``h`` and ``h / refine``, through raw fmpy calls on fresh
+instances.
 
 A vehicle with inputs of the guided vehicle's contract (``nav_lat``, ...) is guided on its
 own truth: before each step every input ``nav_X`` gets the vehicle's last ``truth_X``
@@ -54,8 +55,8 @@ def _fly(path, md, unzip, parameters, h, steps, label):
 
 def record(job: Dict[str, Any]) -> Dict[str, Any]:
     """``{"names", "in_initialization", "initial", "coarse", "fine"}``: the outputs in
-    initialization mode and after it (NaN as None), the flight at ``h`` and the one at ``h / refine`` at the instants of the first
-    (rows k * h)."""
+    initialization mode and after it (NaN as None), the flight at ``h`` and the one at
+    ``h / refine`` at the instants of the first (rows k * h)."""
     from fmpy import extract, read_model_description
 
     md = read_model_description(job["fmu"], validate=False)

@@ -8,8 +8,8 @@ rates (inertial, earth and transport rate included) and the specific force (WGS-
 gravity, Coriolis) follow from it exactly; the geodetic position is integrated from the
 velocity on a fixed 2 ms grid of its own (midpoint rule), so any communication step that
 is a multiple of it gives the same trajectory.  Outputs are valid from initialization mode
-on (written in ``enter_initialization_mode`` and ``exit_initialization_mode``); its state (position, time) is saved and
-restored with the FMU state.
+on (written in ``enter_initialization_mode`` and ``exit_initialization_mode``); its state
+(position, time) is saved and restored with the FMU state.
 
 ``BUG`` switches on one realistic defect (the tests build one FMU per value; the class is
 renamed with it, so every FMU carries its own module): see ``BUGS``.
@@ -28,7 +28,8 @@ BUGS = {
     "nan_until_step": "outputs NaN until the first doStep",
     "euler_step": "position integrated by one Euler step per communication step",
     "restore_forgets": "a restored FMU state keeps the position it replaces",
-    "project_module": "claims a route of its project's module, which a second instance finds claimed",
+    "project_module": "claims a route in its project's module; a second instance finds it "
+                      "claimed",
 }
 if BUG == "project_module":
     import kinematic_aircraft_routes   # the author's own module, shipped in resources/
@@ -152,9 +153,12 @@ class KinematicAircraft(Fmi2Slave):
             if v.causality == Fmi2Causality.output:
                 unknowns.append(unknowns.makeelement("Unknown", {"index": str(i + 1)}))
         structure.append(unknowns)
-        for variable in root.find("ModelVariables"):     # pythonfmu 0.7 writes no units
-            unit = unit_of(variable.get("name"))
-            variable.find("Real").set("unit", unit)
+        units = root.makeelement("UnitDefinitions", {})     # pythonfmu 0.7 writes no units
+        for unit in sorted({unit_of(n) for n in OUTPUTS}):
+            units.append(units.makeelement("Unit", {"name": unit}))
+        root.insert(list(root).index(root.find("LogCategories")), units)
+        for variable in root.find("ModelVariables"):
+            variable.find("Real").set("unit", unit_of(variable.get("name")))
         return root
 
     def _get_fmu_state(self):
@@ -193,14 +197,15 @@ class KinematicAircraft(Fmi2Slave):
     def _advance(self, t_end):
         """Integrate the position to ``t_end`` on the fixed grid (midpoint rule)."""
         lat, lon, h = self._pos
-        t = self._t
+        i, t = round(self._t / GRID), self._t
         while t < t_end - 1e-12:
-            dt = min(GRID * (math.floor(t / GRID + 1e-9) + 1) - t, t_end - t)
+            dt = min((i + 1) * GRID - t, t_end - t)
             k1 = position_rate(lat, h, velocity(t))
             lm, hm = lat + 0.5 * dt * k1[0], h + 0.5 * dt * k1[2]
             k2 = position_rate(lm, hm, velocity(t + 0.5 * dt))
             lat, lon, h = lat + dt * k2[0], lon + dt * k2[1], h + dt * k2[2]
-            t += dt
+            i += 1
+            t = min(i * GRID, t_end)
         self._pos, self._t = [lat, lon, h], t_end
 
     def _euler(self, t_end):
@@ -210,7 +215,10 @@ class KinematicAircraft(Fmi2Slave):
         self._pos, self._t = [lat + dt * k[0], lon + dt * k[1], h + dt * k[2]], t_end
 
     def do_step(self, current_time, step_size):
-        (self._euler if BUG == "euler_step" else self._advance)(current_time + step_size)
+        t_end = current_time + step_size
+        if abs(t_end - round(t_end / GRID) * GRID) < 1e-9:    # on the grid: exactly there
+            t_end = round(t_end / GRID) * GRID
+        (self._euler if BUG == "euler_step" else self._advance)(t_end)
         self._write()
         return True
 
