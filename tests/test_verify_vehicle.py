@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 
+from orchestrator.building import build as fmu_build
 from orchestrator.campaigns.executor import Executor, Task
 from orchestrator.verification import roles, vehicle_checks
 from orchestrator.verification.fmi_checks import run_fmi_checks
@@ -33,6 +34,12 @@ def aircraft(tmp_path_factory):
     return build_variants(tmp_path_factory.mktemp("aircraft"), "KinematicAircraft",
                           ["", *CATALOGUE],
                           {"project_module": ["kinematic_aircraft_routes.py"]})
+
+
+@pytest.fixture(scope="session")
+def dist():
+    fmu_build.build(log=None)
+    return fmu_build.DIST
 
 
 def _setting(path):
@@ -71,6 +78,13 @@ def test_good_aircraft_passes_and_flies(aircraft):
     assert 0.2 < rms["position"] < 3.0 and rms["velocity"] < 0.3
 
 
+def test_guided_uav_passes_the_vehicle_checks(dist):
+    """Our own vehicle (guided on its truth for the recording, turbulence on)."""
+    checks = _vehicle_checks(dist / "GuidedUav.fmu")
+    assert {cid: checks[cid].verdict for cid in KINEMATIC} == {cid: "pass" for cid in KINEMATIC}
+    assert checks["vehicle.body_rates"].details["integrated_attitude_error_deg"] < 0.01
+
+
 def test_good_aircraft_passes_the_fmi_checks(aircraft):
     checks = {c.id: c for c in run_fmi_checks(_setting(aircraft / "KinematicAircraft.fmu"))}
     for cid in ("fmi.validate", "fmi.ports", "fmi.state", "fmi.variable_step"):
@@ -95,8 +109,10 @@ def test_broken_aircraft_fails_its_check(aircraft, bug):
         assert checks[meant].details["integrated_attitude_error_deg"] > 90
     if bug == "no_gravity":                # the whole of gravity is missing
         assert 9.7 < checks[meant].details["max_mismatch"] < 9.9
-    if bug == "euler_step":
+    if bug == "euler_step":                # and 5 steps are not one of 5 periods
         assert checks[meant].details["largest"]["position"] > 0.1
+        fmi = {c.id: c for c in run_fmi_checks(_setting(path))}
+        assert fmi["fmi.variable_step"].verdict == "fail"
     if bug == "project_module":            # one line naming the cause and the remedy
         assert "second instance" in check.reason and "sys.modules" in check.reason
         assert "authoring_fmus.md" in check.reason and "\n" not in check.reason

@@ -57,8 +57,11 @@ class Instance:
     #: instances created in this process so far
     created = 0
 
-    def __init__(self, path, md, unzip, name, parameters, in_initialization=None):
-        """``in_initialization(self)``: called in initialization mode, the parameters set."""
+    def __init__(self, path, md, unzip, name, parameters, in_initialization=None,
+                 parameters_first=False):
+        """``in_initialization(self)``: called in initialization mode, the parameters set;
+        ``parameters_first``: set them before fmi2EnterInitializationMode (as fmpy's
+        simulate_fmu and our master do), else in initialization mode."""
         from fmpy.fmi2 import FMU2Slave
 
         self.md = md
@@ -73,9 +76,13 @@ class Instance:
             raise
         Instance.created += 1
         self.fmu.setupExperiment(startTime=0.0)
+        if parameters_first:
+            for key, value in parameters.items():
+                self.set(key, value)
         self.fmu.enterInitializationMode()
-        for key, value in parameters.items():
-            self.set(key, value)
+        if not parameters_first:
+            for key, value in parameters.items():
+                self.set(key, value)
         self.outputs = {t: [v for v in md.modelVariables
                             if v.causality == "output" and v.type == t]
                         for t in ("Real", "Integer", "Boolean")}

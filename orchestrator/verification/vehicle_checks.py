@@ -4,7 +4,7 @@ on a recording of the vehicle alone (:mod:`.vehicle_probe`), then a flight throu
 swapped in and the filter started at the vehicle's initial outputs).
 
 * ``vehicle.initial_outputs``: every output finite in initialization mode (the parameters
-  set) and after ``fmi2ExitInitializationMode``, before the first ``doStep``, the same in
+  set before it) and after ``fmi2ExitInitializationMode``, before the first ``doStep``, the same in
   both (a master hands them on to ``ImuSensor`` from initialization mode), ``truth_time`` =
   the start time.
 * ``vehicle.velocity``: per step, the velocity the change of geodetic position makes against

@@ -1,5 +1,5 @@
 """The recording of a vehicle FMU under test: its outputs in initialization mode (the
-parameters set), after ``fmi2ExitInitializationMode`` (before any ``doStep``) and along a
+parameters set before it, as fmpy and our master set them), after ``fmi2ExitInitializationMode`` (before any ``doStep``) and along a
 flight at two communication steps, ``h`` and ``h / refine``, through raw fmpy calls on fresh
 instances.
 
@@ -36,7 +36,7 @@ def _feeds(instance: Instance):
 def _fly(path, md, unzip, parameters, h, steps, label):
     """Rows of every output at the end of initialization and after each of ``steps`` steps."""
     in_mode = []
-    inst = Instance(path, md, unzip, label, parameters,
+    inst = Instance(path, md, unzip, label, parameters, parameters_first=True,
                     in_initialization=lambda i: in_mode.append(i.read()))
     names = inst.output_names()
     feeds = {i: names.index(o) for i, o in _feeds(inst).items()}
