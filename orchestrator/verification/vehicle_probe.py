@@ -1,7 +1,7 @@
 """The recording of a vehicle FMU under test: its outputs in initialization mode (the
-parameters set before it, as fmpy and our master set them), after ``fmi2ExitInitializationMode`` (before any ``doStep``) and along a
-flight at two communication steps, ``h`` and ``h / refine``, through raw fmpy calls on fresh
-instances.
+parameters set before it, as fmpy and our master set them), after
+``fmi2ExitInitializationMode`` (before any ``doStep``) and along a flight at two
+communication steps, ``h`` and ``h / refine``, through raw fmpy calls on fresh instances.
 
 A vehicle with inputs of the guided vehicle's contract (``nav_lat``, ...) is guided on its
 own truth: before each step every input ``nav_X`` gets the vehicle's last ``truth_X``
