@@ -409,7 +409,7 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @cli.command()
 @click.argument("fmu", type=click.Path())
 @click.option("--role", type=click.Choice(["ins_gnss_filter", "attitude_filter", "imu_sensor",
-                                           "gnss_receiver"]),
+                                           "gnss_receiver", "vehicle"]),
               help="Force the role (default: detected from the FMU's variables).")
 @click.option("--scenario", "scenario_names", multiple=True, help="Scenario of the "
               "consistency runs (a models/ name or .ssd; repeatable; default: the role's).")
@@ -430,8 +430,8 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @click.pass_context
 def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers, scheduler,
            local_cluster, quick):
-    """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
-    checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
+    """Verify a filter, sensor or vehicle FMU (ours or not): FMI, contract, consistency and
+    robustness checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
     from ..running.ssv_bindings import read_fmu_bindings
     from ..verification.verify import verify as verify_fmu
 

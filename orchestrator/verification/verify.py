@@ -41,14 +41,14 @@ def _role_checks(setting, runs, executor, progress, workdir, quick=False):
               "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks,
               "vehicle": vehicle_checks}[setting.role]
     plan = module.plan(setting, runs, quick=quick)
-    jobs = plan.jobs
-    results = {}
-    while jobs:
-        tasks = [Task(key=key, func=run_job, args=(job, isolated)) for key, job, isolated in jobs]
-        results.update(executor.run(tasks, progress=progress))
-        follow = getattr(module, "next_jobs", None)
-        jobs = follow(setting, plan, results) if follow and len(results) == len(plan.jobs) \
-            else []
+
+    def run(jobs):
+        return executor.run([Task(key=key, func=run_job, args=(job, isolated))
+                             for key, job, isolated in jobs], progress=progress)
+
+    results = dict(run(plan.jobs))
+    if hasattr(module, "next_jobs"):
+        results.update(run(module.next_jobs(setting, plan, results)))
     return module.judge_plan(setting, plan, results, workdir)
 
 
