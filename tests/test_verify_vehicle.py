@@ -4,12 +4,14 @@ and flies through ImuSensor -> GnssReceiver -> Kf, and each variant, carrying on
 bug, fails the check meant to catch it (recordings of 30 s, ``quick``; each test < 15 s)."""
 from __future__ import annotations
 
+import zipfile
+
 import pytest
 
 from orchestrator.building import build as fmu_build
 from orchestrator.campaigns.executor import Executor, Task
 from orchestrator.verification import roles, vehicle_checks
-from orchestrator.verification.fmi_checks import run_fmi_checks
+from orchestrator.verification.fmi_checks import check_validate, run_fmi_checks
 from orchestrator.verification.scenario_run import run_job
 from orchestrator.verification.setting import make_setting
 
@@ -116,3 +118,21 @@ def test_broken_aircraft_fails_its_check(aircraft, bug):
     if bug == "project_module":            # one line naming the cause and the remedy
         assert "second instance" in check.reason and "sys.modules" in check.reason
         assert "authoring_fmus.md" in check.reason and "\n" not in check.reason
+
+
+def test_validate_fails_without_initial_unknowns(aircraft, tmp_path):
+    """The aircraft's model description without the InitialUnknowns it adds (pythonfmu 0.7
+    writes none): fmi.validate fails, as docs/guide/authoring_fmus.md says."""
+    good = aircraft / "KinematicAircraft.fmu"
+    bare = tmp_path / "KinematicAircraft.fmu"
+    with zipfile.ZipFile(good) as src, zipfile.ZipFile(bare, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                start, end = text.index("<InitialUnknowns>"), text.index("</InitialUnknowns>")
+                data = (text[:start] + text[end + len("</InitialUnknowns>"):]).encode()
+            dst.writestr(item, data)
+    assert check_validate(_setting(good)).verdict == "pass"
+    check = check_validate(_setting(bare))
+    assert check.verdict == "fail" and "InitialUnknowns" in check.reason

@@ -8,6 +8,7 @@ FMU run are asserted in test_verify.py, test_verify_catalogue.py, test_verify_ve
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,6 +17,7 @@ import pytest
 from navcore.ins.constants import DPH, DPSH, UG
 from orchestrator.verification import attitude_checks, filter_checks, sensor_checks
 from orchestrator.verification import roles
+from orchestrator.verification.fmi_checks import check_ports
 from orchestrator.verification.setting import make_setting
 
 DT = 0.01
@@ -244,3 +246,27 @@ def test_filter_timing_over_kf(ms, verdict):
     results = {("closure", "filter", 0): {"metrics": {"time_per_step_ms": ms}},
                ("closure", filter_checks.REFERENCE, 0): {"metrics": {"time_per_step_ms": 0.1}}}
     assert filter_checks._judge_timing(results).verdict == verdict
+
+
+# -- FMI: the contract's ports -------------------------------------------------------------
+def _ports_setting(changes):
+    variables = {p.name: roles.Variable(p.name, p.causality, p.type, p.unit, None)
+                 for p in roles.contract("vehicle")}
+    variables.update(changes)
+    facts = roles.FmuFacts(path=Path("V.fmu"), model_name="V", variables={
+        k: v for k, v in variables.items() if v is not None}, can_get_set_state=False,
+        can_serialize_state=False, can_variable_step=False, default_step=None)
+    return SimpleNamespace(facts=facts, role="vehicle")
+
+
+@pytest.mark.parametrize("changes,verdict", [
+    ({}, "pass"),
+    ({"truth_roll": roles.Variable("truth_roll", "output", "Real", "deg", None)}, "fail"),
+    ({"truth_vn": roles.Variable("truth_vn", "input", "Real", "m/s", None)}, "fail"),
+    ({"truth_lat": None}, "fail"),                                  # required, missing
+    ({"body_rate_x": None}, "warn"),                                # optional, missing
+    ({"truth_h": roles.Variable("truth_h", "output", "Real", "", None)}, "warn"),  # no unit
+])
+def test_ports_of_the_vehicle_contract(changes, verdict):
+    check = check_ports(_ports_setting(changes))
+    assert check.verdict == verdict, check.reason
