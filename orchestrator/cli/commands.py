@@ -431,7 +431,8 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers, scheduler,
            local_cluster, quick):
     """Verify a filter, sensor or vehicle FMU (ours or not): FMI, contract, consistency and
-    robustness checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
+    robustness checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one
+    fails."""
     from ..running.ssv_bindings import read_fmu_bindings
     from ..verification.verify import verify as verify_fmu
 

@@ -134,8 +134,9 @@ def _variable_step_check(setting: Setting, result) -> Check:
 def _hostile_check(result) -> Check:
     criterion = ("an unknown value reference, a set of an output and a step back in time each "
                  "return fmi2Discard or worse; the host process lives on")
-    if "error" in result:
-        return Check("fmi.hostile", "hostile host calls", criterion, "host ended", "fail",
+    if "error" in result:      # the host died, or the probe could not make its instances
+        return Check("fmi.hostile", "hostile host calls", criterion,
+                     "host ended" if result.get("crashed") else "probe failed", "fail",
                      result["error"], result)
     statuses = result["statuses"]
     accepted = [name for name, status in statuses.items()
