@@ -2,7 +2,8 @@
 (``python -m orchestrator.cosim.fmu_host REQUESTS_FD REPLIES_FD WORKDIR``), so that an FMU
 which crashes or hangs ends this process, not the master.  The master's side is
 :class:`orchestrator.cosim.hosted_instance.HostedFmuInstance`; the instance inside is an
-ordinary :class:`~orchestrator.cosim.fmu_instance.FmuInstance` (same calls, log and messages).
+ordinary :class:`~orchestrator.cosim.fmu_instance.FmuInstance` (or, for an FMI 3.0 FMU, its
+:class:`~orchestrator.cosim.fmi3_instance.Fmi3Instance`; same calls, log and messages).
 
 The protocol, over two pipes: every message is a header ``HEADER`` (kind or status, payload
 length in bytes) and its payload.
@@ -110,9 +111,9 @@ class Host:
         return getattr(self, "_" + method)(*args)
 
     def _open(self, path, name, unzipdir):
-        from .fmu_instance import FmuInstance
+        from .fmi3_instance import open_fmu
 
-        self.instance = inst = FmuInstance(path, name, unzipdir=unzipdir)
+        self.instance = inst = open_fmu(path, name, unzipdir=unzipdir)
         return {"model_name": inst.model_name, "can_get_set_state": inst.can_get_set_state,
                 "build_info": inst.build_info,
                 "variables": [astuple(v) for v in inst.variables.values()]}

@@ -147,6 +147,8 @@ from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
 from ..model import units
 from ..model.suggestions import did_you_mean
+#: the types a parameter value can be set to
+SETTABLE_TYPES = ("Real", "Integer", "Enumeration", "Boolean", "String")
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 
@@ -188,6 +190,15 @@ def _parameter_hint(d, name: str) -> str:
     """The component's parameters close to the unknown ``name``, or all of them."""
     names = sorted(v.name for v in d.variables.values() if v.causality == "parameter")
     return did_you_mean(name, names) or f" (its parameters: {', '.join(names)})"
+
+
+def _check_settable(d, var) -> None:
+    """Refuse setting a parameter of a type no parameter value maps onto (an FMI 3.0
+    Float32, UInt8, array...: :mod:`orchestrator.cosim.fmi3_variables`)."""
+    if var.type not in SETTABLE_TYPES:
+        raise WiringError(f"component '{d.spec.name}' ({d.source}): parameter '{var.name}' is "
+                          f"a {var.type}, which cannot be set (settable: "
+                          f"{', '.join(SETTABLE_TYPES)})")
 
 
 # ----------------------------------------------------------------------------------------
@@ -310,6 +321,7 @@ class Simulation:
                         + ("does not exist" if var is None else
                            f"has causality '{var.causality}' (not settable)")
                     )
+                _check_settable(d, var)
                 unit = d.spec.parameter_units.get(pname)
                 if unit:
                     value = units.convert(value, unit, var.unit,
@@ -329,6 +341,7 @@ class Simulation:
                     f"parameter '{var_name}'" + (_parameter_hint(d, var_name) if var is None
                                                  else f" (it is an {var.causality})")
                 )
+            _check_settable(d, var)
             values[comp][var_name] = value
         return values, skipped
 
