@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy import simulate_fmu
 
 import fmi3_fixtures as fx
 from conftest import component_xml, connection_xml, ssd_text
@@ -24,6 +25,7 @@ from orchestrator.cosim.isolation import Isolation
 from orchestrator.cosim.master import Simulation
 from orchestrator.errors import NavfmuError, SimulationError, WiringError
 from orchestrator.model.ssp_archive import load_model
+from test_export_package import export_equals_jacobi
 
 H, STOP = 0.01, 1.0
 K_A, X0_A, K_B, OFFSET = 2.0, 3.0, 0.5, 7
@@ -303,3 +305,46 @@ def test_compare_runs_a_mixed_fmi2_fmi3_model(aircraft_models, tmp_path, navfmu_
             m["metrics"]["filter"].pop("time_per_step_ms")
         assert mixed["metrics"] == fmi2["metrics"]
         assert 0 < mixed["metrics"]["filter"]["position_rms_m"]["n"] < 10
+
+
+def test_export_holds_fmi3_components(fmi3_libraries, tmp_path):
+    """Two Dahlquist FMUs without their Int64 (which the container cannot pass), a -> b by x
+    only (the container reads outputs after its transfers: a feedthrough output would be
+    read one step earlier than by the Jacobi rule), exported and run by fmpy: our Jacobi run
+    bit for bit, and the analytic answer."""
+    xml = fx.DAHLQUIST_XML
+    for line in ('<Int64 name="steps"', '<Int64 name="offset"', '<Output valueReference="7"',
+                 '<InitialUnknown valueReference="7"'):
+        start = xml.index(line)
+        xml = xml[:start] + xml[xml.index("\n", start) + 1:]
+    fmu = fx.pack(xml, fmi3_libraries["dahlquist3"], tmp_path / "Dahlquist3.fmu")
+    real = [c for c in CONNECTORS if c[2] == "Real"]
+    a = component_xml("a", str(fmu), real, {"k": ("Real", K_A), "x0": ("Real", X0_A)})
+    b = component_xml("b", str(fmu), real, {"k": ("Real", K_B), "x0": ("Real", 0.0)})
+    (tmp_path / "m").mkdir()
+    (tmp_path / "m" / "SystemStructure.ssd").write_text(ssd_text(
+        a + "\n" + b, connection_xml("a.x", "b.u"), base_step=H, stop=STOP))
+    got = export_equals_jacobi(tmp_path / "m", tmp_path, stop=STOP, step=H)
+    t = np.asarray(got["time"])
+    np.testing.assert_allclose(got["b.x"], _expected_b(t, "jacobi"), rtol=1e-12, atol=1e-15)
+
+
+def test_export_holds_a_mixed_fmi2_fmi3_model(aircraft_models, tmp_path):
+    from orchestrator.packaging.export import export
+
+    fmu = export(aircraft_models["mixed"], tmp_path / "system.fmu")
+    got = simulate_fmu(str(fmu), stop_time=3.0, step_size=0.01, output_interval=0.01)
+    # the pass-through repeats the trajectory's truth; the receiver fixes once a second
+    np.testing.assert_array_equal(got["pass.truth_lat"], got["trajectory.truth_lat"])
+    assert got["gnss.gnss_epoch"][-1] == 2 and got["filter.updated"].sum() == 2
+
+
+def test_export_refuses_an_int64_it_cannot_pass(dahlquist, tmp_path):
+    from orchestrator.packaging.export import export
+
+    with pytest.raises(NavfmuError) as info:
+        export(_chain(tmp_path / "m", dahlquist), tmp_path / "system.fmu")
+    assert str(info.value) == ("component 'a' (Dahlquist3.fmu): output 'steps' is a Int64, "
+                               "which the exported FMU cannot pass (fmpy's container reads "
+                               "Float64, Int32 and Boolean)")
+    assert not (tmp_path / "system.fmu").exists()
