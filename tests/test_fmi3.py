@@ -160,6 +160,44 @@ def test_terminate_simulation_ends_the_run_in_one_line(dahlquist, tmp_path, navf
     assert not (tmp_path / "out").exists()
 
 
+def test_verify_probes_drive_an_fmi3_fmu(dahlquist, tmp_path):
+    """verify's FMI probes (state restore and serialization, variable step, hostile calls)
+    through FMU3Slave: the state restored gives the same run bit for bit, one exact step of
+    k periods differs from k steps in x only by rounding, and the hostile calls are refused."""
+    from fmpy import extract, read_model_description
+    from orchestrator.verification import fmi_probe
+    from orchestrator.verification.roles import read_fmu
+
+    facts = read_fmu(dahlquist)
+    assert (facts.variables["steps"].type, facts.variables["flag_out"].type) == ("Integer",
+                                                                                 "Boolean")
+    assert facts.can_get_set_state and facts.variables["x"].unit == "m"
+    md = read_model_description(str(dahlquist))
+    unzip = extract(str(dahlquist), str(tmp_path / "unzipped"))
+    table = {"u": np.linspace(0.0, 1.0, 40), "count_in": np.arange(40)}
+    params = {"k": K_A, "x0": X0_A}
+    state = fmi_probe.probe_state(str(dahlquist), md, unzip, params, table, H)
+    assert state["set_state"] is None and state["steps"] == 40 and "deserialize" not in state
+    variable = fmi_probe.probe_variable_step(str(dahlquist), md, unzip, params, table, H, 4)
+    assert variable["coarse_steps"] == 10
+    # x first, by rounding only (exp(-k 4h) against exp(-k h)^4); the counts of steps later
+    what = variable["difference"]["what"]
+    assert what.startswith("x at t = 0.04 s: ")
+    fine, coarse = (float(x) for x in what.split(": ")[1].split(" against "))
+    assert fine != coarse and math.isclose(fine, coarse, rel_tol=1e-14)
+    hostile = fmi_probe.probe_hostile(str(dahlquist), md, unzip, params, table, H)
+    assert hostile["statuses"] == {"unknown value reference": 3, "set of an output": 3,
+                                   "step back in time": 3}
+
+
+def test_a_hosted_fmi3_fmu_crashing_is_named_in_its_fmi3_call(dahlquist, tmp_path):
+    folder = _chain(tmp_path / "m", dahlquist, {"abort_at": ("Real", 0.5)})
+    with pytest.raises(SimulationError) as info:
+        Simulation(load_model(folder)).run()
+    assert str(info.value) == ("component 'a' (Dahlquist3.fmu): the FMU process died with "
+                               "SIGABRT in fmi3DoStep at t = 0.49 s")
+
+
 # -- refusals ------------------------------------------------------------------------------
 REFUSED = {
     "float32 output": (
@@ -171,6 +209,10 @@ REFUSED = {
         '<Int32 name="count_in"', '<UInt8 name="count_in"',
         "component 'a' (Refused.fmu): FMI 3.0 input 'count_in' is a UInt8, which no connector "
         "type holds (FMI 3.0 Float64, Int32, Int64 and Boolean are exchanged)"),
+    "int16 output": (
+        '<Int32 name="count_out"', '<Int16 name="count_out"',
+        "component 'a' (Refused.fmu): FMI 3.0 output 'count_out' is an Int16, which no "
+        "connector type holds (FMI 3.0 Float64, Int32, Int64 and Boolean are exchanged)"),
     "array output": (
         '<Float64 name="x" valueReference="1" causality="output" variability="continuous" '
         'unit="m"/>',
@@ -205,9 +247,9 @@ def test_a_float32_parameter_is_refused_when_set(fmi3_libraries, tmp_path):
                   fmi3_libraries["dahlquist3"], tmp_path / "Refused.fmu")
     with pytest.raises(WiringError) as info:
         Simulation(load_model(_chain(tmp_path / "m", fmu)))
-    assert str(info.value) == (f"component 'a' ({fmu}): parameter 'k' is a Float32, which "
-                               f"cannot be set (settable: Real, Integer, Enumeration, Boolean, "
-                               f"String)")
+    assert str(info.value) == (f"component 'a' ({fmu}): parameter 'k' has type Float32, "
+                               f"which cannot be set (settable: Real, Integer, Enumeration, "
+                               f"Boolean, String)")
 
 
 def test_an_int64_output_beyond_32_bits_is_refused_when_read(dahlquist, tmp_path):
@@ -275,8 +317,8 @@ def _through(ssd: str, passthrough: Path) -> str:
 
 
 def test_a_mixed_fmi2_fmi3_chain_runs_as_the_all_fmi2_model(aircraft_models):
-    fmi2 = Simulation(load_model(aircraft_models["fmi2"])).run(10.0)
-    mixed = Simulation(load_model(aircraft_models["mixed"])).run(10.0)
+    fmi2 = Simulation(load_model(aircraft_models["fmi2"])).run(5.0)
+    mixed = Simulation(load_model(aircraft_models["mixed"])).run(5.0)
     assert mixed.metadata["hosted"] == ["pass"]
     assert mixed.metadata["builds"]["pass"]["fmi_version"] == "3.0"
     np.testing.assert_array_equal(mixed.data["pass"], fmi2.data["trajectory"][
@@ -284,7 +326,7 @@ def test_a_mixed_fmi2_fmi3_chain_runs_as_the_all_fmi2_model(aircraft_models):
     for c in ("trajectory", "gnss", "filter"):
         assert mixed.columns[c] == fmi2.columns[c]
         assert mixed.data[c].tobytes() == fmi2.data[c].tobytes(), c
-    assert fmi2.column("gnss", "gnss_epoch")[-1] == 10.0
+    assert fmi2.column("gnss", "gnss_epoch")[-1] == 5.0
 
 
 def test_compare_runs_a_mixed_fmi2_fmi3_model(aircraft_models, tmp_path, navfmu_cli):
@@ -344,7 +386,24 @@ def test_export_refuses_an_int64_it_cannot_pass(dahlquist, tmp_path):
 
     with pytest.raises(NavfmuError) as info:
         export(_chain(tmp_path / "m", dahlquist), tmp_path / "system.fmu")
-    assert str(info.value) == ("component 'a' (Dahlquist3.fmu): output 'steps' is a Int64, "
-                               "which the exported FMU cannot pass (fmpy's container reads "
-                               "Float64, Int32 and Boolean)")
+    assert str(info.value) == ("component 'a' (Dahlquist3.fmu): output 'steps' has type "
+                               "Int64, which the exported FMU cannot pass (fmpy's container "
+                               "reads Float64, Int32 and Boolean)")
     assert not (tmp_path / "system.fmu").exists()
+
+
+def test_a_campaign_runs_a_mixed_fmi2_fmi3_model(aircraft_models, tmp_path):
+    """montecarlo on the FMU backend: two seeds of the mixed model give the all-FMI-2
+    model's metrics (the seeds change the numbers, so the comparison can fail)."""
+    from orchestrator.campaigns.campaign import CampaignSpec, read_run, run_campaign
+
+    metrics = {}
+    for kind, folder in aircraft_models.items():
+        spec = CampaignSpec(scenario=str(folder), filters=("Kf",), runs=2, backend="fmu",
+                            stop_time=5.0)
+        run_campaign(spec, tmp_path / kind, workers=1, log=lambda *_: None)
+        metrics[kind] = [dict(read_run(tmp_path / kind, "Kf", i)["metrics"]) for i in range(2)]
+        for m in metrics[kind]:
+            m.pop("time_per_step_ms")
+    assert metrics["mixed"] == metrics["fmi2"]
+    assert metrics["fmi2"][0]["position_rms_m"] != metrics["fmi2"][1]["position_rms_m"]

@@ -177,15 +177,15 @@ class Fmi3Instance(FmuInstance):
         """The FMU's reason for ending: its error message, else its last log message."""
         return self._cause() or self._last_message[0]
 
-    def _require_and(self, what: str, call, *args):
+    def _state_call(self, what: str, call, *args):
         self._require_state()
         return self._checked(what, call, *args)
 
     def get_state(self):
-        return self._require_and("fmi3GetFMUState", self._fmu.getFMUState)
+        return self._state_call("fmi3GetFMUState", self._fmu.getFMUState)
 
     def set_state(self, state) -> None:
-        self._require_and("fmi3SetFMUState", self._fmu.setFMUState, state)
+        self._state_call("fmi3SetFMUState", self._fmu.setFMUState, state)
 
     def free_state(self, state) -> None:
         self._checked("fmi3FreeFMUState", self._fmu.freeFMUState, state)

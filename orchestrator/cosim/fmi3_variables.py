@@ -15,7 +15,7 @@ String             String      parameters only, as for FMI 2.0
 Enumeration        Enumeration parameters only (set as Int64)
 =================  ==========  ================================================
 
-Refused, by component, variable and type, when the FMU is an input or output of it: Float32,
+Refused, by component, variable and type, when the variable is an input or an output: Float32,
 Int8, UInt8, Int16, UInt16, UInt32, UInt64, Binary (no connector type holds them without a
 conversion the system structure does not state), and arrays (a variable with ``<Dimension>``:
 the system structure connects scalars only; an array is not split into elements).  An FMU
@@ -58,8 +58,8 @@ def _fmi3_type(v) -> str:
 def _refusal(comp: str, path: Path, v, typ: str) -> NavfmuError:
     what = (f"an array ({typ}); only scalar variables can be connected or recorded"
             if v.dimensions else
-            f"a {typ}, which no connector type holds (FMI 3.0 Float64, Int32, Int64 and Boolean "
-            f"are exchanged)")
+            f"{'an' if typ[0] in 'AEIO' else 'a'} {typ}, which no connector type holds (FMI 3.0 "
+            f"Float64, Int32, Int64 and Boolean are exchanged)")
     return NavfmuError(f"component '{comp}' ({path.name}): FMI 3.0 {v.causality} '{v.name}' is "
                        f"{what}")
 

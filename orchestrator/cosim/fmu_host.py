@@ -47,6 +47,12 @@ CALLS = ("fmi2Instantiate", "fmi2Set* of the parameters", "fmi2SetupExperiment a
          "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Set* of the inputs",
          "fmi2DoStep", "fmi2Get* of the outputs", "fmi2GetFMUstate", "fmi2SetFMUstate",
          "fmi2FreeFMUstate", "fmi2Terminate and fmi2FreeInstance")
+#: the same calls of an FMI 3.0 FMU
+CALLS_FMI3 = ("fmi3InstantiateCoSimulation", "fmi3Set* of the parameters",
+              "fmi3EnterInitializationMode", "fmi3ExitInitializationMode",
+              "fmi3Set* of the inputs", "fmi3DoStep", "fmi3Get* of the outputs",
+              "fmi3GetFMUState", "fmi3SetFMUState", "fmi3FreeFMUState",
+              "fmi3Terminate and fmi3FreeInstance")
 #: CALL methods -> the FMI call each makes (an index of CALLS)
 METHODS = {"open": 0, "prepare": None, "set_parameters": 1, "enter_initialization": 2,
            "exit_initialization": 3, "get_state": 7, "set_state": 8, "free_state": 9,

@@ -196,8 +196,8 @@ def _check_settable(d, var) -> None:
     """Refuse setting a parameter of a type no parameter value maps onto (an FMI 3.0
     Float32, UInt8, array...: :mod:`orchestrator.cosim.fmi3_variables`)."""
     if var.type not in SETTABLE_TYPES:
-        raise WiringError(f"component '{d.spec.name}' ({d.source}): parameter '{var.name}' is "
-                          f"a {var.type}, which cannot be set (settable: "
+        raise WiringError(f"component '{d.spec.name}' ({d.source}): parameter '{var.name}' has "
+                          f"type {var.type}, which cannot be set (settable: "
                           f"{', '.join(SETTABLE_TYPES)})")
 
 

@@ -65,9 +65,9 @@ def _container_type(spec, variable) -> str:
         else None)
     if typ is None:
         raise NavfmuError(f"component '{spec.name}' ({spec.source.name}): {variable.causality} "
-                          f"'{variable.name}' is {'an array of ' if variable.dimensions else 'a '}"
-                          f"{variable.type}, which the exported FMU cannot pass (fmpy's container "
-                          f"reads Float64, Int32 and Boolean)")
+                          f"'{variable.name}' has type {variable.type}"
+                          f"{' (an array)' if variable.dimensions else ''}, which the exported FMU "
+                          f"cannot pass (fmpy's container reads Float64, Int32 and Boolean)")
     return typ
 
 

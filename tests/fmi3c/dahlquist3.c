@@ -5,16 +5,18 @@
  * so a test knows every value a master must produce.  Besides: count_out = count_in + steps
  * (Int32), steps = number of steps done + offset (Int64), flag_out = !flag (Boolean), a
  * String parameter label, and stop_at > 0 asks the master to end the simulation
- * (terminateSimulation) at the first communication point at or after stop_at. */
+ * (terminateSimulation) at the first communication point at or after stop_at; abort_at > 0
+ * aborts the process there (an FMU that crashes its host). */
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define MODEL_TOKEN "{8c4e0a37-3d0b-4c59-9b7e-5f1d2a6c3e01}"
 
 struct Model {
-    double x, k, x0, u, stop_at;
+    double x, k, x0, u, stop_at, abort_at;
     int32_t count_in;
     int64_t steps, offset;
     bool flag;
@@ -22,7 +24,7 @@ struct Model {
 };
 
 enum { VR_TIME, VR_X, VR_K, VR_X0, VR_U, VR_COUNT_IN, VR_COUNT_OUT, VR_STEPS, VR_OFFSET,
-       VR_FLAG, VR_FLAG_OUT, VR_LABEL, VR_STOP_AT };
+       VR_FLAG, VR_FLAG_OUT, VR_LABEL, VR_STOP_AT, VR_ABORT_AT };
 
 static void model_reset(struct Model *m)
 {
@@ -51,6 +53,7 @@ static int model_get(const struct Model *m, unsigned vr, int kind, void *value)
         case VR_X0: *v = m->x0; return 0;
         case VR_U: *v = m->u; return 0;
         case VR_STOP_AT: *v = m->stop_at; return 0;
+        case VR_ABORT_AT: *v = m->abort_at; return 0;
         default: return -1;
         }
     }
@@ -83,6 +86,7 @@ static int model_set(struct Model *m, unsigned vr, int kind, const void *value, 
     if (kind == K_F64 && vr == VR_K) { m->k = *(const double *)value; return 0; }
     if (kind == K_F64 && vr == VR_X0) { m->x0 = m->x = *(const double *)value; return 0; }
     if (kind == K_F64 && vr == VR_STOP_AT) { m->stop_at = *(const double *)value; return 0; }
+    if (kind == K_F64 && vr == VR_ABORT_AT) { m->abort_at = *(const double *)value; return 0; }
     if (kind == K_I64 && vr == VR_OFFSET) { m->offset = *(const int64_t *)value; return 0; }
     if (kind == K_STR && vr == VR_LABEL) {
         const char *text = *(const char *const *)value;
@@ -100,6 +104,7 @@ static int model_step(struct Model *m, double t, double h, bool *terminate, char
         snprintf(message, size, "%s: step size %g is not positive", m->label, h);
         return -1;
     }
+    if (m->abort_at > 0.0 && t + h >= m->abort_at - 1e-9 * h) abort();   /* a crashing FMU */
     m->x = m->u + (m->x - m->u) * exp(-m->k * h);
     m->steps += 1;
     if (m->stop_at > 0.0 && t + h >= m->stop_at - 1e-9 * h) {

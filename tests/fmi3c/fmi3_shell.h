@@ -17,6 +17,7 @@
 #ifndef FMI3_SHELL_H
 #define FMI3_SHELL_H
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -137,7 +138,8 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     Instance *inst = instance;
-    if (inst->mode != MODE_INITIALIZATION) return refuse(instance, "fmi3ExitInitializationMode now");
+    if (inst->mode != MODE_INITIALIZATION)
+        return refuse(instance, "fmi3ExitInitializationMode now");
     inst->mode = MODE_STEP;
     return fmi3OK;
 }
@@ -345,6 +347,11 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     *terminateSimulation = false;
     *lastSuccessfulTime = currentCommunicationPoint;
     if (inst->mode != MODE_STEP) return refuse(instance, "fmi3DoStep outside step mode");
+    if (fabs(currentCommunicationPoint - inst->time) > 1e-9 * (1.0 + fabs(inst->time))) {
+        say(inst, fmi3Error, "logStatusError", "fmi3DoStep from t = %g s: the FMU is at t = %g s",
+            currentCommunicationPoint, inst->time);
+        return fmi3Error;
+    }
     if (model_step(&inst->model, currentCommunicationPoint, communicationStepSize, &terminate,
                    message, sizeof message) != 0) {
         say(inst, fmi3Error, "logStatusError", "%s", message);
@@ -368,7 +375,10 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
 }
 
 /* everything else: refused */
-fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return refuse(instance, "fmi3EnterEventMode"); }
+fmi3Status fmi3EnterEventMode(fmi3Instance instance)
+{
+    return refuse(instance, "fmi3EnterEventMode");
+}
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference vr,
                                                size_t *n)
