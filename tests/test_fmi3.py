@@ -198,6 +198,21 @@ def test_a_hosted_fmi3_fmu_crashing_is_named_in_its_fmi3_call(dahlquist, tmp_pat
                                "SIGABRT in fmi3DoStep at t = 0.49 s")
 
 
+def test_fmi3_units_are_compared_as_for_fmi2(fmi3_libraries, tmp_path):
+    """b's input u declared in seconds by the FMU (and its connector): the connection from
+    a's x in metres is refused before anything runs."""
+    fmu = fx.pack(fx.variant('<Float64 name="u" valueReference="4" causality="input" '
+                             'variability="continuous" unit="m"',
+                             '<Float64 name="u" valueReference="4" causality="input" '
+                             'variability="continuous" unit="s"'),
+                  fmi3_libraries["dahlquist3"], tmp_path / "Seconds.fmu")
+    connectors = [c if c[0] != "u" else ("u", "input", "Real", "s") for c in CONNECTORS]
+    with pytest.raises(NavfmuError) as info:
+        Simulation(load_model(_chain(tmp_path / "m", fmu, b_connectors=connectors)))
+    assert str(info.value) == ("connection a.x -> b.u: unit 'm' against 's' (a connection "
+                               "passes the value unchanged: give both ends one unit)")
+
+
 # -- refusals ------------------------------------------------------------------------------
 REFUSED = {
     "float32 output": (
