@@ -23,7 +23,8 @@ from orchestrator.cosim.fmi3_instance import Fmi3Instance
 from orchestrator.cosim.hosted_instance import HostedFmuInstance
 from orchestrator.cosim.isolation import Isolation
 from orchestrator.cosim.master import Simulation
-from orchestrator.errors import NavfmuError, SimulationError, WiringError
+from orchestrator.errors import (NavfmuError, NavfmuWarning, SimulationError,
+                                 SimulationTerminated, WiringError)
 from orchestrator.model.ssp_archive import load_model
 from test_export_package import export_equals_jacobi
 
@@ -147,17 +148,45 @@ def test_an_fmu_without_state_is_refused_by_name(fmi3_libraries, tmp_path):
                                "(canGetAndSetFMUstate is false)")
 
 
-def test_terminate_simulation_ends_the_run_in_one_line(dahlquist, tmp_path, navfmu_cli):
+END = ("component 'a' (Dahlquist3.fmu) ended the simulation at t = 0.5 s (fmi3DoStep "
+       "returned terminateSimulation): A: stop_at = 0.5 s reached")
+
+
+@pytest.mark.parametrize("isolate", ["never", "foreign"])
+def test_terminate_simulation_ends_the_run_cleanly(dahlquist, tmp_path, isolate):
+    """a asks to end at 0.5 s (in macro step 49, b not yet stepped): the results end at
+    0.49 s, the last point both reached, with their numbers, and a warning says so."""
     folder = _chain(tmp_path / "stops", dahlquist, {"stop_at": ("Real", 0.5)})
-    with pytest.raises(SimulationError) as info:
+    full = Simulation(load_model(folder), isolation=Isolation(isolate)).run(0.4)
+    with pytest.warns(NavfmuWarning) as caught:
+        r = Simulation(load_model(_chain(tmp_path / "stops", dahlquist,
+                                         {"stop_at": ("Real", 0.5)})),
+                       isolation=Isolation(isolate)).run()
+    assert [str(w.message) for w in caught] == [
+        END + "; the results end at t = 0.49 s, the last recorded communication point every "
+        "component reached"]
+    assert len(r.time) == 50 and r.time[-1] == pytest.approx(0.49)
+    assert r.metadata["stop_time"] == pytest.approx(0.49) and r.metadata["n_steps"] == 49
+    assert r.metadata["ended_by"] == {"component": "a", "time": 0.5, "message": END}
+    np.testing.assert_allclose(r.column("b", "x"), _expected_b(r.time, "gauss-seidel"),
+                               rtol=1e-12, atol=1e-15)
+    assert r.data["b"][:41].tobytes() == full.data["b"].tobytes()
+
+
+def test_terminate_simulation_keeps_the_run_in_the_cli(dahlquist, tmp_path, navfmu_cli):
+    folder = _chain(tmp_path / "stops", dahlquist, {"stop_at": ("Real", 0.5)})
+    code, out, err = navfmu_cli("run", folder, "--no-plots", "--format", "csv", "--out",
+                                tmp_path / "out")
+    assert code == 0, err
+    assert "navfmu: warning: " + END + "; the results end at t = 0.49 s" in err
+    assert (tmp_path / "out").is_dir()
+
+
+def test_terminate_simulation_before_the_first_row_fails_in_one_line(dahlquist, tmp_path):
+    folder = _chain(tmp_path / "stops", dahlquist, {"stop_at": ("Real", 0.01)})
+    with pytest.raises(SimulationTerminated) as info:
         Simulation(load_model(folder), isolation=Isolation("never")).run()
-    assert str(info.value) == ("component 'a' (Dahlquist3.fmu) ended the simulation at "
-                               "t = 0.5 s (fmi3DoStep returned terminateSimulation): "
-                               "A: stop_at = 0.5 s reached")
-    assert info.value.time == 0.5
-    code, out, err = navfmu_cli("run", folder, "--no-plots", "--out", tmp_path / "out")
-    assert code == 2 and err.splitlines() == ["navfmu: error: " + str(info.value)]
-    assert not (tmp_path / "out").exists()
+    assert str(info.value) == END.replace("0.5 s", "0.01 s")
 
 
 def test_verify_probes_drive_an_fmi3_fmu(dahlquist, tmp_path):

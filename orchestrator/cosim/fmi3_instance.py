@@ -15,9 +15,10 @@ extraction, log, messages and clean-up) whose FMI calls are FMI 3.0's:
   when read), the one-byte Boolean into the int32 Boolean buffers
   (:mod:`orchestrator.cosim.fmi3_variables` has the mapping and what is refused before
   anything runs);
-* ``fmi3DoStep``: a ``terminateSimulation`` it returns ends the run with a
-  :class:`~orchestrator.errors.SimulationError` saying which component asked at which time
-  (the FMU is then terminated and freed like every other);
+* ``fmi3DoStep``: a ``terminateSimulation`` it returns raises
+  :class:`~orchestrator.errors.SimulationTerminated` saying which component asked at which
+  time; the master ends the run there and keeps its rows (rule 9 of
+  :mod:`orchestrator.cosim.master`);
 * ``fmi3GetFMUState``/``fmi3SetFMUState``/``fmi3FreeFMUState`` when the FMU's
   ``canGetAndSetFMUState`` says it can.
 """
@@ -32,7 +33,7 @@ import numpy as np
 from .backends import NUMERIC_TYPES, FMI_INTEGER_MAX, FMI_INTEGER_MIN, coerce
 from .fmi3_variables import fmi_version
 from .fmu_instance import FmuInstance, _dispatch_log
-from ..errors import SimulationError
+from ..errors import SimulationError, SimulationTerminated
 
 #: FMI 3.0 type -> (numpy dtype, ctypes element type) of the values passed to get/set
 _C_TYPES = {"Float64": (np.float64, ctypes.c_double), "Int32": (np.int32, ctypes.c_int32),
@@ -167,7 +168,7 @@ class Fmi3Instance(FmuInstance):
         self.time = t + h
         if terminate.value:
             cause = self._cause_or_last()
-            raise SimulationError(
+            raise SimulationTerminated(
                 f"component '{self.name}' ({self.path.name}) ended the simulation at "
                 f"t = {t + h:.9g} s (fmi3DoStep returned terminateSimulation)"
                 + (f": {cause}" if cause else ""), component=self.name, time=t + h,

@@ -189,9 +189,10 @@ class Host:
 
 
 def _failure(exc: BaseException) -> bytes:
-    from ..errors import NavfmuError, SimulationError, WiringError
+    from ..errors import NavfmuError, SimulationError, SimulationTerminated, WiringError
 
-    kind = ("simulation" if isinstance(exc, SimulationError) else
+    kind = ("terminated" if isinstance(exc, SimulationTerminated) else
+            "simulation" if isinstance(exc, SimulationError) else
             "wiring" if isinstance(exc, WiringError) else
             "navfmu" if isinstance(exc, NavfmuError) else "internal")
     text = str(exc) if kind != "internal" else f"{type(exc).__name__}: {exc}"

@@ -44,7 +44,7 @@ from .fmu_host import (CALL, CALL_FILE, CALLS, CALLS_FMI3, DO_STEP, EXIT, FAILED
                        LOG_FILE, OK, SET, STEP, STEP_HEAD, read_exactly, step_layout,
                        typed_views, write_all)
 from .host_process import child_environment, ending
-from ..errors import NavfmuError, SimulationError, WiringError
+from ..errors import NavfmuError, SimulationError, SimulationTerminated, WiringError
 
 #: how often a wait for the host looks for Ctrl-C / SIGTERM [s]
 POLL_S = 0.1
@@ -245,9 +245,9 @@ class HostedFmuInstance(Instance):
 
     def _error(self, body) -> NavfmuError:
         kind, message = body["kind"], body["message"]
-        if kind == "simulation":
-            return SimulationError(message, component=self.name, time=body["time"],
-                                   log=tuple(body["log"]))
+        if kind in ("simulation", "terminated"):
+            cls = SimulationTerminated if kind == "terminated" else SimulationError
+            return cls(message, component=self.name, time=body["time"], log=tuple(body["log"]))
         if kind == "wiring":
             return WiringError(message)
         if kind == "navfmu":
