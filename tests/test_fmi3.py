@@ -179,7 +179,8 @@ def test_terminate_simulation_keeps_the_run_in_the_cli(dahlquist, tmp_path, navf
                                 tmp_path / "out")
     assert code == 0, err
     assert "navfmu: warning: " + END + "; the results end at t = 0.49 s" in err
-    assert (tmp_path / "out").is_dir()
+    rows = (tmp_path / "out" / "results.csv").read_text().splitlines()
+    assert len(rows) == 51 and rows[-1].startswith("0.49,")
 
 
 def test_terminate_simulation_before_the_first_row_fails_in_one_line(dahlquist, tmp_path):

@@ -149,7 +149,10 @@ class Fmi3Instance(FmuInstance):
         return self.real_out, self.int_out, self.bool_out
 
     def _check_int64(self, g: _Group) -> None:
-        bad = np.flatnonzero((g.values < FMI_INTEGER_MIN) | (g.values > FMI_INTEGER_MAX))
+        values = g.values
+        if FMI_INTEGER_MIN <= values.min() and values.max() <= FMI_INTEGER_MAX:
+            return
+        bad = np.flatnonzero((values < FMI_INTEGER_MIN) | (values > FMI_INTEGER_MAX))
         if len(bad):
             name = self.output_names["Integer"][g.positions[bad[0]]]
             raise SimulationError(
