@@ -24,6 +24,7 @@ from typing import Dict, Optional, Tuple
 from navcore.components import imu_sensor
 from navcore.core import signals
 
+from ..cosim.fmi3_variables import SUPPORTED_VERSIONS, variables_of
 from ..errors import NavfmuError
 
 ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver", "vehicle")
@@ -80,14 +81,16 @@ def read_fmu(path) -> FmuFacts:
     except Exception as exc:  # fmpy raises plain exceptions for broken archives
         raise NavfmuError(f"{p}: cannot read the FMU's model description: {exc}") from None
     cs = md.coSimulation
-    if cs is None:
-        raise NavfmuError(f"{p}: not a co-simulation FMU (verify runs FMI 2.0 co-simulation)")
+    if cs is None or md.fmiVersion not in SUPPORTED_VERSIONS:
+        raise NavfmuError(f"{p}: not a co-simulation FMU of FMI {' or '.join(SUPPORTED_VERSIONS)} "
+                          f"(verify runs FMI 2.0 and 3.0 co-simulation)")
     units = {}
     variables = {}
+    connector = variables_of(md, md.modelName, p)
     for v in md.modelVariables:
-        unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
+        unit = connector[v.name].unit
         units[v.name] = unit
-        variables[v.name] = Variable(v.name, v.causality, v.type, unit,
+        variables[v.name] = Variable(v.name, v.causality, connector[v.name].type, unit,
                                      None if v.start is None else str(v.start))
     step = md.defaultExperiment.stepSize if md.defaultExperiment is not None else None
     return FmuFacts(path=p.resolve(), model_name=md.modelName, variables=variables,
