@@ -23,6 +23,12 @@ KF-GINS key            filter parameter
 ``antlever``           ``lever_arm_x/y/z`` [m], body forward-right-down
 (GNSS file)           ``r_from_receiver`` = true; ``measurement`` = ``position`` (7 columns) or
                        ``position_velocity`` with ``r_vel_n/e/d`` [m/s] (13 columns)
+(not in KF-GINS)       ``imu_noise_factor``: 30 for a MEMS gyro (``arw`` 0.1 deg/sqrt(h) or
+                       more; its figures are a datasheet's, and a real MEMS IMU does worse),
+                       else 1 (:mod:`navcore.filters.process_noise_factor`);
+                       ``gnss_corr_time`` = 4.5 s, the correlation time of an RTK receiver's
+                       errors measured on a real drive (:mod:`navcore.filters.correlated_gnss`;
+                       ``docs/guide/your_real_log.md`` measures one's own)
 ``starttime``          not a filter parameter: the replay's ``--start`` (stated in the
                        ``.ssv`` and printed), with ``endtime`` (-1: the end) as ``--stop``
 =====================  ========================================================================
@@ -46,6 +52,8 @@ from pathlib import Path
 from typing import Any, Dict, List
 
 import numpy as np
+from navcore.filters.correlated_gnss import MEASURED_CORR_TIME
+from navcore.filters.process_noise_factor import recommended_factor
 from navcore.ins.constants import UG
 
 from ..errors import NavfmuError
@@ -100,7 +108,9 @@ def read_config(path) -> Dict[str, Any]:
          "q_accel_bias_instability_ug": ab * MGAL / UG, "q_accel_bias_tau_s": tau,
          **dict(zip(("lever_arm_x", "lever_arm_y", "lever_arm_z"),
                     _numbers(path, config, "antlever"))),
-         "measurement": "position", "r_from_receiver": True}
+         "measurement": "position", "r_from_receiver": True,
+         "imu_noise_factor": recommended_factor(max(_numbers(where, noise, "arw"))),
+         "gnss_corr_time": MEASURED_CORR_TIME}
     notes = [f"{key} (scale factors are not filter states)" for key in
              ("gsstd", "asstd") if key in noise]
     notes += [f"{key} = {config[key]} (the filters start with zero bias)"
