@@ -247,9 +247,12 @@ def correlation_time(t, err, outages) -> float:
 
 
 def short_warning(text: str) -> str:
-    """A run's warning as a table cell: the NIS warning's time, the inconsistency share."""
+    """A run's warning as a table cell: the NIS warning's time and the imu_noise_factor it
+    suggests, the inconsistency share."""
     if "NIS above" in text:
-        return "NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+        _, said, factor = text.partition("try imu_noise_factor = ")
+        return ("NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+                + (f" (factor {factor.split(' ')[0]})" if said else ""))
     if "is inconsistent" in text:
         return "inconsistent " + text.split(": ")[1].split(" of")[0]
     return text[:60]

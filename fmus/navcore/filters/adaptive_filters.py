@@ -179,8 +179,7 @@ class SageHusaFadingEngine(RowUpdates, GuardedEngine, KfEngine):
                       "r_floor_fraction", "r_max_scale", "r_floor_nominal")
 
     def __init__(self, config, nav, *, forgetting_factor, reserve_gamma, r_floor_fraction,
-                 max_fading_factor, r_max_scale, recovery, recovery_epochs,
-                 r_floor_nominal=False):
+                 max_fading_factor, r_max_scale, recovery, recovery_epochs, r_floor_nominal):
         super().__init__(config, nav)
         self.r_floor_nominal = bool(r_floor_nominal)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
