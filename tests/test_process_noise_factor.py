@@ -34,9 +34,9 @@ def test_the_factor_scales_every_part_of_q_by_its_square(name):
 
 
 def test_the_suggested_and_recommended_factors():
-    # sqrt(NIS / dof), times the factor in use, rounded up to one significant digit
-    assert suggested_factor(1.0, 6.05) == 3.0 and suggested_factor(10.0, 6.05) == 30.0
-    assert suggested_factor(1.0, 400.0) == 20.0 and suggested_factor(1.0, 401.0) == 30.0
+    # NIS / dof times the factor in use, rounded up to one significant digit
+    assert suggested_factor(1.0, 6.05) == 7.0 and suggested_factor(10.0, 6.05) == 70.0
+    assert suggested_factor(1.0, 20.0) == 20.0 and suggested_factor(1.0, 20.5) == 30.0
     assert suggested_factor(30.0, 0.5) == 30.0      # an NIS below its dof asks for no more
     # a MEMS gyro's figures are a datasheet's; a fibre-optic gyro's are not
     assert recommended_factor(0.228) == CONSUMER_IMU_NOISE_FACTOR == 30.0

@@ -61,11 +61,16 @@ def recommended_factor(gyro_arw_dpsh: float) -> float:
 
 def suggested_factor(factor: float, nis_ratio: float) -> float:
     """The factor to try when a run's NIS is ``nis_ratio`` times its dof (median over a
-    window) at ``factor``: ``factor`` times ``sqrt(nis_ratio)`` -- the innovations' spread
-    against the sigma the filter predicts -- rounded up to one significant digit (a value to
-    try and check on the data, not an estimate: the predicted position sigma grows more
-    slowly than the sigma of Q)."""
-    raw = factor * math.sqrt(max(nis_ratio, 1.0))
+    window) at ``factor``: ``factor`` times ``nis_ratio``, rounded up to one significant
+    digit.  The innovation's variance grows more slowly than Q: were it Q's sigma, the
+    factor would go by ``sqrt(nis_ratio)``; for a position-aided INS whose R is negligible
+    (the steady state of a double integrator with position fixes, position variance
+    proportional to ``q**0.25``; Brown & Hwang 2012, *Introduction to Random Signals and
+    Applied Kalman Filtering*, 4th ed., ch. 4 on steady-state Kalman filters) by
+    ``nis_ratio**2``.  The middle course is a value to try and check on the data: on the
+    real drive of docs/guide/your_real_log.md the filters' windows give 20-30 at the factor 1,
+    where 30 makes its sigma honest."""
+    raw = factor * max(nis_ratio, 1.0)
     scale = 10.0 ** math.floor(math.log10(raw))
     return math.ceil(raw / scale - 1e-9) * scale
 
