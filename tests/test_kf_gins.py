@@ -137,6 +137,10 @@ def test_config_becomes_a_filter_ssv_in_si_units(tmp_path, navfmu_cli):
     assert code == 0, err
     mems = {k: v for k, (_, v) in read_ssv(tmp_path / "log3" / "filter.ssv").items()}
     assert mems["imu_noise_factor"] == 30.0 and mems["q_gyro_arw_dpsh"] == 0.228
+    comment = (tmp_path / "log3" / "filter.ssv").read_text()
+    assert "imu_noise_factor 30 for a MEMS gyro" in comment and "gnss_corr_time 4.5 s" in comment
+    assert "imu_noise_factor 1 for a gyro better than MEMS" in (
+        tmp_path / "log" / "filter.ssv").read_text()
     (tmp_path / "bad.yaml").write_text(CONFIG.replace("initpos: [ 30.4447873701,", "initpos: ["))
     code, _, err = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt",
                               tmp_path / "gnss.txt", tmp_path / "log2", "--config",

@@ -149,6 +149,16 @@ def _or_none(t) -> str:
     return "none" if t is None else seconds_text(t)
 
 
+def _real_sensor_text(p) -> str:
+    """Why the .ssv sets ``imu_noise_factor`` and ``gnss_corr_time`` (module docstring)."""
+    grade = ("a MEMS gyro (arw >= 0.1 deg/sqrt(h)): its figures are a datasheet's, a real MEMS "
+             "IMU does worse" if p["imu_noise_factor"] != 1.0 else
+             "a gyro better than MEMS: its figures as given")
+    return (f"imu_noise_factor {p['imu_noise_factor']:g} for {grade}; gnss_corr_time "
+            f"{p['gnss_corr_time']:g} s for a receiver's errors correlated from fix to fix "
+            "(both measured on a real drive; docs/guide/your_real_log.md has the recipes)")
+
+
 def write_filter_ssv(settings, destination) -> str:
     """Write ``destination/filter.ssv`` from :func:`read_config`'s ``settings``; one line
     saying what was written and how to replay with it."""
@@ -160,7 +170,8 @@ def write_filter_ssv(settings, destination) -> str:
     text = ssv_text("filter", {}, typed)
     head, rest = text.split("\n", 1)
     body = (f"from {settings['source']}; KF-GINS starttime {_or_none(settings['start'])} s and "
-            f"endtime {_or_none(settings['stop'])} s: the replay's start and stop options"
+            f"endtime {_or_none(settings['stop'])} s: the replay's start and stop options; "
+            + _real_sensor_text(settings["parameters"])
             + (f"; not representable: {'; '.join(settings['notes'])}"
                if settings["notes"] else ""))
     comment = f"<!-- {body.replace('--', '- -')} -->"     # a comment holds no double hyphen
