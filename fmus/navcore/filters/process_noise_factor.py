@@ -65,8 +65,8 @@ def suggested_factor(factor: float, nis_ratio: float) -> float:
     digit.  The innovation's variance grows more slowly than Q: were it Q's sigma, the
     factor would go by ``sqrt(nis_ratio)``; for a position-aided INS whose R is negligible
     (the steady state of a double integrator with position fixes, position variance
-    proportional to ``q**0.25``; Brown & Hwang 2012, *Introduction to Random Signals and
-    Applied Kalman Filtering*, 4th ed., ch. 4 on steady-state Kalman filters) by
+    proportional to ``q**0.25``, the continuous steady state ``sqrt(2) q**0.25 r**0.75``
+    of the filter for white acceleration noise q and position noise r) by
     ``nis_ratio**2``.  The middle course is a value to try and check on the data: on the
     real drive of docs/guide/your_real_log.md the filters' windows give 20-30 at the factor 1,
     where 30 makes its sigma honest."""
