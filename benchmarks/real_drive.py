@@ -43,6 +43,8 @@ from scipy.signal import butter, filtfilt
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "fmus")]
 
+from navcore.filters.correlated_gnss import MEASURED_CORR_TIME  # noqa: E402
+from navcore.filters.process_noise_factor import CONSUMER_IMU_NOISE_FACTOR  # noqa: E402
 from navcore.ins import earth  # noqa: E402
 from navcore.ins.rotations import euler_to_dcm  # noqa: E402
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
@@ -64,6 +66,8 @@ DRIVE_PARAMETERS = {
     "filter.q_gyro_bias_instability_dph": 10.0, "filter.q_gyro_bias_tau_s": 100.0,
     "filter.q_accel_bias_instability_ug": 200.0, "filter.q_accel_bias_tau_s": 100.0,
     "filter.r_vel_n": 0.1, "filter.r_vel_e": 0.1, "filter.r_vel_d": 0.1,
+    "filter.imu_noise_factor": CONSUMER_IMU_NOISE_FACTOR,
+    "filter.gnss_corr_time": MEASURED_CORR_TIME,
 }
 OUTAGES = "120:130,220:250,440:500"
 AFTER_FIXES = 5
@@ -81,10 +85,11 @@ def tag_times(tag_file: Path):
     return seconds + fraction, float(records[0, 0]), float(records[-1, 0])
 
 
-def imu_samples(csv_file: Path, tag_file: Path):
+def imu_samples(csv_file: Path, tag_file: Path, start=None):
     """(UNIX GPST times [s], accel [m/s^2], gyro [rad/s]) in the sensor's axes: the counter
-    of the logger (column 7, ms) stretched to the tag file's first and last record; lines
-    without seven numbers (a cut-off last line) are left out."""
+    of the logger (column 7, ms) stretched to the tag file's first and last record, or with
+    ``start`` (UNIX GPST [s] of the first sample) taken as it is; lines without seven
+    numbers (a cut-off last line) are left out."""
     rows = []
     for line in csv_file.read_text().splitlines():
         parts = line.split(",")
@@ -93,8 +98,11 @@ def imu_samples(csv_file: Path, tag_file: Path):
         except ValueError:
             continue
     rows = np.array(rows)
-    start, ms0, ms1 = tag_times(tag_file)
     counter = rows[:, 6]
+    if start is not None:
+        times = start + (counter - counter[0]) / 1000.0
+        return times, rows[:, :3] * G0, np.radians(rows[:, 3:6])
+    start, ms0, ms1 = tag_times(tag_file)
     ms = ms0 + (counter - counter[0]) * (ms1 - ms0) / (counter[-1] - counter[0])
     return start + ms / 1000.0, rows[:, :3] * G0, np.radians(rows[:, 3:6])
 
@@ -132,16 +140,18 @@ def parse_outages(text: str):
     return [tuple(float(x) for x in part.split(":")) for part in text.split(",") if part]
 
 
-def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate) -> SensorLog:
+def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
+              imu_start=None) -> SensorLog:
     """The sensor log of ``drive`` in ``dst`` with ``outages`` (s after the first fix) cut
-    into the fixes and the uncut fixes as its truth."""
+    into the fixes and the uncut fixes as its truth (``imu_start``: :func:`imu_samples`'s
+    ``start``)."""
     pos = next(drive.glob("*.pos"))
     imu_csv = next(p for p in drive.glob("imu*.csv"))
     raw = dst / "raw"
     raw.mkdir(parents=True, exist_ok=True)
     print(convert_rtklib(pos, raw, time_scale="unix", force=True))
-    t, acc, gyr = body_imu(*imu_samples(imu_csv, imu_csv.with_suffix(".csv.tag")), misalign,
-                           time_offset, fs=rate)
+    t, acc, gyr = body_imu(*imu_samples(imu_csv, imu_csv.with_suffix(".csv.tag"), imu_start),
+                           misalign, time_offset, fs=rate)
     with tempfile.TemporaryDirectory() as tmp:
         body = Path(tmp) / "imu_body.csv"
         write_uniform_csv(body, t, acc, gyr, rate)
@@ -233,13 +243,16 @@ def correlation_time(t, err, outages) -> float:
         for y in (part - part.mean(axis=0)).T:
             ac = np.correlate(y, y, "full")[len(y) - 1:]
             times.append(float(np.argmax(ac / ac[0] < math.exp(-1.0))) * interval)
-    return float(np.median(times))
+    return float(np.median(times)) if times else float("nan")
 
 
 def short_warning(text: str) -> str:
-    """A run's warning as a table cell: the NIS warning's time, the inconsistency share."""
+    """A run's warning as a table cell: the NIS warning's time and the imu_noise_factor it
+    suggests, the inconsistency share."""
     if "NIS above" in text:
-        return "NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+        _, said, factor = text.partition("try imu_noise_factor = ")
+        return ("NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+                + (f" (factor {factor.split(' ')[0]})" if said else ""))
     if "is inconsistent" in text:
         return "inconsistent " + text.split(": ")[1].split(" of")[0]
     return text[:60]
@@ -288,6 +301,9 @@ def main(argv=None) -> int:
                    help="sensor-to-body Euler angles roll,pitch,yaw [deg]")
     p.add_argument("--time-offset", type=float, default=-0.125, help="[s] added to the IMU times")
     p.add_argument("--rate", type=float, default=100.0, help="[Hz] the IMU grid")
+    p.add_argument("--imu-start", type=float, default=None,
+                   help="[s] UNIX GPST time of the IMU file's first sample (without a .tag "
+                   "file: the counter taken as it is)")
     p.add_argument("--work", type=Path, default=None,
                    help="folder for the logs (default: temporary)")
     p.add_argument("--json", type=Path, default=None, help="write the numbers here too")
@@ -300,7 +316,7 @@ def main(argv=None) -> int:
     work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
     log, first = build_log(args.drive, work, outages,
                            [float(x) for x in args.misalign.split(",")], args.time_offset,
-                           args.rate)
+                           args.rate, args.imu_start)
     rows = {}
     for name in args.filters.split(","):
         try:

@@ -360,7 +360,8 @@ def inconsistency_warning(label, metrics):
         return None
     return (f"filter '{label}' is inconsistent: {outside:.0f} % of its position errors are "
             "outside +/-3 sigma (its reported sigmas understate its error; real GNSS errors "
-            "are biased and time-correlated)")
+            "are biased and time-correlated: gnss_corr_time; a real IMU does worse than its "
+            "datasheet: imu_noise_factor)")
 
 
 def nis_band95(updates, dof):

@@ -30,6 +30,7 @@ from ..filters.latency import SolutionHistory
 from .filter_batch import InsGnssFilterBatch
 from ..filters.correlated_gnss import CORRELATION_PARAMETERS, CorrelatedFixes
 from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
+from ..filters.process_noise_factor import IMU_NOISE_PARAMETERS
 from ..filters.recovery import RECOVERY_PARAMETERS
 from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
 from ..ins.rotations import euler_to_dcm
@@ -102,6 +103,7 @@ _FILTER_PARAMETERS = (
             "gnss_std_n/e/d, a replayed log's std_n/e/d) as the position part of R instead "
             "of r_pos_*", False),
     *CORRELATION_PARAMETERS,
+    *IMU_NOISE_PARAMETERS,
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -159,11 +161,13 @@ class InsGnssFilter(Component):
             bias_sigmas(p, p["p0_gyro_bias_dph"] * DPH, p["p0_accel_bias_ug"] * UG)])
         r = [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"], p["r_vel_n"], p["r_vel_e"], p["r_vel_d"]]
         gyro_bias0, accel_bias0 = given_biases(p)
+        k = p["imu_noise_factor"]       # navcore.filters.process_noise_factor
         return KfConfig(
-            p0=p0, gyro_arw=p["q_gyro_arw_dpsh"] * DPSH, accel_vrw=p["q_accel_vrw_ugpsHz"] * UG,
-            gyro_bias_sigma=p["q_gyro_bias_instability_dph"] * DPH,
+            p0=p0, gyro_arw=k * p["q_gyro_arw_dpsh"] * DPSH,
+            accel_vrw=k * p["q_accel_vrw_ugpsHz"] * UG,
+            gyro_bias_sigma=k * p["q_gyro_bias_instability_dph"] * DPH,
             gyro_bias_tau=p["q_gyro_bias_tau_s"],
-            accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
+            accel_bias_sigma=k * p["q_accel_bias_instability_ug"] * UG,
             accel_bias_tau=p["q_accel_bias_tau_s"],
             r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
             measurement=p["measurement"], lever_arm=lever_arm_of(p),
@@ -197,7 +201,7 @@ class InsGnssFilter(Component):
         self.pending = []            # fixes from the future: (gnss_time, lat, lon, h, v)
         self.n_stale = 0
         self.late_fixes = False      # a fix was applied in the past: dense checkpoints
-        self.nis_monitor = NisMonitor(p["nis_warning_s"])
+        self.nis_monitor = NisMonitor(p["nis_warning_s"], p["imu_noise_factor"])
         self.correlated = CorrelatedFixes(p["gnss_corr_time"])
         self.out = {q.name: q.default() for q in self.outputs}
         self.require("init_mode", p["init_mode"] in INIT_MODES, f"is not one of {INIT_MODES}")
