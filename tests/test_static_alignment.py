@@ -94,3 +94,21 @@ def test_the_rest_period_is_the_latest_run_of_windows_at_rest():
     for k in range(20):                     # the vehicle drives off: the rest stays
         det.add_interval(*(shaken if k % 2 else still), 0.1)
     assert det.rest_time == pytest.approx(6.0) and not det.resting
+
+
+def test_the_yaw_sigma_from_differenced_fixes_takes_the_receivers_sigmas_and_their_gap():
+    """Position fixes 1 s apart with the receiver's 0.1 m sigmas (r_from_receiver): the
+    velocity differenced from two fixes has sigma sqrt(2) 0.1 / 1 m/s, the course of a
+    1.8 m/s walk atan(0.141 / 1.8) = 4.5 deg (r_pos_* = 5 m would say 76 deg)."""
+    rng = np.random.default_rng(7)
+    f = registry.REGISTRY["Kf"](init_mode="static", init_lat=LAT, init_h=100.0,
+                                measurement="position", r_from_receiver=True,
+                                p0_att_yaw=math.radians(100.0))
+    f.start(0.0)
+    std = {f"gnss_std_{a}": 0.1 for a in "ned"}
+    for k in range(320):
+        f.advance(k * DT, DT, {**_imu(k, rng, False), **walk_fix(k, DT, 30.0), **std})
+        if f.out["aligned"]:
+            break
+    assert f.out["std_att_d"] == pytest.approx(math.atan(math.sqrt(2.0) * 0.1 / 1.8),
+                                               rel=1e-6)

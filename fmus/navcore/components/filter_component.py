@@ -316,6 +316,9 @@ class InsGnssFilter(Component):
         p = self.params
         config = self.make_config()
         r = np.array([p[f"r_{q}_{a}"] for q in ("pos", "vel") for a in "ned"])
+        std = self.initializer.start_std
+        if p["r_from_receiver"] and std is not None and np.all(std > 0):
+            r[:3] = std                 # the receiver's own sigmas of the fix started from
         config.p0 = self.initializer.start_sigmas(
             config.p0, r if self.initializer.use_fix_velocity else r[:3],
             max(math.hypot(v[0], v[1]), p["init_speed_min"]))

@@ -127,7 +127,7 @@ class Initializer:
 
     state_fields = ("done", "elapsed", "rest_dvel", "rest_dtheta", "rest_time", "all_dvel",
                     "all_dtheta", "previous_fix", "first_position", "checked", "warned",
-                    "first_fix_time", "fastest", "wait_warned")
+                    "first_fix_time", "fastest", "wait_warned", "velocity_gap", "start_std")
     derived_fields = ("mode", "speed_min", "align_time", "use_fix_velocity")
 
     def __init__(self, mode, speed_min=DEFAULT_INIT_SPEED, align_time=DEFAULT_ALIGN_TIME,
@@ -145,6 +145,8 @@ class Initializer:
         self.first_fix_time = None    # gnss: time of the first valid fix [s]
         self.fastest = 0.0            # ... and the largest horizontal speed since [m/s]
         self.wait_warned = False      # ... and the wait was warned of
+        self.velocity_gap = MAX_DIFFERENCED_FIX_GAP   # [s] between the fixes differenced
+        self.start_std = None         # the receiver's sigmas N/E/D of the fix started from
 
     # -- intervals -------------------------------------------------------------------------
     def add_interval(self, dtheta, dvel, dt, lat, h):
@@ -172,6 +174,7 @@ class Initializer:
         if previous is None or not 0.0 < t - previous[0] <= MAX_DIFFERENCED_FIX_GAP:
             return None
         t0, lat0, lon0, h0 = previous
+        self.velocity_gap = t - t0
         rn, re = earth.radii(lat)
         return np.array([(lat - lat0) * (rn + h), wrap_angle(lon - lon0) * (re + h)
                          * math.cos(lat), -(h - h0)]) / (t - t0)
@@ -197,6 +200,8 @@ class Initializer:
         else:
             roll, pitch = 0.0, math.atan2(-v[2], math.hypot(v[0], v[1]))
         yaw = math.atan2(v[1], v[0])
+        if len(fix) > 5:
+            self.start_std = np.array(fix[5], dtype=float)
         return lat_now, lon_now, h - v[2] * age, v, roll, pitch, yaw
 
     def waiting_warning(self, t):
@@ -242,7 +247,7 @@ class Initializer:
         if self.mode in FROM_FIX:
             p0[0:3] = np.maximum(p0[0:3], r_sigma[0:3])
             v_sigma = (r_sigma[3:6] if len(r_sigma) == 6 else
-                       math.sqrt(2.0) * r_sigma[0:3] / MAX_DIFFERENCED_FIX_GAP)
+                       math.sqrt(2.0) * r_sigma[0:3] / self.velocity_gap)
             p0[3:6] = np.maximum(p0[3:6], v_sigma)
             p0[8] = max(MIN_COURSE_SIGMA, math.atan2(float(max(v_sigma[:2])), speed))
             if self.rest_time == 0.0:
