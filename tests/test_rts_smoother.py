@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from filterpy.kalman import rts_smoother
 
+from navcore.components.smoothing import SmoothingSession
 from navcore.filters.rts_smoother import backward
 from orchestrator.cli.commands import main
 from orchestrator.results import metrics as nav_metrics
@@ -83,10 +84,16 @@ def _outage_errors(run):
 
 
 def test_smoothed_error_in_an_outage_is_far_below_the_forward_filter():
+    """One recording run (its rows are the forward filter's) and its smoothed solution laid
+    on them, as :func:`orchestrator.running.smoothing.smoothed_run` does."""
     model = scenarios.load_scenario(ROOT / "models" / "mems_outages")
-    common = dict(filter="Kf", stop_time=130.0, parameters=SIMULATED, log=None)
-    forward = scenarios.simulate_scenario(model, backend="direct", **common)
-    smoothed = smoothing.smoothed_run(model, **common)
+    session = SmoothingSession("Kf")
+    forward = scenarios.simulate_scenario(
+        model, filter="Kf", stop_time=130.0, parameters=SIMULATED, log=None, backend="direct",
+        components={"Kf": session.component_class})
+    solution = session.solution()
+    smoothed = scenarios.measured_run("Kf-smoothed", model,
+                                      smoothing.smoothed_results(forward.results, solution))
     rms_forward, e_f = _outage_errors(forward)
     rms_smoothed, e_s = _outage_errors(smoothed)
     # measured: 1.32 m forward, 0.28 m smoothed (the fixes' white 0.5 m noise averaged)
@@ -94,8 +101,9 @@ def test_smoothed_error_in_an_outage_is_far_below_the_forward_filter():
     assert rms_smoothed < 0.3 * rms_forward, (rms_smoothed, rms_forward)
     # at the last epoch the smoothed solution is the filtered one
     assert e_s["pos_n"][-1] == pytest.approx(e_f["pos_n"][-1], abs=1e-9)
-    assert smoothed.label == "Kf-smoothed"
-    assert smoothed.results.metadata["smoother"]["recording_mb"] < 5.0
+    # the recording: 6500 epochs of 20 floats and 131 updates of 262 (the tables grown by
+    # doubling from 1024 rows)
+    assert solution["recording_bytes"] == 8 * (8192 * 20 + 1024 * 262)
 
 
 def test_a_filter_the_smoother_does_not_support_is_refused(capsys, tmp_path):

@@ -21,13 +21,13 @@ x-_{j+1})`` becomes the line above because the forward state ``x-_{j+1}`` predic
 error state is the nominal state before the update (the error state is 0 between updates),
 and the nominal after the update is it less ``dx_{j+1}``.
 
-Memory (:class:`KfRecording`): per IMU epoch only the nominal state's first 15 strapdown
-columns, the specific force in NED and the interval (19 floats); per update the correction,
-the covariance after it and the nominal and biases after it.  The transitions ``Phi`` are
-rebuilt in the backward pass from the stored nominal states with the filter's own function
-(:func:`navcore.ins.error_model.transition_rows`), and the forward covariances of one
-stretch between two updates at a time (the longest stretch, an outage, sets the working
-memory: 15 s at 100 Hz is 1500 epochs of three 15 x 15 matrices, 8 MB).
+Memory (:class:`KfRecording`): per IMU epoch only the time, the interval, the nominal
+state's first 15 strapdown columns and the specific force in NED (20 floats); per update
+the correction, the covariance after it and the nominal and biases after it.  The
+transitions ``Phi`` are rebuilt in the backward pass from the stored nominal states with the
+filter's own function (:func:`navcore.ins.error_model.transition_rows`), and the forward
+covariances of one stretch between two updates at a time (the longest stretch, an outage,
+sets the working memory: 15 s at 100 Hz is 1500 epochs of three 15 x 15 matrices, 8 MB).
 """
 from __future__ import annotations
 
