@@ -3,8 +3,9 @@
 The backward pass against filterpy's independent ``rts_smoother`` on a linear model (the
 closed-loop form with the corrections against the textbook form on the states), and the
 smoother over a simulated MEMS INS/GNSS run with a 10 s GNSS outage: the smoothed position
-error inside the outage far below the forward filter's, the last epoch unchanged, and a
-filter the smoother does not support refused in one error line.
+error inside the outage far below the forward filter's, the last epoch unchanged; the
+recording through a rollback for late fixes; a filter the smoother does not support refused
+in one error line.
 """
 from __future__ import annotations
 
@@ -116,3 +117,31 @@ def test_a_filter_the_smoother_does_not_support_is_refused(capsys, tmp_path):
     first = err.strip().splitlines()[0]
     assert first.startswith("navfmu: error:") and "Ukf" in first and "Kf" in first
     assert not (tmp_path / "o").exists()
+
+
+def test_the_recording_follows_a_rollback_for_late_fixes():
+    """Fixes delivered 0.3 s after their time make the filter roll back and integrate again
+    (navcore.filters.latency): the recording keeps one epoch per IMU interval, in time
+    order, and one update per fix at the epoch of its time."""
+    from walk_inputs import LAT, walk_fix
+
+    session = SmoothingSession("Kf")
+    f = session.component_class(init_lat=LAT, init_h=100.0, init_vn=1.08, init_ve=1.44)
+    f.start(0.0)
+    dt, g = 0.1, 9.80665
+    for k in range(100):
+        late = walk_fix(k - 3, dt) if k >= 3 else {**walk_fix(k, dt), "gnss_valid": False,
+                                                    "gnss_epoch": 0}
+        f.advance(k * dt, dt, {"imu_time": (k + 1) * dt, "imu_dt": dt, "imu_dtheta_x": 0.0,
+                               "imu_dtheta_y": 0.0, "imu_dtheta_z": 0.0, "imu_dvel_x": 0.0,
+                               "imu_dvel_y": 0.0, "imu_dvel_z": -g * dt, **late})
+    assert f.late_fixes                                   # the filter did roll back
+    rec = f.recording
+    t = rec.epochs.rows[:, 0]
+    np.testing.assert_allclose(t, np.arange(101) * dt, atol=1e-9)
+    epochs = rec.updates.rows[:, 0].astype(int)
+    assert epochs[0] == 0 and np.all(np.diff(epochs) > 0)
+    np.testing.assert_allclose(t[epochs[1:]], np.arange(1, len(epochs)), atol=1e-9)
+    assert len(epochs) - 1 == 9                           # fixes at 1..9 s delivered by 9.9 s
+    out = session.solution()
+    assert len(out["time"]) == 101 and np.all(np.isfinite(out["lat"]))
