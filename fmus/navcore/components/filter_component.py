@@ -209,7 +209,8 @@ class InsGnssFilter(Component):
         why = check_static_mode(p["init_mode"], p["init_static_time"])
         self.require("init_static_time", why is None, why or "")
         self.static_bias = StaticBiasEstimator(p["init_static_time"])
-        self.rest = RestDetector(p["static_window"], p["static_accel_std"], p["static_rate_std"])
+        self.rest = (RestDetector(p["static_window"], p["static_accel_std"],
+                                  p["static_rate_std"]) if p["init_mode"] == "static" else None)
         self.out["aligned"] = self.initializer.done
         self._write_solution()
         self.write_diagnostics(None)  # extra outputs start from the engine's initial state
