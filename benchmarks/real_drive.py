@@ -35,6 +35,7 @@ import struct
 import sys
 import tempfile
 import warnings
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -50,7 +51,7 @@ from navcore.ins.rotations import euler_to_dcm  # noqa: E402
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
 from orchestrator.cli.convert import convert_imu_csv, convert_rtklib, imu_csv_spec  # noqa: E402
 from orchestrator.errors import NavfmuWarning  # noqa: E402
-from orchestrator.running import scenarios  # noqa: E402
+from orchestrator.running import scenarios, smoothing  # noqa: E402
 
 G0 = 9.80665                       # m/s^2 per g (the logger's unit)
 GPS_EPOCH_UNIX = 315964800.0       # 1980-01-06 in UNIX seconds
@@ -177,13 +178,15 @@ def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
 
 
 # -- the runs ---------------------------------------------------------------------------
-def run_filter(log_dir: Path, name: str, parameters):
-    """One replay of ``log_dir`` through filter ``name``: (run, the warnings it raised)."""
+def run_filter(log_dir: Path, name: str, parameters, smooth=False):
+    """One replay of ``log_dir`` through filter ``name`` (its smoothed solution with
+    ``smooth``, :mod:`orchestrator.running.smoothing`): (run, the warnings it raised)."""
     model = scenarios.load_scenario(ROOT / "models" / "replay_gnss_ins_sim")
+    simulate = smoothing.smoothed_run if smooth else partial(scenarios.simulate_scenario,
+                                                             backend="direct")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        run = scenarios.simulate_scenario(model, filter=name, backend="direct", log=None,
-                                          replay=log_dir, parameters=parameters)
+        run = simulate(model, filter=name, log=None, replay=log_dir, parameters=parameters)
     said = [str(w.message) for w in caught if issubclass(w.category, NavfmuWarning)]
     return run, list(dict.fromkeys(said))
 
@@ -225,7 +228,22 @@ def score(t, err, std, outages):
             "inside_3sigma_fix_pct": (100.0 * np.mean(inside[~in_outage], axis=0)).tolist(),
             "inside_3sigma_outage_pct": (100.0 * np.mean(inside[in_outage], axis=0)).tolist(),
             "nees": float(np.mean(ratio2.sum(axis=1))),
-            "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t))}
+            "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t)),
+            "outages_from_2": outage_score(t, err, outages[1:])}
+
+
+def outage_score(t, err, outages):
+    """The peer's scoring of the horizontal error over ``outages``: its RMS inside them, its
+    mean at their ends (the last fix epoch of each) and its largest value [m]."""
+    horizontal = np.hypot(err[:, 0], err[:, 1])
+    inside = [np.flatnonzero((t > a) & (t <= b)) for a, b in outages]
+    inside = [k for k in inside if len(k)]
+    if not inside:
+        return {}
+    every = np.concatenate(inside)
+    return {"rms": float(np.sqrt(np.mean(horizontal[every] ** 2))),
+            "end_mean": float(np.mean([horizontal[k[-1]] for k in inside])),
+            "max": float(np.max(horizontal[every]))}
 
 
 def correlation_time(t, err, outages) -> float:
@@ -307,6 +325,8 @@ def main(argv=None) -> int:
     p.add_argument("--work", type=Path, default=None,
                    help="folder for the logs (default: temporary)")
     p.add_argument("--json", type=Path, default=None, help="write the numbers here too")
+    p.add_argument("--smooth", action="store_true",
+                   help="add each filter's smoothed solution (a row '<filter>-smoothed')")
     args = p.parse_args(argv)
     outages = parse_outages(args.outages)
     parameters = dict(DRIVE_PARAMETERS)
@@ -318,15 +338,19 @@ def main(argv=None) -> int:
                            [float(x) for x in args.misalign.split(",")], args.time_offset,
                            args.rate, args.imu_start)
     rows = {}
-    for name in args.filters.split(","):
+    runs = [(name, False) for name in args.filters.split(",")]
+    if args.smooth:
+        runs += [(name, True) for name in args.filters.split(",")]
+    for name, smooth in runs:
+        label = name + smoothing.SMOOTHED_SUFFIX if smooth else name
         try:
-            run, said = run_filter(work / "log", name, parameters)
+            run, said = run_filter(work / "log", name, parameters, smooth)
             t, err, std = fix_epoch_errors(run, first)
-            rows[name] = {**score(t, err, std, outages), "warnings": said,
+            rows[label] = {**score(t, err, std, outages), "warnings": said,
                           "residual_corr_time_s": correlation_time(t, err, outages)}
         except Exception as exc:  # a filter that stops is a row of the table, not the end
-            rows[name] = {"error": str(exc).splitlines()[0][:120]}
-        print(name, json.dumps(rows[name]), flush=True)
+            rows[label] = {"error": str(exc).splitlines()[0][:120]}
+        print(label, json.dumps(rows[label]), flush=True)
     print(table(rows))
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))

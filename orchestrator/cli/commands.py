@@ -161,12 +161,12 @@ def _isolation():
 
 
 def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots, title,
-             replay=None, log_sensors=None):
+             replay=None, log_sensors=None, smooth=False):
     from .run_command import run_scenarios
 
     meta = click.get_current_context().meta
     run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
-                  echo=click.echo, ssv=ssv,
+                  echo=click.echo, ssv=ssv, smooth=smooth,
                   algorithm=meta.get("algorithm", ALGORITHMS[0]),
                   replay=replay, log_sensors=log_sensors,
                   replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")},
@@ -182,12 +182,16 @@ def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_p
               callback=nonempty_path,
               help="Also write the run's IMU, GNSS and truth signals as a sensor log to this "
               "folder (replay it with --replay).")
+@click.option("--smooth", is_flag=True,
+              help="Also write the filter's smoothed solution (Rauch-Tung-Striebel over the "
+              "recorded run; Kf) with its own metrics, as the run '<filter>-smoothed'.")
 @_common_run_options
-def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, ssv, fmt, no_plots,
-        replay):
+def run(scenario, filter_, log_sensors, smooth, out, stop, backend, window, sets, ssv, fmt,
+        no_plots, replay):
     """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
     _execute(scenario, [filter_], out, stop, backend, window, sets, ssv, fmt, no_plots,
-             title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors)
+             title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors,
+             smooth=smooth)
 
 
 @cli.command()

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from ..results import mission_metrics, outputs
-from ..running import prechecks, scenarios
+from ..running import prechecks, scenarios, smoothing
 from .cli_options import DEFAULT_OUT, parse_sets, parse_window
 from ..running.comparison import paper_comparison, report_table
 from ..running.comparison_text import format_comparison
@@ -84,6 +84,15 @@ def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, r
     return runs
 
 
+def _smoothed_run(model, filter, stop, window, parameters, replay, replay_options, algorithm):
+    """The smoothed run of ``filter`` (``--smooth``, :mod:`orchestrator.running.smoothing`)."""
+    with progress_bars() as progress_bar:
+        return smoothing.smoothed_run(
+            model, filter=filter, stop_time=stop, parameters=parameters, window=window,
+            progress=progress_bar("smoother"), algorithm=algorithm, log=None, replay=replay,
+            replay_options=replay_options)
+
+
 def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm, echo,
                   isolation=None):
     """The mission's baseline run (its ``mission.json``), reported under its label (kept in
@@ -101,14 +110,15 @@ def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm,
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
                   fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
                   replay=None, log_sensors=None, replay_options=None, isolation=None,
-                  ssv=()) -> None:
+                  ssv=(), smooth=False) -> None:
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
     ``navfmu-results/<model>``), each run with its progress bar.  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
     ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
     process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones).
-    ``ssv``: the ``--ssv`` items (:mod:`orchestrator.running.ssv_bindings`), under ``sets``."""
+    ``ssv``: the ``--ssv`` items (:mod:`orchestrator.running.ssv_bindings`), under ``sets``.
+    ``smooth``: also the smoothed run of the (single) filter, after the real-time one."""
     replay_options = {k: v for k, v in (replay_options or {}).items() if v is not None}
     if replay_options and replay is None:
         raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
@@ -120,8 +130,16 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     parameters = overrides(ssv, model, parse_sets(sets))
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
+    if smooth:
+        if fmt == "parquet":
+            raise NavfmuError("--smooth keeps the run's rows in memory: use --format csv or npz "
+                              "with it")
+        smoothing.check_smoothable(model, filters[0])
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
                          log_sensors, algorithm, echo, replay_options, isolation)
+    if smooth:
+        runs.append(_smoothed_run(model, filters[0], stop, window, parameters, replay,
+                                  replay_options, algorithm))
     baseline = scenarios.mission_baseline(model) if replay is None else None
     if baseline is not None:
         runs.append(_baseline_run(model, baseline, stop, backend, window, parameters,
