@@ -55,8 +55,8 @@ EDITS = {
                           'startConnector="truth_vn" endElement="gnss" endConnector="truth_h"'),
     "bound_in_furlong": ("gnss.ssv", '<ssv:Real value="5"/>',
                          '<ssv:Real value="5" unit="furlong"/>'),
-    "paper_row_text": ("paper.json", '"position_enu_m": [8.6003, 9.4141, 3.2837]',
-                       '"position_enu_m": "8.6 9.4 3.3"'),
+    "paper_row_text": ("paper.json", '"position_ned_m": [9.4141, 8.6003, 3.2837]',
+                       '"position_ned_m": "9.4 8.6 3.3"'),
 }
 
 KF = "{dist}/Kf.fmu"
@@ -90,8 +90,8 @@ BAD = {
     # -- models ---------------------------------------------------------------------------
     "paper_json_of_the_wrong_shape": (
         "paper_row_text", RUN,
-        "{scenario}/paper.json: table[0].position_enu_m: expected 3 numbers (east, north, up) "
-        "or null, got '8.6 9.4 3.3'"),
+        "{scenario}/paper.json: table[0].position_ned_m: expected 3 numbers (north, east, "
+        "down) or null, got '9.4 8.6 3.3'"),
     "ssd_without_connections": (
         "no_connections", RUN,
         "{scenario}/SystemStructure.ssd: the system structure has no <ssd:Connections>: no "

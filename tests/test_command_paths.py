@@ -219,7 +219,8 @@ def test_paper_rows_only_for_the_papers_scenario_over_its_length(navfmu_cli, tmp
                                 tmp_path / "o")
     assert code == 0, err
     assert "paper:" not in out and "no sample" not in err
-    assert "the paper's numbers are left out: the run stops at 2 s" in out
+    assert ("the paper's numbers are left out: the run spans 0-2 s, the paper's scenario "
+            "0-500 s") in out
     assert not (tmp_path / "o" / "report.json").exists()
 
 

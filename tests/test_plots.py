@@ -51,8 +51,8 @@ def test_single_filter_scale_from_errors_sigma_in_legend(figures, tmp_path):
     plots.plot_errors([_entry("InsOnly", err, 2e4)], tmp_path / "e.png")
     fig = figures[0]
     titles = [ax.get_title() for ax in fig.axes]
-    assert titles == ["position error E", "position error N", "position error U",
-                      "velocity error E", "velocity error N", "velocity error U",
+    assert titles == ["position error N", "position error E", "position error D",
+                      "velocity error N", "velocity error E", "velocity error D",
                       "attitude error roll", "attitude error pitch", "attitude error yaw"]
     pos_e = fig.axes[0]
     assert pos_e.get_ylim() == pytest.approx((-1.3, 1.3), rel=1e-3)  # not +-6e4
@@ -94,7 +94,7 @@ def test_several_filters_get_sliding_rms_on_a_log_scale(figures, tmp_path):
     entries = [_entry("Kf", 0.5 * np.ones(N), 1.0), _entry("InsOnly", 50.0 * np.ones(N), 2e4)]
     plots.plot_errors(entries, tmp_path / "e.png")
     ax = figures[0].axes[0]
-    assert ax.get_yscale() == "log" and ax.get_title() == "position error E: RMS over 10 s"
+    assert ax.get_yscale() == "log" and ax.get_title() == "position error N: RMS over 10 s"
     labels = ax.get_legend_handles_labels()[1]
     assert labels == ["Kf", "InsOnly", "Kf: 1 sigma (own)", "InsOnly: 1 sigma (own)"]
     kf_line = ax.get_lines()[0].get_ydata()

@@ -36,16 +36,20 @@ def _consistency_line(run, m) -> str:
 
 
 def _comparable_reference(model, stop, replay, echo):
-    """paper.json's numbers where the run is the paper's scenario over its length, else None
-    (a shorter run or a replayed log does not compare with the paper's table): said once."""
+    """paper.json's numbers where the run is the paper's scenario over its span (paper.json's
+    ``span_s``; without it, the model's experiment), else None (a shorter run, one started
+    later or a replayed log does not compare with the paper's table): said once."""
     reference = scenarios.paper_reference(model)
     if reference is None:
         return None
+    run_span = [model.start_time, model.stop_time if stop is None else stop]
+    paper_span = reference.get("span_s") or [model.start_time, model.stop_time]
     why = None
     if replay:
         why = "the sensors are a replayed log"
-    elif stop is not None and stop != model.stop_time:
-        why = f"the run stops at {stop:g} s, the paper's scenario at {model.stop_time:g} s"
+    elif run_span != paper_span:
+        why = (f"the run spans {run_span[0]:g}-{run_span[1]:g} s, the paper's scenario "
+               f"{paper_span[0]:g}-{paper_span[1]:g} s")
     if why:
         echo(f"(the paper's numbers are left out: {why})")
         return None

@@ -26,17 +26,13 @@ from .phases import shade_phases  # noqa: E402
 from .run_results import atomic_write  # noqa: E402
 
 #: the panels of the error plots, named as in the RMS tables: (group, unit, scale to the
-#: unit, [(axis label, error key, sign, sigma keys)]).  Position and velocity E/N/U (up = -down);
+#: unit, [(axis label, error key, sigma keys)]).  Position and velocity N/E/D;
 #: attitude as the Euler-angle errors roll/pitch/yaw of the tables, whose sigmas come from
 #: the filter's N/E/D tilt sigmas (see :func:`_attitude_sigmas`).
 _PANELS = (
-    ("position", "m", 1.0, [("E", "pos_e", 1.0, "std_pe"), ("N", "pos_n", 1.0, "std_pn"),
-                            ("U", "pos_d", -1.0, "std_pd")]),
-    ("velocity", "m/s", 1.0, [("E", "vel_e", 1.0, "std_ve"), ("N", "vel_n", 1.0, "std_vn"),
-                              ("U", "vel_d", -1.0, "std_vd")]),
-    ("attitude", "deg", math.degrees(1.0), [("roll", "att_roll", 1.0, "roll"),
-                                            ("pitch", "att_pitch", 1.0, "pitch"),
-                                            ("yaw", "att_yaw", 1.0, "yaw")]),
+    ("position", "m", 1.0, [(a.upper(), f"pos_{a}", f"std_p{a}") for a in nav_metrics.AXES]),
+    ("velocity", "m/s", 1.0, [(a.upper(), f"vel_{a}", f"std_v{a}") for a in nav_metrics.AXES]),
+    ("attitude", "deg", math.degrees(1.0), [(a, f"att_{a}", a) for a in nav_metrics.ATTITUDE]),
 )
 ATTITUDE_NOTE = ("attitude: Euler-angle errors roll/pitch/yaw as in the tables; their sigmas "
                  "come from the filter's tilt sigmas about N/E/D, turned by the heading psi: "
@@ -133,9 +129,9 @@ def plot_errors(entries, path, title=""):
     fig, axes = plt.subplots(3, 3, figsize=(14, 9.5), sharex=True)
     t = e["time"]
     for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
-        for col, (axis, key, sign, std) in enumerate(axes_spec):
+        for col, (axis, key, std) in enumerate(axes_spec):
             ax = axes[row, col]
-            err = np.where(invalid, np.nan, sign * e[key] * scale)
+            err = np.where(invalid, np.nan, e[key] * scale)
             ax.plot(t, err, color="C0", lw=0.8, label=f"{label} error")
             limit = _error_limit([err], e["valid"])
             sigma = _sigma(results, name, std, attitude)
@@ -186,7 +182,7 @@ def plot_error_rms(entries, path, title=""):
     window = max(RMS_WINDOW_S, RMS_WINDOW_FRACTION * span)
     widths = np.linspace(2.4, 0.9, len(entries))
     for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
-        for col, (axis, key, sign, std) in enumerate(axes_spec):
+        for col, (axis, key, std) in enumerate(axes_spec):
             ax = axes[row, col]
             sigmas = []
             for f_i, (label, results, name, e) in enumerate(entries):
@@ -486,7 +482,7 @@ def plot_outliers(entries, path, title=""):
 
 
 def plot_trajectory(results, truth_name, path, title=""):
-    """The truth: ground track, height, velocity east/north/up, speed, roll and pitch, yaw;
+    """The truth: ground track, height, velocity north/east/down, speed, roll and pitch, yaw;
     the title names the run's profile and span (:func:`run_title`)."""
     col = results.column
     t = col(truth_name, "truth_time")
@@ -505,7 +501,7 @@ def plot_trajectory(results, truth_name, path, title=""):
     axes[0, 1].plot(t, h)
     axes[0, 1].set_ylabel("height [m]")
     v = {a: col(truth_name, f"truth_v{a}") for a in "ned"}
-    for name, values in (("east", v["e"]), ("north", v["n"]), ("up", -v["d"])):
+    for name, values in (("north", v["n"]), ("east", v["e"]), ("down", v["d"])):
         axes[1, 0].plot(t, values, lw=0.8, label=name)
     axes[1, 0].set_ylabel("velocity [m/s]")
     axes[1, 0].legend(fontsize=8)
