@@ -103,12 +103,13 @@ def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm,
 
 
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
-                  fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
+                  fmt, no_plots, echo: Callable, algorithm="gauss-seidel",
                   replay=None, log_sensors=None, replay_options=None, isolation=None,
                   ssv=()) -> None:
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
-    ``navfmu-results/<model>``), each run with its progress bar.  ``replay_options``: the
+    ``navfmu-results/<model>``), each run with its progress bar; the figures are titled from
+    the runs (:func:`orchestrator.results.plots.figure_title`).  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
     ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
     process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones).
@@ -137,7 +138,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     if not runs[0].metrics:
         echo(f"\n{model.name}: no truth in the run (a sensor log without truth.csv): no "
              "metrics")
-        written = write_outputs(runs, out, fmt=fmt, plots_on=False, title=title)
+        written = write_outputs(runs, out, fmt=fmt, plots_on=False)
         echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
         return
     reference = _comparable_reference(model, stop, replay, echo)
@@ -164,7 +165,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     if text:
         echo(text)
     with progress_bars() as progress_bar:   # a long CSV takes seconds: show the writing
-        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
+        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots,
                                 reference=reference, comparison=comparison,
                                 progress=progress_bar("writing", unit="part"))
     echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))

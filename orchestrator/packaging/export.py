@@ -38,6 +38,7 @@ from typing import Dict, List, Set
 
 from navcore.core.start_text import start_text
 
+from ..building.build import binary_platforms
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
@@ -167,8 +168,7 @@ def _common_platforms(fmus) -> Set[str]:
     common = None
     for fmu in fmus:
         with zipfile.ZipFile(fmu) as z:
-            have = {n.split("/")[1] for n in z.namelist()
-                    if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+            have = binary_platforms(z.namelist())
         common = have if common is None else common & have
     return common or set()
 

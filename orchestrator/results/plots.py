@@ -105,6 +105,22 @@ def run_title(results, title="", truth_name=None):
     return ", ".join(parts)
 
 
+def figure_title(entries):
+    """Whose figure it is, from the run itself: the model's name, the filters' labels of
+    ``entries`` and, for the truth, its motion profile and the time span simulated
+    (:func:`run_title`), e.g. ``aircraft_500s: Kf, Iakf, profile 'climb', 0-500 s``."""
+    results = entries[0][1]
+    labels = ", ".join(dict.fromkeys(entry[0] for entry in entries))
+    model = (results.metadata or {}).get("model") or ""
+    truth = next((c for c in results.components if "truth_time" in results.columns[c]), None)
+    return run_title(results, f"{model}: {labels}" if model else labels, truth)
+
+
+def titled(what: str, title: str) -> str:
+    """A figure's title: what it shows, then whose it is (``title``, when given)."""
+    return f"{what}\n{title}" if title else what
+
+
 def _error_limit(values, valid):
     """Half-height of a panel: from the errors (their 99.9 % |error| quantile, plus 30 %),
     never from a sigma, so a diverging filter's envelope cannot flatten the others."""
@@ -151,7 +167,7 @@ def plot_errors(entries, path, title=""):
     for ax in axes.flat:  # the first panel, and every panel whose sigma is off its scale
         if ax is axes[0, 0] or any("beyond" in t for t in ax.get_legend_handles_labels()[1]):
             ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle(title or errors_caption(entries))
+    fig.suptitle(titled(errors_caption(entries), title))
     fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
     fig.tight_layout(rect=(0, 0.035, 1, 1))
     return _save(fig, path)
@@ -207,7 +223,7 @@ def plot_error_rms(entries, path, title=""):
     handles, labels = _legend_entries(axes.flat)
     fig.legend(handles, labels, loc="lower center", ncol=min(4, len(labels)), fontsize=8,
                frameon=False, bbox_to_anchor=(0.5, 0.03))
-    fig.suptitle(title or f"RMS errors over a sliding {window:g} s window")
+    fig.suptitle(titled(f"RMS errors over a sliding {window:g} s window", title))
     fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
     rows = 1 + (len(labels) - 1) // 4
     fig.tight_layout(rect=(0, 0.05 + 0.025 * rows, 1, 1))
@@ -259,7 +275,7 @@ def plot_attitude_errors(entries, path, title="", angles=nav_metrics.ATTITUDE):
             ax.grid(True, alpha=0.3)
     legend_outside(axes[0, 0])
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(title or ATTITUDE_ERRORS_CAPTION)
+    fig.suptitle(titled(ATTITUDE_ERRORS_CAPTION, title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -305,7 +321,7 @@ def plot_nis(entries, path, title=""):
     ax.set_ylabel("NIS")
     ax.grid(True, alpha=0.3)
     legend_outside(ax)
-    ax.set_title(title or "normalized innovation squared")
+    ax.set_title(titled("normalized innovation squared", title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -383,7 +399,7 @@ def plot_r_estimate(entries, path, title=""):
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, ncol=3, loc="best")
     axes[-1].set_xlabel("time [s]")
-    fig.suptitle(title or "estimated GNSS measurement noise (diagonal of R, as 1 sigma)")
+    fig.suptitle(titled("estimated GNSS measurement noise (diagonal of R, as 1 sigma)", title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -423,7 +439,7 @@ def plot_chi2(entries, path, title="", phases=()):
     ax.set_ylabel("chi-square statistic")
     ax.grid(True, alpha=0.3)
     legend_outside(ax)
-    ax.set_title(title or "chi-square statistic of the innovations")
+    ax.set_title(titled("chi-square statistic of the innovations", title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -476,7 +492,7 @@ def plot_outliers(entries, path, title=""):
     ax_ev.set_ylim(-len(rows) + 0.5, 0.5)
     ax_ev.grid(True, axis="x", alpha=0.3)
     ax_ev.set_xlabel("time [s]")
-    ax.set_title(title or "per-observation chi-square test and outlier epochs")
+    ax.set_title(titled("per-observation chi-square test and outlier epochs", title))
     fig.tight_layout()
     return _save(fig, path)
 

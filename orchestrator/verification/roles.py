@@ -21,6 +21,7 @@ from typing import Dict, Optional, Tuple
 
 from navcore.core import signals
 
+from ..building.build import binary_platforms
 from ..errors import NavfmuError
 
 ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver")
@@ -61,6 +62,21 @@ class FmuFacts:
         return {n: v for n, v in self.variables.items() if v.causality == "parameter"}
 
 
+def _check_runnable(path: Path, identifier: str) -> None:
+    """An FMU with neither a binary for this platform nor ``sources/`` to build one from
+    cannot run at all: one line, instead of every check failing on it."""
+    from fmpy import platform, sharedLibraryExtension
+
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+    binary = f"binaries/{platform}/{identifier}{sharedLibraryExtension}"
+    if binary in names or any(n.startswith("sources/") and not n.endswith("/") for n in names):
+        return
+    have = ", ".join(sorted(binary_platforms(names))) or "none"
+    raise NavfmuError(f"{path}: no binary for this platform ({binary}) and no sources/ to "
+                      f"build one from (the FMU has binaries for: {have})")
+
+
 def read_fmu(path) -> FmuFacts:
     """The facts of the FMU file ``path``; :class:`NavfmuError` naming the file when it is
     missing, not an FMU, or not a co-simulation FMU."""
@@ -78,6 +94,7 @@ def read_fmu(path) -> FmuFacts:
     cs = md.coSimulation
     if cs is None:
         raise NavfmuError(f"{p}: not a co-simulation FMU (verify runs FMI 2.0 co-simulation)")
+    _check_runnable(p, cs.modelIdentifier)
     units = {}
     variables = {}
     for v in md.modelVariables:
