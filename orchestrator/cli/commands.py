@@ -160,12 +160,12 @@ def _isolation():
                      meta.get("call_timeout", DEFAULT_CALL_TIMEOUT_S))
 
 
-def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots, title,
+def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots,
              replay=None, log_sensors=None, smooth=False):
     from .run_command import run_scenarios
 
     meta = click.get_current_context().meta
-    run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
+    run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
                   echo=click.echo, ssv=ssv, smooth=smooth,
                   algorithm=meta.get("algorithm", ALGORITHMS[0]),
                   replay=replay, log_sensors=log_sensors,
@@ -190,8 +190,7 @@ def run(scenario, filter_, log_sensors, smooth, out, stop, backend, window, sets
         no_plots, replay):
     """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
     _execute(scenario, [filter_], out, stop, backend, window, sets, ssv, fmt, no_plots,
-             title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors,
-             smooth=smooth)
+             replay=replay, log_sensors=log_sensors, smooth=smooth)
 
 
 @cli.command()
@@ -202,7 +201,7 @@ def compare(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_pl
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
     names = filter_names(filters)
     _execute(scenario, names, out, stop, backend, window, sets, ssv, fmt, no_plots,
-             title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
+             replay=replay)
 
 
 cli.add_command(convert)
@@ -464,8 +463,12 @@ def _write_system(scenario, out, module_name, **options):
     from ..running import scenarios
     from ..results.outputs import check_writable
 
+    from ..running.prechecks import check_initializes
+
     check_writable(out, "--out")
-    scenarios.ensure_fmus(scenarios.load_scenario(scenario), log=lambda m: click.echo(m, err=True))
+    model = scenarios.load_scenario(scenario)
+    scenarios.ensure_fmus(model, log=lambda m: click.echo(m, err=True))
+    check_initializes(model)        # a value its FMU refuses is not packaged
     writer = importlib.import_module(f"..packaging.{module_name}", __package__)
     click.echo(f"wrote {getattr(writer, module_name)(scenario, out, **options)}")
 

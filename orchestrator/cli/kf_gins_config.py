@@ -86,6 +86,10 @@ def read_config(path) -> Dict[str, Any]:
                           "corrtime)")
     where = f"{path} imunoise"
     lat, lon, h = _numbers(path, config, "initpos")
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0):
+        raise NavfmuError(f"{path}: key 'initpos': latitude {lat:g} deg, longitude {lon:g} "
+                          "deg: expected a latitude in [-90, 90] and a longitude in "
+                          "[-180, 360] deg")
     roll, pitch, yaw = (math.radians(x) for x in _numbers(path, config, "initatt"))
     att_std = [math.radians(x) for x in _numbers(path, config, "initattstd")]
     gb = max(_numbers(where, noise, "gbstd"))
@@ -157,6 +161,18 @@ def _real_sensor_text(p) -> str:
     return (f"imu_noise_factor {p['imu_noise_factor']:g} for {grade}; gnss_corr_time "
             f"{p['gnss_corr_time']:g} s for a receiver's errors correlated from fix to fix "
             "(both measured on a real drive; docs/guide/your_real_log.md has the recipes)")
+
+
+def remove_stale_ssv(destination) -> str:
+    """A log replaced without ``--config`` keeps no ``filter.ssv`` of the log it replaced
+    (that file's initial state and start time belong to the old data): removed, said in a
+    line (empty when there was none)."""
+    ssv = Path(destination) / SSV_NAME
+    if not ssv.is_file():
+        return ""
+    ssv.unlink()
+    return (f"removed {ssv}: the configuration of the replaced log (give --config to write "
+            "this log's)\n")
 
 
 def write_filter_ssv(settings, destination) -> str:

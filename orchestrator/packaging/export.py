@@ -39,6 +39,7 @@ from typing import Dict, List, Set
 from navcore.core.start_text import start_text
 
 from ..cosim.fmi3_variables import FMI3_TYPES, check_version
+from ..building.build import binary_platforms
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
@@ -192,8 +193,7 @@ def _common_platforms(fmus) -> Set[str]:
     common = None
     for fmu in fmus:
         with zipfile.ZipFile(fmu) as z:
-            have = {n.split("/")[1] for n in z.namelist()
-                    if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+            have = binary_platforms(z.namelist())
         have = {_FMI2_PLATFORMS.get(p, p) for p in have}
         common = have if common is None else common & have
     return common or set()

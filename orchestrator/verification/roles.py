@@ -25,6 +25,7 @@ from navcore.components import imu_sensor
 from navcore.core import signals
 
 from ..cosim.fmi3_variables import SUPPORTED_VERSIONS, variables_of
+from ..building.build import binary_platforms
 from ..errors import NavfmuError
 
 ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver", "vehicle")
@@ -66,6 +67,22 @@ class FmuFacts:
         return {n: v for n, v in self.variables.items() if v.causality == "parameter"}
 
 
+def _check_runnable(path: Path, identifier: str, version: str = "2.0") -> None:
+    """An FMU with neither a binary for this platform nor ``sources/`` to build one from
+    cannot run at all: one line, instead of every check failing on it."""
+    from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+    folder = platform_tuple if version == "3.0" else platform
+    binary = f"binaries/{folder}/{identifier}{sharedLibraryExtension}"
+    if binary in names or any(n.startswith("sources/") and not n.endswith("/") for n in names):
+        return
+    have = ", ".join(sorted(binary_platforms(names))) or "none"
+    raise NavfmuError(f"{path}: no binary for this platform ({binary}) and no sources/ to "
+                      f"build one from (the FMU has binaries for: {have})")
+
+
 def read_fmu(path) -> FmuFacts:
     """The facts of the FMU file ``path``; :class:`NavfmuError` naming the file when it is
     missing, not an FMU, or not a co-simulation FMU."""
@@ -84,6 +101,7 @@ def read_fmu(path) -> FmuFacts:
     if cs is None or md.fmiVersion not in SUPPORTED_VERSIONS:
         raise NavfmuError(f"{p}: not a co-simulation FMU of FMI {' or '.join(SUPPORTED_VERSIONS)} "
                           f"(verify runs FMI 2.0 and 3.0 co-simulation)")
+    _check_runnable(p, cs.modelIdentifier, md.fmiVersion)
     units = {}
     variables = {}
     connector = variables_of(md, md.modelName, p)
