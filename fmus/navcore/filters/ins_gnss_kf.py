@@ -290,6 +290,11 @@ class KfEngine:
         plain Kalman update and feedback, whatever the engine's own law for the fixes."""
         dx, P = linear_update(np.zeros(N_STATES), self.covariance(), z, H, R)
         self.apply(dx, P)
+        self.aid_applied(dx)
+
+    def aid_applied(self, dx):
+        """After :meth:`aid_update` fed back ``dx``: what a law keeps of past innovations
+        follows the corrected INS (a subclass's bookkeeping; nothing here)."""
 
     def apply(self, dx, P):
         """Closed-loop feedback of the estimated errors and reset of the accumulators."""

@@ -62,12 +62,12 @@ LAND_AID_PARAMETERS = (
          Limits(0.0, 60.0, low_open=True)),
     real("stationary_window_s", "s", "window of the stationarity detector", 0.5,
          Limits(0.0, 60.0, low_open=True)),
-    real("stationary_accel_std", "m/s2", "stationary when the moving standard deviation of "
-         "the specific force over the window is at most this", 0.15, _POSITIVE),
-    real("stationary_rate_rms", "rad/s", "... and the RMS of the bias-compensated angular "
-         "rate over the window is at most this", math.radians(0.5), _POSITIVE),
-    real("stationary_gnss_speed", "m/s", "... and the last fix's horizontal speed (within "
-         "1 s) at most this (0: GNSS speed not used)", 0.3, Limits(0.0, 1e3)),
+    real("stationary_accel_std", "m/s2", "stationary needs the moving standard deviation of "
+         "the specific force over the window at most this", 0.15, _POSITIVE),
+    real("stationary_rate_rms", "rad/s", "stationary needs the RMS of the bias-compensated "
+         "angular rate over the window at most this", math.radians(0.5), _POSITIVE),
+    real("stationary_gnss_speed", "m/s", "stationary needs the horizontal speed of a fix of "
+         "the last second at most this (0: GNSS speed not used)", 0.3, Limits(0.0, 1e3)),
     real("zupt_sigma", "m/s", "1-sigma of the zero-velocity pseudo-measurement", 0.01,
          _POSITIVE),
     real("zaru_sigma", "rad/s", "1-sigma of the zero angular-rate pseudo-measurement",
