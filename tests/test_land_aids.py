@@ -98,7 +98,8 @@ def test_detector_finds_the_car_stops_and_nothing_while_it_drives(car):
             times.append(row[col["imu_time"]])
             verdicts.append(detector.stationary())
     times, verdicts = np.array(times), np.array(verdicts)
-    speed = np.interp(times, sensors.time, np.hypot(*(sensors.truth[:, TRUTH_NAMES.index(f"truth_v{a}")] for a in "ne")))
+    vn, ve = (sensors.truth[:, TRUTH_NAMES.index(f"truth_v{a}")] for a in "ne")
+    speed = np.interp(times, sensors.time, np.hypot(vn, ve))
     inside = np.zeros(len(times), bool)
     for a, b in rests:
         inside |= (times >= a + window + 0.05) & (times <= b)
