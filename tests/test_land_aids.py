@@ -149,7 +149,9 @@ def test_every_filter_runs_with_the_aids(car, car_kf, name):
 def test_an_aid_update_leaves_the_adaptive_laws_alone(car, name):
     """After 10 s of the car at rest, one ZUPT through ``aid_update``: the filter's state moves
     (navigation, covariance, biases) and nothing of its law does (Sage-Husa R and index,
-    fading, robust histories, CTFA Q scale, IMM model probabilities, guards)."""
+    fading, robust test statistics, CTFA Q scale, IMM model probabilities, guards); only
+    NewtonRobustKf's stored observations follow the feedback, as after a fix: each shifted
+    by the correction H dx (position and velocity), none added."""
     sensors = car[0]
     run = run_filter(sensors, registry()[name], overrides={**FILTER_START, **DETECTOR},
                      stop_row=int(round(10.0 / sensors.h)))
@@ -163,13 +165,24 @@ def test_an_aid_update_leaves_the_adaptive_laws_alone(car, name):
     engine.aid_update(H, np.array([0.05, -0.03, 0.01]), np.eye(3) * 1e-4)
     after = capture(engine)
     moved = {"nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates", "ukf",
-             "bank"}
+             "bank", "history"}
+    stored = list(engine.history._values) if name == "NewtonRobustKf" else None
+    lat, lon, h, v = engine.nav.lat, engine.nav.lon, engine.nav.h, engine.nav.v_ned.copy()
     assert before["nav"] != after["nav"]
     for field in before:
         if field not in moved:
             assert repr(after[field]) == repr(before[field]), field
     if mu is not None:
         assert np.array_equal(engine.bank.mu, mu)
+    if stored is not None:             # z = INS - GNSS of position, velocity: less dr, dv
+        rn, re = earth.radii(lat)
+        dr = np.array([(lat - engine.nav.lat) * (rn + h),
+                       (lon - engine.nav.lon) * (re + h) * math.cos(lat), engine.nav.h - h,
+                       *(v - engine.nav.v_ned)])
+        shifted = list(engine.history._values)
+        assert len(shifted) == len(stored) > 0
+        for new_z, old_z in zip(shifted, stored):
+            assert np.allclose(new_z, old_z - dr, atol=1e-6)
 
 
 # -- the real drive's first seconds at rest --------------------------------------------
@@ -219,3 +232,22 @@ def test_zupt_and_zaru_on_the_real_car_at_rest():
     rest_rate = gyr[len(t) // 2:].mean(axis=0) - nav.C_bn.T @ earth.earth_rate_ned(lat)
     assert np.abs(np.degrees(aided.gyro_bias - rest_rate)).max() < 0.01
     assert np.linalg.norm(aided.nav.v_ned) < 0.01 < 0.1 < np.linalg.norm(free.nav.v_ned)
+
+
+@pytest.mark.parametrize("name", ("Kf", "ImmUkf"))
+def test_a_saved_state_with_aids_continues_bit_identically(car, name):
+    """The aids' detector window, accumulators and last fix are part of the filter's state:
+    a component rebuilt from a state saved at rest in the first outage (ZUPT and ZARU
+    applying, the NHC due when the car drives off) continues exactly like the original."""
+    sensors = car[0]
+    k = int(round(100.0 / sensors.h))
+    overrides = {**FILTER_START, **DETECTOR, **ALL_AIDS}
+    first = run_filter(sensors, registry()[name], overrides=overrides, stop_row=k).component
+    assert first.engine.aids.n_zupt > 0
+    copy_of = type(first).from_state(copy.deepcopy(first.get_state()))
+    stop = k + int(round(30.0 / sensors.h))
+    runs = [run_filter(sensors, component=c, start_row=k, stop_row=stop) for c in (first,
+                                                                                   copy_of)]
+    assert runs[0].component.engine.aids.n_nhc > 0
+    for name_out, values in runs[0].outputs.items():
+        assert np.array_equal(values, runs[1].outputs[name_out]), name_out
