@@ -72,6 +72,15 @@ DRIVE_PARAMETERS = {
 }
 OUTAGES = "120:130,220:250,440:500"
 AFTER_FIXES = 5
+#: the drive's own outage schedule (its drive_config.py: start_coast, coast_len, end_coast;
+#: GNSS_IMU.py waits twice the outage's length between outages): 15 s outages from 40 s
+#: after the first fix, one every 45 s, the last ending at least 30 s before the last fix
+PEER_SCHEDULE = (40.0, 15.0, 45.0, 30.0)
+#: the land aids of ``--aids`` (docs/guide/land_aids.md) and the drive's NHC geometry: the
+#: body frame is the car's (``--misalign``), the non-holonomic point 0.65 m below the IMU
+#: (the drive's ``imu_offset``)
+AIDS = ("zupt", "zaru", "nhc")
+NHC_PARAMETERS = {"filter.nhc_lever_z": 0.65}
 
 
 # -- the IMU ----------------------------------------------------------------------------
@@ -139,6 +148,18 @@ def write_uniform_csv(path: Path, t, acc, gyr, rate: float) -> None:
 def parse_outages(text: str):
     """``"120:130,220:250"`` -> [(120.0, 130.0), (220.0, 250.0)]."""
     return [tuple(float(x) for x in part.split(":")) for part in text.split(",") if part]
+
+
+def peer_outages(first_fix: float, last_fix: float, schedule=PEER_SCHEDULE):
+    """The outages (s after ``first_fix``) of the drive's own schedule :data:`PEER_SCHEDULE`
+    over fixes from ``first_fix`` to ``last_fix`` (seconds on one scale)."""
+    start, length, period, end_margin = schedule
+    last = last_fix - first_fix - end_margin
+    out, a = [], start
+    while a + length <= last:
+        out.append((a, a + length))
+        a += period
+    return out
 
 
 def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
@@ -228,22 +249,25 @@ def score(t, err, std, outages):
             "inside_3sigma_fix_pct": (100.0 * np.mean(inside[~in_outage], axis=0)).tolist(),
             "inside_3sigma_outage_pct": (100.0 * np.mean(inside[in_outage], axis=0)).tolist(),
             "nees": float(np.mean(ratio2.sum(axis=1))),
-            "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t)),
-            "outages_from_2": outage_score(t, err, outages[1:])}
+            "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t))}
 
 
 def outage_score(t, err, outages):
-    """The peer's scoring of the horizontal error over ``outages``: its RMS inside them, its
-    mean at their ends (the last fix epoch of each) and its largest value [m]."""
+    """The issue's scoring of the outages ``outages`` (the drive's own: its 2nd to last):
+    horizontal error at the reference fixes inside them: RMS, the mean over the outages of
+    the error at the last fix inside each (the outage's end), the largest."""
     horizontal = np.hypot(err[:, 0], err[:, 1])
-    inside = [np.flatnonzero((t > a) & (t <= b)) for a, b in outages]
-    inside = [k for k in inside if len(k)]
+    inside, ends = [], []
+    for a, b in outages:
+        k = np.flatnonzero((t > a) & (t <= b))
+        if len(k):
+            inside.append(horizontal[k])
+            ends.append(float(horizontal[k[-1]]))
     if not inside:
         return {}
     every = np.concatenate(inside)
-    return {"rms": float(np.sqrt(np.mean(horizontal[every] ** 2))),
-            "end_mean": float(np.mean([horizontal[k[-1]] for k in inside])),
-            "max": float(np.max(horizontal[every]))}
+    return {"outage_rms": float(np.sqrt(np.mean(every ** 2))),
+            "outage_end_mean": float(np.mean(ends)), "outage_max": float(every.max())}
 
 
 def correlation_time(t, err, outages) -> float:
@@ -300,6 +324,28 @@ def table(rows) -> str:
     return "\n".join(lines)
 
 
+def outage_table(rows) -> str:
+    """The issue's scoring (:func:`outage_score`) of every filter as a markdown table."""
+    lines = ["| filter | RMS in outages [m] | mean error at outage end [m] | max [m] |",
+             "|---|---:|---:|---:|"]
+    for name, r in rows.items():
+        if "outage_rms" in r:
+            lines.append(f"| {name} | {r['outage_rms']:.2f} | {r['outage_end_mean']:.2f} | "
+                         f"{r['outage_max']:.1f} |")
+    return "\n".join(lines)
+
+
+def peer_fixes_outages(drive: Path):
+    """:func:`peer_outages` over the fixes of the drive's RTKLIB solution."""
+    pos = next(drive.glob("*.pos"))
+    times = [line.split()[1] for line in pos.read_text().splitlines()
+             if line.strip() and not line.startswith("%")]
+    seconds = [sum(float(x) * f for x, f in zip(hms.split(":"), (3600.0, 60.0, 1.0)))
+               for hms in times]
+    shift = seconds[0] - math.floor(seconds[0])    # build_log counts from the whole second
+    return [(a + shift, b + shift) for a, b in peer_outages(seconds[0], seconds[-1])]
+
+
 def _value(text: str):
     """A ``--set`` value: a JSON number or true/false, else the text."""
     try:
@@ -311,7 +357,12 @@ def _value(text: str):
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("drive", type=Path, help="folder with the .pos, imu csv and .tag files")
-    p.add_argument("--outages", default=OUTAGES, help="a:b,... seconds after the first fix")
+    p.add_argument("--outages", default=OUTAGES,
+                   help="a:b,... seconds after the first fix, or 'peer': the drive's own "
+                        "schedule (15 s every 45 s from 40 s; scored on its 2nd to last)")
+    p.add_argument("--aids", default="",
+                   help="land aids to switch on: any of zupt,zaru,nhc (with nhc the drive's "
+                        "NHC point, NHC_PARAMETERS; --set over it)")
     p.add_argument("--filters", default=",".join(FILTERS))
     p.add_argument("--set", action="append", default=[], metavar="COMPONENT.NAME=VALUE",
                    help="a parameter over the drive's (repeatable)")
@@ -328,8 +379,15 @@ def main(argv=None) -> int:
     p.add_argument("--smooth", action="store_true",
                    help="add each filter's smoothed solution (a row '<filter>-smoothed')")
     args = p.parse_args(argv)
-    outages = parse_outages(args.outages)
+    peer = args.outages == "peer"
+    outages = peer_fixes_outages(args.drive) if peer else parse_outages(args.outages)
     parameters = dict(DRIVE_PARAMETERS)
+    for aid in filter(None, args.aids.split(",")):
+        if aid not in AIDS:
+            p.error(f"--aids: {aid!r} is not one of {', '.join(AIDS)}")
+        parameters[f"filter.{aid}"] = True
+        if aid == "nhc":
+            parameters.update(NHC_PARAMETERS)
     for item in args.set:
         key, _, value = item.partition("=")
         parameters[key] = _value(value)
@@ -347,11 +405,13 @@ def main(argv=None) -> int:
             run, said = run_filter(work / "log", name, parameters, smooth)
             t, err, std = fix_epoch_errors(run, first)
             rows[label] = {**score(t, err, std, outages), "warnings": said,
-                          "residual_corr_time_s": correlation_time(t, err, outages)}
+                           "residual_corr_time_s": correlation_time(t, err, outages),
+                           **outage_score(t, err, outages[1:] if peer else outages)}
         except Exception as exc:  # a filter that stops is a row of the table, not the end
             rows[label] = {"error": str(exc).splitlines()[0][:120]}
         print(label, json.dumps(rows[label]), flush=True)
     print(table(rows))
+    print(outage_table(rows))
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
     return 0

@@ -27,6 +27,7 @@ from ..filters.static_alignment import STATIC_PARAMETERS, RestDetector
 from ..filters.initial_biases import (INITIAL_BIAS_PARAMETERS, StaticBiasEstimator, bias_sigmas,
                                       check_static_mode, given_biases)
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
+from ..filters.land_aids import LAND_AID_PARAMETERS, LandAids
 from ..filters.latency import SolutionHistory
 from .filter_batch import InsGnssFilterBatch
 from ..filters.correlated_gnss import CORRELATION_PARAMETERS, CorrelatedFixes
@@ -107,6 +108,7 @@ _FILTER_PARAMETERS = (
             "of r_pos_*", False),
     *CORRELATION_PARAMETERS,
     *IMU_NOISE_PARAMETERS,
+    *LAND_AID_PARAMETERS,
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -181,7 +183,11 @@ class InsGnssFilter(Component):
         return {}
 
     def make_engine(self, config, nav):
-        return self.engine_class(config, nav, **self.engine_options())
+        """The engine, with the land aids (:mod:`navcore.filters.land_aids`) when any is on."""
+        engine = self.engine_class(config, nav, **self.engine_options())
+        if LandAids.wanted(self.params):
+            engine.aids = LandAids(self.params)
+        return engine
 
     def fresh_engine(self):
         """The engine as it starts, built from the parameters (validated first)."""
@@ -383,7 +389,10 @@ class InsGnssFilter(Component):
 
     def _integrate(self, increment):
         imu_time, dtheta, dvel, imu_dt = increment
-        self.engine.propagate(dtheta, dvel, imu_dt)
+        engine = self.engine
+        engine.propagate(dtheta, dvel, imu_dt)
+        if engine.aids is not None:
+            engine.aids.after_interval(engine, dtheta, dvel, imu_dt, imu_time)
         self.nav_time = imu_time
         if self.applies_fixes:
             self.history.record(increment, self.engine, self.max_fix_age + imu_dt,
@@ -459,6 +468,8 @@ class InsGnssFilter(Component):
         half an interval); the history restarts here."""
         z = self._measure(fix)
         self._applied(z, self.engine.update(z))
+        if self.engine.aids is not None:
+            self.engine.aids.note_fix(fix[0], fix[4])
 
     def _measure(self, fix):
         """The measurement ``z`` of ``fix`` (:meth:`_apply` before the engine's update)."""
