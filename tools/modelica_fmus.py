@@ -22,10 +22,11 @@ wheel lacks FMU export, so the compiler is built from the source distribution on
   cores (nice 10) with Rust 1.95; about 380 crates from crates.io, so the first build needs the
   network.  Later runs reuse the build.
 
-Rumoca gives every compiled FMU a new random GUID and stamps the generation time; this script
-makes the output deterministic: the GUID is replaced by a UUID-5 of the compiler version, the
-target, the model and the Modelica source, the time stamp by a fixed one, and the archive is
-written with sorted members and fixed dates.  The same source then gives the same FMU bytes.
+Rumoca gives every compiled FMU a new random GUID and a model identifier with another random
+UUID (``Rumoca_<uuid>``), and stamps the generation time; this script makes the output
+deterministic: each UUID is replaced by a UUID-5 of the compiler version, the target, the
+model and the Modelica source, the time stamp by a fixed one, and the archive is written with
+sorted members and fixed dates.  The same source then gives the same FMU bytes.
 """
 from __future__ import annotations
 
@@ -151,17 +152,24 @@ def build_driver(workspace: Path, jobs: int) -> Path:
     return workspace / "target" / "release" / DRIVER
 
 
+UUID = re.compile(r"[0-9a-f]{8}([-_])[0-9a-f]{4}\1[0-9a-f]{4}\1[0-9a-f]{4}\1[0-9a-f]{12}")
+
+
 def deterministic(fmu: Path, out: Path, model: str, target: str) -> None:
-    """Write ``fmu`` to ``out`` with a GUID derived from its inputs, a fixed time stamp,
-    sorted members and fixed dates (see the module docstring)."""
+    """Write ``fmu`` to ``out`` with its random UUIDs (the GUID or instantiation token, and
+    the one in the model identifier, spelt with underscores) replaced by UUID-5s of its
+    inputs, a fixed time stamp, sorted members and fixed dates (see the module docstring)."""
     with zipfile.ZipFile(fmu) as z:
         members = {name: z.read(name) for name in z.namelist() if not name.endswith("/")}
-    description = members["modelDescription.xml"].decode()
-    match = re.search(r'(?:guid|instantiationToken)="\{?([0-9a-f-]{36})\}?"', description)
-    if match is None:
+    found = []
+    for match in UUID.finditer(members["modelDescription.xml"].decode()):
+        key = match.group(0).replace("_", "-")
+        if key not in found:
+            found.append(key)
+    if not found:
         fail(f"{fmu}: no GUID found in its model description")
     seed = f"rumoca {VERSION} {target} {model} {hashlib.sha256(SOURCE.read_bytes()).hexdigest()}"
-    guid = str(uuid.uuid5(uuid.NAMESPACE_URL, seed))
+    new = {old: str(uuid.uuid5(uuid.NAMESPACE_URL, f"{seed} {i}")) for i, old in enumerate(found)}
     stamp = re.compile(r'generationDateAndTime="[^"]*"')
     tmp = out.with_suffix(".tmp")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
@@ -172,9 +180,13 @@ def deterministic(fmu: Path, out: Path, model: str, target: str) -> None:
             except UnicodeDecodeError:
                 pass
             else:
-                text = text.replace(match.group(1), guid)
+                for old, replacement in new.items():
+                    text = text.replace(old, replacement).replace(
+                        old.replace("-", "_"), replacement.replace("-", "_"))
                 text = stamp.sub(f'generationDateAndTime="{FIXED_STAMP}"', text)
                 data = text.encode()
+            if UUID.search(name):
+                fail(f"{fmu}: a UUID in the member name {name}")
             info = zipfile.ZipInfo(name, ZIP_DATE)
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16
