@@ -35,6 +35,7 @@ import struct
 import sys
 import tempfile
 import warnings
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -43,12 +44,14 @@ from scipy.signal import butter, filtfilt
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "fmus")]
 
+from navcore.filters.correlated_gnss import MEASURED_CORR_TIME  # noqa: E402
+from navcore.filters.process_noise_factor import CONSUMER_IMU_NOISE_FACTOR  # noqa: E402
 from navcore.ins import earth  # noqa: E402
 from navcore.ins.rotations import euler_to_dcm  # noqa: E402
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
 from orchestrator.cli.convert import convert_imu_csv, convert_rtklib, imu_csv_spec  # noqa: E402
 from orchestrator.errors import NavfmuWarning  # noqa: E402
-from orchestrator.running import scenarios  # noqa: E402
+from orchestrator.running import scenarios, smoothing  # noqa: E402
 
 G0 = 9.80665                       # m/s^2 per g (the logger's unit)
 GPS_EPOCH_UNIX = 315964800.0       # 1980-01-06 in UNIX seconds
@@ -64,9 +67,20 @@ DRIVE_PARAMETERS = {
     "filter.q_gyro_bias_instability_dph": 10.0, "filter.q_gyro_bias_tau_s": 100.0,
     "filter.q_accel_bias_instability_ug": 200.0, "filter.q_accel_bias_tau_s": 100.0,
     "filter.r_vel_n": 0.1, "filter.r_vel_e": 0.1, "filter.r_vel_d": 0.1,
+    "filter.imu_noise_factor": CONSUMER_IMU_NOISE_FACTOR,
+    "filter.gnss_corr_time": MEASURED_CORR_TIME,
 }
 OUTAGES = "120:130,220:250,440:500"
 AFTER_FIXES = 5
+#: the drive's own outage schedule (its drive_config.py: start_coast, coast_len, end_coast;
+#: GNSS_IMU.py waits twice the outage's length between outages): 15 s outages from 40 s
+#: after the first fix, one every 45 s, the last ending at least 30 s before the last fix
+PEER_SCHEDULE = (40.0, 15.0, 45.0, 30.0)
+#: the land aids of ``--aids`` (docs/guide/land_aids.md) and the drive's NHC geometry: the
+#: body frame is the car's (``--misalign``), the non-holonomic point 0.65 m below the IMU
+#: (the drive's ``imu_offset``)
+AIDS = ("zupt", "zaru", "nhc")
+NHC_PARAMETERS = {"filter.nhc_lever_z": 0.65}
 
 
 # -- the IMU ----------------------------------------------------------------------------
@@ -81,10 +95,11 @@ def tag_times(tag_file: Path):
     return seconds + fraction, float(records[0, 0]), float(records[-1, 0])
 
 
-def imu_samples(csv_file: Path, tag_file: Path):
+def imu_samples(csv_file: Path, tag_file: Path, start=None):
     """(UNIX GPST times [s], accel [m/s^2], gyro [rad/s]) in the sensor's axes: the counter
-    of the logger (column 7, ms) stretched to the tag file's first and last record; lines
-    without seven numbers (a cut-off last line) are left out."""
+    of the logger (column 7, ms) stretched to the tag file's first and last record, or with
+    ``start`` (UNIX GPST [s] of the first sample) taken as it is; lines without seven
+    numbers (a cut-off last line) are left out."""
     rows = []
     for line in csv_file.read_text().splitlines():
         parts = line.split(",")
@@ -93,8 +108,11 @@ def imu_samples(csv_file: Path, tag_file: Path):
         except ValueError:
             continue
     rows = np.array(rows)
-    start, ms0, ms1 = tag_times(tag_file)
     counter = rows[:, 6]
+    if start is not None:
+        times = start + (counter - counter[0]) / 1000.0
+        return times, rows[:, :3] * G0, np.radians(rows[:, 3:6])
+    start, ms0, ms1 = tag_times(tag_file)
     ms = ms0 + (counter - counter[0]) * (ms1 - ms0) / (counter[-1] - counter[0])
     return start + ms / 1000.0, rows[:, :3] * G0, np.radians(rows[:, 3:6])
 
@@ -132,16 +150,30 @@ def parse_outages(text: str):
     return [tuple(float(x) for x in part.split(":")) for part in text.split(",") if part]
 
 
-def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate) -> SensorLog:
+def peer_outages(first_fix: float, last_fix: float, schedule=PEER_SCHEDULE):
+    """The outages (s after ``first_fix``) of the drive's own schedule :data:`PEER_SCHEDULE`
+    over fixes from ``first_fix`` to ``last_fix`` (seconds on one scale)."""
+    start, length, period, end_margin = schedule
+    last = last_fix - first_fix - end_margin
+    out, a = [], start
+    while a + length <= last:
+        out.append((a, a + length))
+        a += period
+    return out
+
+
+def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
+              imu_start=None) -> SensorLog:
     """The sensor log of ``drive`` in ``dst`` with ``outages`` (s after the first fix) cut
-    into the fixes and the uncut fixes as its truth."""
+    into the fixes and the uncut fixes as its truth (``imu_start``: :func:`imu_samples`'s
+    ``start``)."""
     pos = next(drive.glob("*.pos"))
     imu_csv = next(p for p in drive.glob("imu*.csv"))
     raw = dst / "raw"
     raw.mkdir(parents=True, exist_ok=True)
     print(convert_rtklib(pos, raw, time_scale="unix", force=True))
-    t, acc, gyr = body_imu(*imu_samples(imu_csv, imu_csv.with_suffix(".csv.tag")), misalign,
-                           time_offset, fs=rate)
+    t, acc, gyr = body_imu(*imu_samples(imu_csv, imu_csv.with_suffix(".csv.tag"), imu_start),
+                           misalign, time_offset, fs=rate)
     with tempfile.TemporaryDirectory() as tmp:
         body = Path(tmp) / "imu_body.csv"
         write_uniform_csv(body, t, acc, gyr, rate)
@@ -167,13 +199,15 @@ def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate) -> S
 
 
 # -- the runs ---------------------------------------------------------------------------
-def run_filter(log_dir: Path, name: str, parameters):
-    """One replay of ``log_dir`` through filter ``name``: (run, the warnings it raised)."""
+def run_filter(log_dir: Path, name: str, parameters, smooth=False):
+    """One replay of ``log_dir`` through filter ``name`` (its smoothed solution with
+    ``smooth``, :mod:`orchestrator.running.smoothing`): (run, the warnings it raised)."""
     model = scenarios.load_scenario(ROOT / "models" / "replay_gnss_ins_sim")
+    simulate = smoothing.smoothed_run if smooth else partial(scenarios.simulate_scenario,
+                                                             backend="direct")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        run = scenarios.simulate_scenario(model, filter=name, backend="direct", log=None,
-                                          replay=log_dir, parameters=parameters)
+        run = simulate(model, filter=name, log=None, replay=log_dir, parameters=parameters)
     said = [str(w.message) for w in caught if issubclass(w.category, NavfmuWarning)]
     return run, list(dict.fromkeys(said))
 
@@ -218,6 +252,24 @@ def score(t, err, std, outages):
             "max": float(np.max(np.linalg.norm(err, axis=1))), "n": int(len(t))}
 
 
+def outage_score(t, err, outages):
+    """The issue's scoring of the outages ``outages`` (the drive's own: its 2nd to last):
+    horizontal error at the reference fixes inside them: RMS, the mean over the outages of
+    the error at the last fix inside each (the outage's end), the largest."""
+    horizontal = np.hypot(err[:, 0], err[:, 1])
+    inside, ends = [], []
+    for a, b in outages:
+        k = np.flatnonzero((t > a) & (t <= b))
+        if len(k):
+            inside.append(horizontal[k])
+            ends.append(float(horizontal[k[-1]]))
+    if not inside:
+        return {}
+    every = np.concatenate(inside)
+    return {"outage_rms": float(np.sqrt(np.mean(every ** 2))),
+            "outage_end_mean": float(np.mean(ends)), "outage_max": float(every.max())}
+
+
 def correlation_time(t, err, outages) -> float:
     """[s] the median over the axes and the stretches between outages of the 1/e time of the
     autocorrelation of the filter's error at the fixes: run on the Kf without
@@ -233,13 +285,16 @@ def correlation_time(t, err, outages) -> float:
         for y in (part - part.mean(axis=0)).T:
             ac = np.correlate(y, y, "full")[len(y) - 1:]
             times.append(float(np.argmax(ac / ac[0] < math.exp(-1.0))) * interval)
-    return float(np.median(times))
+    return float(np.median(times)) if times else float("nan")
 
 
 def short_warning(text: str) -> str:
-    """A run's warning as a table cell: the NIS warning's time, the inconsistency share."""
+    """A run's warning as a table cell: the NIS warning's time and the imu_noise_factor it
+    suggests, the inconsistency share."""
     if "NIS above" in text:
-        return "NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+        _, said, factor = text.partition("try imu_noise_factor = ")
+        return ("NIS@" + text.split("at t = ")[1].split(" s")[0] + "s"
+                + (f" (factor {factor.split(' ')[0]})" if said else ""))
     if "is inconsistent" in text:
         return "inconsistent " + text.split(": ")[1].split(" of")[0]
     return text[:60]
@@ -269,6 +324,28 @@ def table(rows) -> str:
     return "\n".join(lines)
 
 
+def outage_table(rows) -> str:
+    """The issue's scoring (:func:`outage_score`) of every filter as a markdown table."""
+    lines = ["| filter | RMS in outages [m] | mean error at outage end [m] | max [m] |",
+             "|---|---:|---:|---:|"]
+    for name, r in rows.items():
+        if "outage_rms" in r:
+            lines.append(f"| {name} | {r['outage_rms']:.2f} | {r['outage_end_mean']:.2f} | "
+                         f"{r['outage_max']:.1f} |")
+    return "\n".join(lines)
+
+
+def peer_fixes_outages(drive: Path):
+    """:func:`peer_outages` over the fixes of the drive's RTKLIB solution."""
+    pos = next(drive.glob("*.pos"))
+    times = [line.split()[1] for line in pos.read_text().splitlines()
+             if line.strip() and not line.startswith("%")]
+    seconds = [sum(float(x) * f for x, f in zip(hms.split(":"), (3600.0, 60.0, 1.0)))
+               for hms in times]
+    shift = seconds[0] - math.floor(seconds[0])    # build_log counts from the whole second
+    return [(a + shift, b + shift) for a, b in peer_outages(seconds[0], seconds[-1])]
+
+
 def _value(text: str):
     """A ``--set`` value: a JSON number or true/false, else the text."""
     try:
@@ -280,7 +357,12 @@ def _value(text: str):
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("drive", type=Path, help="folder with the .pos, imu csv and .tag files")
-    p.add_argument("--outages", default=OUTAGES, help="a:b,... seconds after the first fix")
+    p.add_argument("--outages", default=OUTAGES,
+                   help="a:b,... seconds after the first fix, or 'peer': the drive's own "
+                        "schedule (15 s every 45 s from 40 s; scored on its 2nd to last)")
+    p.add_argument("--aids", default="",
+                   help="land aids to switch on: any of zupt,zaru,nhc (with nhc the drive's "
+                        "NHC point, NHC_PARAMETERS; --set over it)")
     p.add_argument("--filters", default=",".join(FILTERS))
     p.add_argument("--set", action="append", default=[], metavar="COMPONENT.NAME=VALUE",
                    help="a parameter over the drive's (repeatable)")
@@ -288,30 +370,48 @@ def main(argv=None) -> int:
                    help="sensor-to-body Euler angles roll,pitch,yaw [deg]")
     p.add_argument("--time-offset", type=float, default=-0.125, help="[s] added to the IMU times")
     p.add_argument("--rate", type=float, default=100.0, help="[Hz] the IMU grid")
+    p.add_argument("--imu-start", type=float, default=None,
+                   help="[s] UNIX GPST time of the IMU file's first sample (without a .tag "
+                   "file: the counter taken as it is)")
     p.add_argument("--work", type=Path, default=None,
                    help="folder for the logs (default: temporary)")
     p.add_argument("--json", type=Path, default=None, help="write the numbers here too")
+    p.add_argument("--smooth", action="store_true",
+                   help="add each filter's smoothed solution (a row '<filter>-smoothed')")
     args = p.parse_args(argv)
-    outages = parse_outages(args.outages)
+    peer = args.outages == "peer"
+    outages = peer_fixes_outages(args.drive) if peer else parse_outages(args.outages)
     parameters = dict(DRIVE_PARAMETERS)
+    for aid in filter(None, args.aids.split(",")):
+        if aid not in AIDS:
+            p.error(f"--aids: {aid!r} is not one of {', '.join(AIDS)}")
+        parameters[f"filter.{aid}"] = True
+        if aid == "nhc":
+            parameters.update(NHC_PARAMETERS)
     for item in args.set:
         key, _, value = item.partition("=")
         parameters[key] = _value(value)
     work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
     log, first = build_log(args.drive, work, outages,
                            [float(x) for x in args.misalign.split(",")], args.time_offset,
-                           args.rate)
+                           args.rate, args.imu_start)
     rows = {}
-    for name in args.filters.split(","):
+    runs = [(name, False) for name in args.filters.split(",")]
+    if args.smooth:
+        runs += [(name, True) for name in args.filters.split(",")]
+    for name, smooth in runs:
+        label = name + smoothing.SMOOTHED_SUFFIX if smooth else name
         try:
-            run, said = run_filter(work / "log", name, parameters)
+            run, said = run_filter(work / "log", name, parameters, smooth)
             t, err, std = fix_epoch_errors(run, first)
-            rows[name] = {**score(t, err, std, outages), "warnings": said,
-                          "residual_corr_time_s": correlation_time(t, err, outages)}
+            rows[label] = {**score(t, err, std, outages), "warnings": said,
+                           "residual_corr_time_s": correlation_time(t, err, outages),
+                           **outage_score(t, err, outages[1:] if peer else outages)}
         except Exception as exc:  # a filter that stops is a row of the table, not the end
-            rows[name] = {"error": str(exc).splitlines()[0][:120]}
-        print(name, json.dumps(rows[name]), flush=True)
+            rows[label] = {"error": str(exc).splitlines()[0][:120]}
+        print(label, json.dumps(rows[label]), flush=True)
     print(table(rows))
+    print(outage_table(rows))
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
     return 0

@@ -37,6 +37,11 @@ class SimulationError(NavfmuError):
         self.log = tuple(log)
 
 
+class SimulationTerminated(SimulationError):
+    """A component asked to end the simulation (FMI 3.0 ``terminateSimulation``): the master
+    stops there and keeps what it recorded (rule 9 of :mod:`orchestrator.cosim.master`)."""
+
+
 class NavfmuWarning(UserWarning):
     """Something the user should know and can act on, though the command goes on (e.g. a
     scenario parameter the swapped-in filter does not have).  The command line prints each
@@ -48,5 +53,6 @@ class SkippedParametersWarning(NavfmuWarning):
     commands that swap every filter into every scenario on their own (``report``) expect it."""
 
 
-__all__ = ["NavfmuError", "SspError", "WiringError", "SimulationError", "NavfmuWarning",
+__all__ = ["NavfmuError", "SspError", "WiringError", "SimulationError", "SimulationTerminated",
+           "NavfmuWarning",
            "SkippedParametersWarning"]

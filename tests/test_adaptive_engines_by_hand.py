@@ -97,7 +97,8 @@ def test_masked_update_is_the_textbook_update_of_the_kept_components():
 # Sage-Husa + fading
 # ------------------------------------------------------------------------------------------
 SHF = dict(forgetting_factor=0.9, reserve_gamma=2.0, r_floor_fraction=0.04,
-           max_fading_factor=None, r_max_scale=4.0, recovery=False, recovery_epochs=5)
+           max_fading_factor=None, r_max_scale=4.0, recovery=False, recovery_epochs=5,
+           r_floor_nominal=False)
 
 
 def shf_by_hand(engine, v, b, gamma, cap=None, r_max=None):

@@ -5,7 +5,9 @@ before.  Plus the good side of the same inputs: a value given in km is taken in 
 
 Placeholders in a row: ``{scenario}`` (a private copy of aircraft_500s, edited by the row's
 ``edit``), ``{tmp}`` (the working folder), ``{dist}`` (the built FMUs), ``{full}`` (a folder on
-a 64 KiB tmpfs: a full disk).
+a 64 KiB tmpfs: a full disk), ``{models}`` (the repository's models).  Inputs made for the
+rows that name them (:data:`MADE`): KF-GINS files with a configuration of latitude 123 deg,
+a sensor log whose header hides a zero-width space, an FMU without binaries or sources.
 """
 from __future__ import annotations
 
@@ -55,8 +57,9 @@ EDITS = {
                           'startConnector="truth_vn" endElement="gnss" endConnector="truth_h"'),
     "bound_in_furlong": ("gnss.ssv", '<ssv:Real value="5"/>',
                          '<ssv:Real value="5" unit="furlong"/>'),
-    "paper_row_text": ("paper.json", '"position_enu_m": [8.6003, 9.4141, 3.2837]',
-                       '"position_enu_m": "8.6 9.4 3.3"'),
+    "negative_sigma": ("gnss.ssv", '<ssv:Real value="5"/>', '<ssv:Real value="-5"/>'),
+    "paper_row_text": ("paper.json", '"position_ned_m": [9.4141, 8.6003, 3.2837]',
+                       '"position_ned_m": "9.4 8.6 3.3"'),
 }
 
 KF = "{dist}/Kf.fmu"
@@ -65,6 +68,8 @@ S = "{scenario}"
 OUT = "{tmp}/out"
 RUN = ["run", S, "--stop", "1", "--no-plots", "--out", OUT]
 SSV_KM = "{tmp}/km.ssv"
+KFG = "{tmp}/kfgins"
+LOG = "{models}/replay_gnss_ins_sim/log"
 
 # id: (edit or None, command line, exact first line)
 BAD = {
@@ -90,8 +95,8 @@ BAD = {
     # -- models ---------------------------------------------------------------------------
     "paper_json_of_the_wrong_shape": (
         "paper_row_text", RUN,
-        "{scenario}/paper.json: table[0].position_enu_m: expected 3 numbers (east, north, up) "
-        "or null, got '8.6 9.4 3.3'"),
+        "{scenario}/paper.json: table[0].position_ned_m: expected 3 numbers (north, east, "
+        "down) or null, got '9.4 8.6 3.3'"),
     "ssd_without_connections": (
         "no_connections", RUN,
         "{scenario}/SystemStructure.ssd: the system structure has no <ssd:Connections>: no "
@@ -166,6 +171,39 @@ BAD = {
                                          "--out", OUT],
                                   f"--junit {SSV_KM}/junit.xml: cannot write into {SSV_KM}: "
                                   "not a folder"),
+    "verify_nan_parameter": (
+        None, ["verify", KF, "--set", "init_lat=nan", "--out", OUT],
+        "Kf.fmu refuses the parameter values given (init_lat=nan): component 'filter' "
+        "(Kf.fmu): parameter 'init_lat' = nan is outside the accepted range (-1.5708, 1.5708) "
+        "rad"),
+    "verify_fmu_without_binaries": (
+        None, ["verify", "{tmp}/nobin.fmu", "--out", OUT],
+        "{tmp}/nobin.fmu: no binary for this platform (binaries/linux64/Kf.so) and no "
+        "sources/ to build one from (the FMU has binaries for: none)"),
+    # -- package and export -----------------------------------------------------------------
+    "package_negative_sigma": (
+        "negative_sigma", ["package", S, "--out", "{tmp}/m.ssp"],
+        "component 'gnss' (GnssReceiver.fmu): parameter 'pos_sigma_n' = -5.0 is outside the "
+        "accepted range [0, 10000] m"),
+    "export_negative_sigma": (
+        "negative_sigma", ["export", S, "--out", "{tmp}/m.fmu"],
+        "component 'gnss' (GnssReceiver.fmu): parameter 'pos_sigma_n' = -5.0 is outside the "
+        "accepted range [0, 10000] m"),
+    # -- convert and replay -----------------------------------------------------------------
+    "kf_gins_latitude_123": (
+        None, ["convert", "kf-gins", f"{KFG}/imu.txt", f"{KFG}/gnss.txt", f"{KFG}/log",
+               "--config", f"{KFG}/lat123.yaml"],
+        f"{KFG}/lat123.yaml: key 'initpos': latitude 123 deg, longitude 114.472 deg: expected "
+        "a latitude in [-90, 90] and a longitude in [-180, 360] deg"),
+    "replay_stop_after_the_log": (
+        None, [*RUN[:2], "--replay", LOG, "--stop", "1000", "--no-plots", "--out", OUT],
+        f"--stop 1000: after the end of the log {LOG} (80.05 s); give a stop time up to it, "
+        "or no --stop to replay to the log's end"),
+    "replay_header_with_a_zero_width_space": (
+        None, [*RUN, "--replay", "{tmp}/zwsp_log"],
+        "--replay: {tmp}/zwsp_log/imu.csv, line 1: unknown column '\\u200btime [s]' "
+        "(columns of this file: time [s], dt [s], dtheta_x [rad], dtheta_y [rad], dtheta_z "
+        "[rad], dvel_x [m/s], dvel_y [m/s], dvel_z [m/s])"),
     # -- a full disk ----------------------------------------------------------------------
     "disk_full_run": (None, ["run", S, "--stop", "20", "--backend", "direct", "--out",
                              "{full}/out"],
@@ -177,6 +215,13 @@ BAD = {
     "disk_full_tune": (None, ["tune", S, "--params", "r_pos_n", "--generations", "1",
                               "--population", "2", "--stop", "0.5", "--out", "{full}/tune"],
                        "cannot write {full}/tune/fitness.png: No space left on device"),
+    "disk_full_convert": (None, ["convert", "kf-gins", f"{KFG}/imu.txt", f"{KFG}/gnss.txt",
+                                 "{full}/log"],
+                          "cannot write the sensor log {full}/log: No space left on device"),
+    "disk_full_package": (None, ["package", S, "--out", "{full}/m.ssp"],
+                          "cannot write {full}/m.ssp: No space left on device"),
+    "disk_full_export": (None, ["export", S, "--out", "{full}/m.fmu"],
+                         "cannot write {full}/m.fmu: No space left on device"),
 }
 
 
@@ -193,6 +238,40 @@ def full_disk(tmp_path):
     (folder / ".filler").write_bytes(b"\0" * max(free - 8192, 0))
     yield folder
     subprocess.run(["umount", str(folder)], check=True)
+
+
+def _kf_gins_inputs(folder: Path) -> None:
+    """KF-GINS IMU and GNSS files and a configuration whose latitude is 123 deg."""
+    from test_kf_gins import CONFIG, _kf_gins_files
+
+    folder.mkdir()
+    _kf_gins_files(folder, velocity=False)
+    config = CONFIG.replace("initpos: [ 30.4447873701,", "initpos: [ 123.0,")
+    assert config != CONFIG
+    (folder / "lat123.yaml").write_text(config)
+
+
+def _zero_width_space_log(folder: Path) -> None:
+    """The replay scenario's log with a zero-width space before its IMU header's first title
+    (invisible in a terminal)."""
+    shutil.copytree(fmu_build.ROOT / "models" / "replay_gnss_ins_sim" / "log", folder)
+    imu = folder / "imu.csv"
+    imu.write_text("\u200b" + imu.read_text(encoding="utf-8"), encoding="utf-8")
+
+
+def _fmu_without_binaries(path: Path) -> None:
+    """Kf.fmu without its binaries/ (and it has no sources/)."""
+    import zipfile
+
+    with zipfile.ZipFile(fmu_build.DIST / "Kf.fmu") as src, zipfile.ZipFile(path, "w") as dst:
+        for item in src.infolist():
+            if not item.filename.startswith("binaries/"):
+                dst.writestr(item, src.read(item))
+
+
+#: the inputs a row names, made before it runs: placeholder text -> maker(path)
+MADE = {"{tmp}/kfgins": _kf_gins_inputs, "{tmp}/zwsp_log": _zero_width_space_log,
+        "{tmp}/nobin.fmu": _fmu_without_binaries}
 
 
 def _listing(folder: Path):
@@ -233,6 +312,9 @@ def test_bad_input_is_one_line_and_leaves_nothing(capsys, tmp_path, monkeypatch,
     _ssv(tmp_path / "speed.ssv", "gnss.pos_sigma_n", "1", "m/s")
     _ssv(tmp_path / "km.ssv", "pos_sigma_n", "0.005", "km")
     values = _placeholders(tmp_path, scenario, request)
+    for name, make in MADE.items():
+        if any(a.startswith(name) for a in args):
+            make(Path(name.format(**values)))
     monkeypatch.chdir(tmp_path)
     before = _listing(tmp_path)
     with pytest.raises(SystemExit) as exc:
@@ -267,3 +349,56 @@ def test_ssv_value_in_km_is_taken_in_km(capsys, tmp_path):
     assert same[0] == same[1] and same[0]["position_rms_m"]["n"] > 0
     assert (tmp_path / "km" / "results.csv").read_bytes() == (
         tmp_path / "m" / "results.csv").read_bytes()
+
+
+def _run_ok(capsys, args):
+    with pytest.raises(SystemExit) as exc:
+        main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    assert exc.value.code == 0, err
+    return out, err
+
+
+def test_a_byte_order_mark_in_a_log_header_is_read_past(capsys, tmp_path):
+    """A log whose CSV files start with a UTF-8 byte-order mark (as spreadsheet programs
+    write them) replays exactly as the same log without it."""
+    log = fmu_build.ROOT / "models" / "replay_gnss_ins_sim" / "log"
+    bom = tmp_path / "bom_log"
+    shutil.copytree(log, bom)
+    for csv in bom.glob("*.csv"):
+        csv.write_bytes(b"\xef\xbb\xbf" + csv.read_bytes())
+    for name, folder in (("plain", log), ("bom", bom)):
+        _run_ok(capsys, ["run", MODEL, "--replay", folder, "--stop", "2", "--no-plots",
+                         "--backend", "direct", "--out", tmp_path / name])
+    assert (tmp_path / "bom" / "results.csv").read_bytes() == (
+        tmp_path / "plain" / "results.csv").read_bytes()
+
+
+def test_convert_force_without_config_removes_the_replaced_logs_ssv(capsys, tmp_path):
+    """filter.ssv written by --config describes the log it came with; replacing the log
+    with --force and no --config removes it (and says so) instead of keeping it stale."""
+    from test_kf_gins import CONFIG, _kf_gins_files
+
+    _kf_gins_files(tmp_path, velocity=False)
+    (tmp_path / "kf-gins.yaml").write_text(CONFIG)
+    files = [tmp_path / "imu.txt", tmp_path / "gnss.txt", tmp_path / "log"]
+    _run_ok(capsys, ["convert", "kf-gins", *files, "--config", tmp_path / "kf-gins.yaml"])
+    assert (tmp_path / "log" / "filter.ssv").is_file()
+    out, _ = _run_ok(capsys, ["convert", "kf-gins", *files, "--force"])
+    assert not (tmp_path / "log" / "filter.ssv").exists()
+    assert f"removed {tmp_path / 'log' / 'filter.ssv'}: the configuration of the replaced " \
+        "log" in out
+    assert sorted(p.name for p in (tmp_path / "log").iterdir()) == ["gnss.csv", "imu.csv"]
+
+
+def test_a_model_started_later_prints_no_paper_rows(capsys, tmp_path):
+    """The paper's 0-500 s numbers are not printed beside a run of the model started at
+    100 s (its own stop time, no --stop): the run's span is not the paper's."""
+    scenario = _scenario(tmp_path, None)
+    _edit(scenario / "SystemStructure.ssd", '<ssd:DefaultExperiment startTime="0.0" '
+          'stopTime="500.0">', '<ssd:DefaultExperiment startTime="100.0" stopTime="102.0">')
+    out, _ = _run_ok(capsys, ["run", scenario, "--no-plots", "--backend", "direct", "--out",
+                              tmp_path / "out"])
+    assert "paper:" not in out
+    assert ("(the paper's numbers are left out: the run spans 100-102 s, the paper's "
+            "scenario 0-500 s)") in out

@@ -14,8 +14,8 @@ from orchestrator.campaigns import campaign_summary as cs
 from orchestrator.campaigns import statistics as st
 
 ROOT = Path(__file__).resolve().parent.parent
-#: the papers' table order: position and velocity east, north, up, then roll, pitch, yaw
-NAV_KEYS = ["pos_e", "pos_n", "pos_u", "vel_e", "vel_n", "vel_u", "att_roll", "att_pitch",
+#: the tables' order: position and velocity north, east, down, then roll, pitch, yaw
+NAV_KEYS = ["pos_n", "pos_e", "pos_d", "vel_n", "vel_e", "vel_d", "att_roll", "att_pitch",
             "att_yaw"]
 MISSION_KEYS = ["cross_track_rms_m", "cross_track_max_m", "outage_cross_track_max_m",
                 "outage_position_error_max_m", "waypoint_miss_max_m"]
@@ -36,8 +36,8 @@ def _records(scales):
 
 def test_the_axes_in_table_order_and_only_those_every_run_has():
     assert [a[0] for a in cs.AXES] == NAV_KEYS + MISSION_KEYS
-    assert [a[3] for a in cs.AXES[:9]] == ["pos E", "pos N", "pos U", "vel E", "vel N",
-                                           "vel U", "roll", "pitch", "yaw"]
+    assert [a[3] for a in cs.AXES[:9]] == ["pos N", "pos E", "pos D", "vel N", "vel E",
+                                           "vel D", "roll", "pitch", "yaw"]
     assert [a[4] for a in cs.AXES] == ["m"] * 3 + ["m/s"] * 3 + ["deg"] * 3 + ["m"] * 5
     assert cs.AXES[2][1:3] == ("position_rms_m", "d") and cs.AXES[5][1:3] == (
         "velocity_rms_mps", "d")
@@ -65,18 +65,18 @@ def test_the_paper_numbers_of_paper_001():
     reference = json.loads((ROOT / "models" / "aircraft_500s" / "paper.json").read_text())
     paper = cs.paper_values(reference)
     assert sorted(paper) == ["Iakf", "Kf", "SageHusaFading"]
-    # Table 1 of paper 001: [east, north, up]
-    assert paper["Kf"] == {"pos_e": 8.6003, "pos_n": 9.4141, "pos_u": 3.2837,
-                           "vel_e": 0.5652, "vel_n": 0.9521, "vel_u": 0.3004}
-    assert paper["Iakf"]["vel_u"] == 0.086
+    # Table 1 of paper 001 (printed east, north, up: east 8.6003, north 9.4141, up 3.2837)
+    assert paper["Kf"] == {"pos_e": 8.6003, "pos_n": 9.4141, "pos_d": 3.2837,
+                           "vel_e": 0.5652, "vel_n": 0.9521, "vel_d": 0.3004}
+    assert paper["Iakf"]["vel_d"] == 0.086
 
 
 def test_paper_rows_without_a_filter_or_numbers_are_skipped():
     reference = {"table": [
-        {"label": "no filter", "position_enu_m": [1.0, 2.0, 3.0]},
-        {"filter": "", "position_enu_m": [1.0, 2.0, 3.0]},
+        {"label": "no filter", "position_ned_m": [1.0, 2.0, 3.0]},
+        {"filter": "", "position_ned_m": [1.0, 2.0, 3.0]},
         {"filter": "Kf"},                                       # no numbers at all
-        {"filter": "Iakf", "position_enu_m": [None, 2, None],
+        {"filter": "Iakf", "position_ned_m": [2, None, None],
          "attitude_deg": [0.1, 0.2, 0.3]}]}
     paper = cs.paper_values(reference)
     assert paper == {"Iakf": {"pos_n": 2.0, "att_roll": 0.1, "att_pitch": 0.2, "att_yaw": 0.3}}
@@ -105,8 +105,8 @@ def test_summary_of_one_filter_per_axis():
         {k: st.positive_interval([2.0, 4.0, 8.0])[k] for k in ("low", "high")})
     yaw = summary["axes"]["att_yaw"]["filters"]["Kf"]
     assert yaw["mean"] == pytest.approx(9 * 7.0 / 3.0)
-    assert (summary["axes"]["vel_u"]["label"], summary["axes"]["vel_u"]["unit"]) == (
-        "vel U", "m/s")
+    assert (summary["axes"]["vel_d"]["label"], summary["axes"]["vel_d"]["unit"]) == (
+        "vel D", "m/s")
     assert cs.summarize({})["runs"] == 0 and cs.summarize({})["provenance"] == {}
 
 
@@ -115,8 +115,8 @@ def test_summary_orderings_against_the_paper():
     # and SageHusaFading the same (paired differences 0, an interval [0, 0])
     records = _records({"Kf": [1.0, 2.0, 4.0], "SageHusaFading": [1.0, 2.0, 4.0],
                         "Iakf": [0.9, 1.9, 3.9]})
-    reference = {"table": [{"filter": "Kf", "position_enu_m": [3.0, 1.0, 2.0]},
-                           {"filter": "Iakf", "position_enu_m": [1.0, 2.0, 1.0]}]}
+    reference = {"table": [{"filter": "Kf", "position_ned_m": [1.0, 3.0, 2.0]},
+                           {"filter": "Iakf", "position_ned_m": [2.0, 1.0, 1.0]}]}
     summary = cs.summarize(records, reference)
     pos_e = summary["axes"]["pos_e"]
     assert pos_e["filters"]["Kf"]["paper"] == 3.0 and pos_e["filters"]["Iakf"]["paper"] == 1.0
@@ -137,7 +137,7 @@ def test_summary_orderings_against_the_paper():
 
 def test_a_paper_ordering_needs_two_ranked_filters():
     records = _records({"Kf": [1.0, 2.0], "Iakf": [0.5, 1.5]})
-    reference = {"table": [{"filter": "Kf", "position_enu_m": [3.0, 1.0, 2.0]}]}
+    reference = {"table": [{"filter": "Kf", "position_ned_m": [1.0, 3.0, 2.0]}]}
     pos_e = cs.summarize(records, reference)["axes"]["pos_e"]
     assert "orderings" in pos_e and "paper_ordering" not in pos_e
     assert "paper_ordering_supported" not in pos_e

@@ -219,7 +219,8 @@ def test_paper_rows_only_for_the_papers_scenario_over_its_length(navfmu_cli, tmp
                                 tmp_path / "o")
     assert code == 0, err
     assert "paper:" not in out and "no sample" not in err
-    assert "the paper's numbers are left out: the run stops at 2 s" in out
+    assert ("the paper's numbers are left out: the run spans 0-2 s, the paper's scenario "
+            "0-500 s") in out
     assert not (tmp_path / "o" / "report.json").exists()
 
 
@@ -274,6 +275,43 @@ def test_sigterm_while_writing_keeps_the_previous_folder(navfmu_cli, tmp_path):
     assert "Traceback" not in done.stderr and "navfmu: error" not in done.stderr
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert not _staging(tmp_path, "o")
+
+
+@pytest.mark.parametrize("command", [
+    ["export", MODEL, "--out", "{tmp}/m.fmu"],
+    ["package", MODEL, "--out", "{tmp}/m.ssp"],
+    ["convert", "gnss-ins-sim", GIS, "{tmp}/log"],
+], ids=["export", "package", "convert"])
+def test_ctrl_c_while_the_output_is_written_writes_nothing(tmp_path, command):
+    """Ctrl-C arriving while a command writes its output (sent by the test hook when the
+    first written file is about to be moved into place): exit 130 with 'navfmu: interrupted'
+    and nothing written, not the complete output followed by 'interrupted'.  The command's
+    temporary files are gone too."""
+    work = tmp_path / "work"
+    (work / "tmp").mkdir(parents=True)
+    args = [str(a).format(tmp=work) for a in command]
+    done = subprocess.run([sys.executable, "-m", "orchestrator.cli", *args],
+                          env=_env(**{SIGNAL_AT_ENV: "commit:INT", "TMPDIR": str(work / "tmp")}),
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 130, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "navfmu: interrupted"
+    assert "Traceback" not in done.stderr and "navfmu: error" not in done.stderr
+    assert _listing(work) == ["tmp"]
+
+
+def test_ctrl_c_during_verify_stops_at_the_next_probe_and_leaves_no_temporary_files(tmp_path):
+    """Ctrl-C during verify's FMI probes (at the first probe, by the test hook): exit 130
+    without running the rest, no report and no temporary folder (tables, probes) left."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    done = subprocess.run([sys.executable, "-m", "orchestrator.cli", "verify",
+                           str(fmu_build.DIST / "Kf.fmu"), "--out", str(tmp_path / "v")],
+                          env=_env(**{SIGNAL_AT_ENV: "verify-probe:INT", "TMPDIR": str(tmp)}),
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 130, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "navfmu: interrupted"
+    assert "pass" not in done.stdout and not (tmp_path / "v").exists()
+    assert list(tmp.iterdir()) == []
 
 
 def test_stale_staging_folder_of_a_killed_run_removed_by_the_next(navfmu_cli, tmp_path):

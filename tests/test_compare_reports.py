@@ -65,18 +65,18 @@ def test_improvement_and_ratios_on_constructed_metrics():
     assert metric_comparisons.rms_3d(filt, "velocity") == pytest.approx(0.05)
     assert metric_comparisons.improvement_percent(5.0, 1.0) == pytest.approx(80.0)
     assert metric_comparisons.rms_ratio(6.0, 1.5) == pytest.approx(4.0)
-    assert metric_comparisons.per_axis_enu(base, "position") == [4.0, 3.0, 0.0]  # E, N, U
+    assert metric_comparisons.per_axis(base, "position") == [3.0, 4.0, 0.0]  # N, E, D
 
     runs = [scenarios.Run("Kf", None, None, {"filter": base}),
             scenarios.Run("Robust", None, None, {"filter": filt})]
     ref = {"improvement_percent": {"baseline": "Kf", "filter": "Robust", "position": 76.0,
-                                   "velocity": 80.0, "position_ratio_enu": [6.07, 5.71, 2.39]}}
+                                   "velocity": 80.0, "position_ratio_ned": [5.71, 6.07, 2.39]}}
     comp = comparison.paper_comparison(runs, ref)
     items = {i["key"]: i for i in comp["improvement"]["items"]}
     assert items["position"]["ours"] == pytest.approx(80.0)
     assert items["velocity"]["ours"] == pytest.approx(90.0)
     assert items["position"]["paper"] == 76.0
-    ratio = items["position_ratio_enu"]["ours"]
+    ratio = items["position_ratio_ned"]["ours"]
     assert ratio[:2] == pytest.approx([5.0, 5.0]) and math.isnan(ratio[2])  # 0 / 0 -> nan
     text = comparison_text.format_comparison(comp)
     assert "ours 80.0 % lower, paper 76.0 %" in text
@@ -109,8 +109,8 @@ def test_rms_table_prints_dashes_for_missing_paper_numbers():
     assert _row(table, "paper: a").split()[2:] == ["-"] * 9
     assert _row(table, "paper: b").split()[2:] == ["1.0000", "-", "3.0000", "4.0000", "5.0000",
                                                    "6.0000", "0.5000", "0.6000", "0.7000"]
-    # ours in E, N, U order
-    assert _row(table, "ours").split()[1:4] == ["2.0000", "1.0000", "3.0000"]
+    # ours in N, E, D order
+    assert _row(table, "ours").split()[1:4] == ["1.0000", "2.0000", "3.0000"]
 
 
 # -- paper 004: aircraft_outliers ----------------------------------------------------------
@@ -176,7 +176,7 @@ def test_uav_report(uav, tmp_path):
     assert lines[2].startswith("Ukf ") and lines[3].startswith("paper: UKF ")
     assert lines[3].split()[-3:] == ["0.0780", "0.0690", "0.1680"]
     assert _row(table, "paper: CTFA-UKF").split()[-9:] == [
-        "0.7570", "0.9970", "1.0410", "0.0540", "0.0690", "0.0510", "0.0140", "0.0110", "0.0330"]
+        "0.9970", "0.7570", "1.0410", "0.0690", "0.0540", "0.0510", "0.0140", "0.0110", "0.0330"]
     assert _row(table, "paper: IMM-UKF")  # not run: listed at the end
     for label in ("Ukf", "CtfaUkf"):
         values = [float(x) for x in NUMBER.findall(_row(table, label))]
@@ -216,11 +216,11 @@ def test_aircraft_report(aircraft, tmp_path):
     comp = comparison.paper_comparison(runs, ref)
     items = {i["key"]: i for i in comp["improvement"]["items"]}
     kf, iakf = runs[0].metrics["filter"], runs[1].metrics["filter"]
-    expected = [kf["position_rms_m"][a] / iakf["position_rms_m"][a] for a in "end"]
-    assert items["position_ratio_enu"]["ours"] == pytest.approx(expected)
-    assert items["position_ratio_enu"]["paper"] == [6.07, 5.71, 2.39]
-    assert items["velocity_enu"]["ours"] == pytest.approx(
-        [100 * (1 - iakf["velocity_rms_mps"][a] / kf["velocity_rms_mps"][a]) for a in "end"])
+    expected = [kf["position_rms_m"][a] / iakf["position_rms_m"][a] for a in "ned"]
+    assert items["position_ratio_ned"]["ours"] == pytest.approx(expected)
+    assert items["position_ratio_ned"]["paper"] == [5.71, 6.07, 2.39]
+    assert items["velocity_ned"]["ours"] == pytest.approx(
+        [100 * (1 - iakf["velocity_rms_mps"][a] / kf["velocity_rms_mps"][a]) for a in "ned"])
     text = comparison_text.format_comparison(comp)
     assert "position RMS ratio Kf/Iakf" in text and "6.07" in text and "2.39" in text
     assert "time per filter cycle" not in text  # paper 001 gives no timing
@@ -241,7 +241,8 @@ def test_compare_cli_prints_the_report(capsys, tmp_path):
     # 16 s of a 500 s scenario: the paper's rows and improvements do not compare (the
     # formatted improvement line is checked above on a comparison of its own)
     assert "paper: robust Kalman filter" not in out and "paper 76.0 %" not in out
-    assert "the paper's numbers are left out: the run stops at 16 s" in out
+    assert ("the paper's numbers are left out: the run spans 0-16 s, the paper's scenario "
+            "0-500 s") in out
     assert "NewtonRobustKf: detected 2/2 injected epochs (100.0 %)" in out
     assert (out_dir / "report.json").is_file()
 

@@ -94,7 +94,7 @@ def test_fmu_state_serialized_and_loaded_continues_bit_identically(dist, name, s
     finally:
         a.close()
         b.close()
-    assert blob.startswith(MAGIC) and len(blob) < 50_000
+    assert blob.startswith(MAGIC) and len(blob) < 56_000   # ImmUkf, the largest: 52.4 kB (with the land aids and static alignment)
     assert np.array_equal(reference, again) and np.array_equal(reference, other)
 
 

@@ -75,7 +75,8 @@ def test_the_share_outside_is_pooled_over_the_axes_and_warns_above_half():
     assert inconsistency_warning("Iakf", m) == (
         "filter 'Iakf' is inconsistent: 67 % of its position errors are outside +/-3 sigma "
         "(its reported sigmas understate its error; real GNSS errors are biased and "
-        "time-correlated)")
+        "time-correlated: gnss_corr_time; a real IMU does worse than its datasheet: "
+        "imu_noise_factor)")
 
 
 def test_the_warning_starts_above_half_and_needs_sigmas():
@@ -94,4 +95,5 @@ def test_the_report_names_the_inconsistent_filter_and_its_runs():
     assert _inconsistent([plan]) == [
         "- drive: warning: filter 'Iakf' is inconsistent: 91 % of its position errors are "
         "outside +/-3 sigma (its reported sigmas understate its error; real GNSS errors are "
-        "biased and time-correlated) (in 2 of 3 runs)", ""]
+        "biased and time-correlated: gnss_corr_time; a real IMU does worse than its datasheet: "
+        "imu_noise_factor) (in 2 of 3 runs)", ""]

@@ -127,6 +127,20 @@ def test_config_becomes_a_filter_ssv_in_si_units(tmp_path, navfmu_cli):
     assert (values["lever_arm_x"], values["lever_arm_y"], values["lever_arm_z"]) == (
         0.136, -0.301, -0.184)
     assert values["r_from_receiver"] is True and values["measurement"] == "position"
+    # a navigation-grade gyro (arw 0.003 deg/sqrt(h)): its figures as given; the receiver's
+    # errors correlated over the time measured on a real drive
+    assert values["imu_noise_factor"] == 1.0 and values["gnss_corr_time"] == 4.5
+    (tmp_path / "mems.yaml").write_text(CONFIG.replace("arw: [0.003, 0.003, 0.003]",
+                                                       "arw: [0.228, 0.1, 0.05]"))
+    code, _, err = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt", tmp_path / "gnss.txt",
+                              tmp_path / "log3", "--config", tmp_path / "mems.yaml")
+    assert code == 0, err
+    mems = {k: v for k, (_, v) in read_ssv(tmp_path / "log3" / "filter.ssv").items()}
+    assert mems["imu_noise_factor"] == 30.0 and mems["q_gyro_arw_dpsh"] == 0.228
+    comment = (tmp_path / "log3" / "filter.ssv").read_text()
+    assert "imu_noise_factor 30 for a MEMS gyro" in comment and "gnss_corr_time 4.5 s" in comment
+    assert "imu_noise_factor 1 for a gyro better than MEMS" in (
+        tmp_path / "log" / "filter.ssv").read_text()
     (tmp_path / "bad.yaml").write_text(CONFIG.replace("initpos: [ 30.4447873701,", "initpos: ["))
     code, _, err = navfmu_cli("convert", "kf-gins", tmp_path / "imu.txt",
                               tmp_path / "gnss.txt", tmp_path / "log2", "--config",

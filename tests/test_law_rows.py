@@ -61,13 +61,15 @@ def test_the_row_statistics_give_each_run_the_floats_of_its_1d_calls():
 
 
 SHF = dict(forgetting_factor=0.9, reserve_gamma=2.0, r_floor_fraction=0.04,
-           max_fading_factor=None, r_max_scale=4.0, recovery=True, recovery_epochs=2)
+           max_fading_factor=None, r_max_scale=4.0, recovery=True, recovery_epochs=2,
+           r_floor_nominal=False)
 NEWTON = dict(chi2_threshold=6.635, newton_order=2, replacement_variance="propagated",
               recovery=True, recovery_epochs=2)
 
 
 @pytest.mark.parametrize("engine_class, options", [
     (SageHusaFadingEngine, SHF),
+    (SageHusaFadingEngine, dict(SHF, r_floor_nominal=True)),
     (SageHusaFadingEngine, dict(SHF, max_fading_factor=3.0, recovery=False)),
     (IakfEngine, dict(SHF, outlier_alpha=0.02)),
     (NewtonRobustKfEngine, NEWTON),

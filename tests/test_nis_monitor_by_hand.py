@@ -73,7 +73,13 @@ def test_the_message_counts_the_window_and_gives_the_median_ratio():
     assert text == ("at t = 10 s 10 of the last 10 updates (10 s) have an NIS above their "
                     "99 % chi-square band (median 1.6 times its edge): the filter's covariance "
                     "and the sigmas it reports understate its real errors (its Q, R or initial "
-                    "state do not match the sensors); warned once")
+                    "state do not match the sensors); warned once.  Q too small for a real "
+                    "IMU: try imu_noise_factor = 7 (now 1); GNSS errors correlated from fix to "
+                    "fix: set gnss_corr_time (docs/guide/your_real_log.md)")
+    # the factor: the median NIS per dof, 11.345 * 1.6 / 3 = 6.05, rounded up to one digit;
+    # from a factor of 10 in use, 60.5 -> 70
+    warned = _feed(NisMonitor(10.0, noise_factor=10.0), values)
+    assert "try imu_noise_factor = 70 (now 10)" in warned[0][1]
 
 
 def test_after_its_warning_the_monitor_is_silent_and_keeps_no_window():

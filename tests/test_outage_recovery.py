@@ -116,5 +116,6 @@ def test_the_nis_warning_and_the_3_sigma_percentages_reach_the_cli(capsys, tmp_p
     assert warnings[1] == (f"navfmu: warning: filter 'NewtonRobustKf' is inconsistent: "
                            f"{outside:.0f} % of its position errors are outside +/-3 sigma "
                            "(its reported sigmas understate its error; real GNSS errors are "
-                           "biased and time-correlated)")
+                           "biased and time-correlated: gnss_corr_time; a real IMU does "
+                           "worse than its datasheet: imu_noise_factor)")
     assert inside["inconsistent"] == warnings[1][len("navfmu: warning: "):]

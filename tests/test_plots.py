@@ -51,8 +51,8 @@ def test_single_filter_scale_from_errors_sigma_in_legend(figures, tmp_path):
     plots.plot_errors([_entry("InsOnly", err, 2e4)], tmp_path / "e.png")
     fig = figures[0]
     titles = [ax.get_title() for ax in fig.axes]
-    assert titles == ["position error E", "position error N", "position error U",
-                      "velocity error E", "velocity error N", "velocity error U",
+    assert titles == ["position error N", "position error E", "position error D",
+                      "velocity error N", "velocity error E", "velocity error D",
                       "attitude error roll", "attitude error pitch", "attitude error yaw"]
     pos_e = fig.axes[0]
     assert pos_e.get_ylim() == pytest.approx((-1.3, 1.3), rel=1e-3)  # not +-6e4
@@ -94,7 +94,7 @@ def test_several_filters_get_sliding_rms_on_a_log_scale(figures, tmp_path):
     entries = [_entry("Kf", 0.5 * np.ones(N), 1.0), _entry("InsOnly", 50.0 * np.ones(N), 2e4)]
     plots.plot_errors(entries, tmp_path / "e.png")
     ax = figures[0].axes[0]
-    assert ax.get_yscale() == "log" and ax.get_title() == "position error E: RMS over 10 s"
+    assert ax.get_yscale() == "log" and ax.get_title() == "position error N: RMS over 10 s"
     labels = ax.get_legend_handles_labels()[1]
     assert labels == ["Kf", "InsOnly", "Kf: 1 sigma (own)", "InsOnly: 1 sigma (own)"]
     kf_line = ax.get_lines()[0].get_ydata()
@@ -193,7 +193,8 @@ def test_chi2_and_nis_legends_sit_outside_the_data(figures, tmp_path):
         ax = fig.axes[0]
         assert _outside_axes(fig, ax)
         np.testing.assert_allclose(ax.lines[0].get_ydata(), nis)  # the series is the results'
-    assert figures[0].axes[0].get_title() == "aircraft_outliers"
+    assert figures[0].axes[0].get_title() == ("chi-square statistic of the innovations\n"
+                                              "aircraft_outliers")
 
 
 def test_trajectory_title_carries_the_runs_profile(figures, tmp_path):
@@ -210,6 +211,46 @@ def test_trajectory_title_carries_the_runs_profile(figures, tmp_path):
     title = figures[0]._suptitle.get_text()
     assert "profile 'uav_maneuver'" in title and "0-200 s" in title
     np.testing.assert_allclose(figures[0].axes[1].lines[0].get_ydata(), 100.0)
+
+
+def test_cli_figures_are_titled_from_the_run_not_the_folder(figures, tmp_path, capsys):
+    """navfmu compare on a copy of aircraft_500s in a folder of another name, flown on
+    another profile: every figure names the model, the filters it shows, the profile and
+    the span actually run, never the folder; the errors figure still says what it draws,
+    and its plotted error is the run's (the recorded results against the truth)."""
+    import json
+    import shutil
+
+    from orchestrator.building import build as fmu_build
+    from orchestrator.cli.commands import main
+    from orchestrator.results import metrics as nav_metrics
+
+    folder = tmp_path / "my_copy"
+    shutil.copytree(fmu_build.ROOT / "models" / "aircraft_500s", folder)
+    ssd = folder / "SystemStructure.ssd"
+    ssd.write_text(ssd.read_text().replace("../../fmus/dist/", f"{fmu_build.DIST}/"))
+    with pytest.raises(SystemExit) as exc:
+        main(["compare", str(folder), "--filters", "Kf,Iakf", "--stop", "3", "--backend",
+              "direct", "--set", "trajectory.profile=uav_maneuver", "--out",
+              str(tmp_path / "out")])
+    assert exc.value.code == 0, capsys.readouterr().err
+    run = "profile 'uav_maneuver', 0-3 s"
+    titles = {(fig._suptitle.get_text() if fig._suptitle else fig.axes[0].get_title())
+              for fig in figures}
+    assert all("my_copy" not in t for t in titles), titles
+    assert {t.split("\n")[-1] for t in titles} >= {
+        f"aircraft_500s: Kf, Iakf, {run}", f"aircraft_500s: Kf, {run}",
+        f"aircraft_500s: Iakf, {run}", f"truth trajectory: aircraft_500s, {run}"}
+    kf_errors = next(f for f in figures if f._suptitle and f._suptitle.get_text() == (
+        f"errors (solid) with the filter's own +-3 sigma (dashed)\naircraft_500s: Kf, {run}"))
+    results = Results.from_csv(tmp_path / "out" / "results_Kf.csv")
+    results.metadata = json.loads((tmp_path / "out" / "metrics.json").read_text())["Kf"][
+        "metadata"]
+    e = nav_metrics.navigation_errors(results, "filter")
+    drawn = kf_errors.axes[0].lines[0].get_ydata()       # position error N
+    np.testing.assert_allclose(drawn[e["valid"]], e["pos_n"][e["valid"]], rtol=1e-9,
+                               atol=1e-9)
+    assert np.isnan(drawn[~e["valid"]]).all()
 
 
 def test_mission_frame_is_around_the_route_at_equal_aspect(monkeypatch, tmp_path):

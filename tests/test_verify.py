@@ -65,7 +65,8 @@ def _verdicts(checks):
                                        ("UkfAhrs", "attitude_filter"),
                                        ("FuzzyUkfAhrs", "attitude_filter"),
                                        ("TrajectoryImu", "imu_sensor"),
-                                       ("GnssReceiver", "gnss_receiver")])
+                                       ("GnssReceiver", "gnss_receiver"),
+                                       ("GuidedUav", "vehicle")])
 def test_role_is_detected_from_the_variables(dist, name, role):
     assert roles.detect_role(roles.read_fmu(dist / f"{name}.fmu")) == role
 

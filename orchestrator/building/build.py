@@ -82,6 +82,13 @@ def has_binaries(fmu: Path) -> bool:
         return False
 
 
+def binary_platforms(names) -> set:
+    """The FMI 2.0 platforms (``binaries/<platform>/...``) the archive member ``names`` hold
+    a binary for."""
+    return {n.split("/")[1] for n in names
+            if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+
+
 def build_one(script: Path, dist: Path = DIST, library: Path = None) -> Path:
     """Build one FMU (always), with ``library`` as its Linux binary if given (else the
     wheel's), and return its path."""

@@ -16,17 +16,17 @@ from ..results import metrics as nav_metrics
 from ..results import mission_metrics
 from . import statistics as st
 
-#: (key, metrics group, metrics axis, label, unit), in the papers' table order
+#: (key, metrics group, metrics axis, label, unit), in the tables' order (north, east, down)
 AXES = tuple(
-    [(f"pos_{a}", "position_rms_m", k, f"pos {a.upper()}", "m")
-     for a, k in zip("enu", nav_metrics.ENU)]
-    + [(f"vel_{a}", "velocity_rms_mps", k, f"vel {a.upper()}", "m/s")
-       for a, k in zip("enu", nav_metrics.ENU)]
+    [(f"pos_{a}", "position_rms_m", a, f"pos {a.upper()}", "m")
+     for a in nav_metrics.AXES]
+    + [(f"vel_{a}", "velocity_rms_mps", a, f"vel {a.upper()}", "m/s")
+       for a in nav_metrics.AXES]
     + [(f"att_{a}", "attitude_rms_deg", a, a, "deg") for a in nav_metrics.ATTITUDE]
     # the mission metrics of a guided vehicle (orchestrator.results.mission_metrics), when
     # the runs have them
     + [(key, "mission", key, label, "m") for key, label in mission_metrics.SHORT_LABELS.items()])
-_PAPER_KEYS = {"position_rms_m": "position_enu_m", "velocity_rms_mps": "velocity_enu_mps",
+_PAPER_KEYS = {"position_rms_m": "position_ned_m", "velocity_rms_mps": "velocity_ned_mps",
                "attitude_rms_deg": "attitude_deg"}
 
 
@@ -53,7 +53,7 @@ def paper_values(reference: Optional[Mapping[str, Any]]) -> Dict[str, Dict[str, 
             values = row.get(_PAPER_KEYS[group])
             if name and values is not None:
                 i = (nav_metrics.ATTITUDE if group == "attitude_rms_deg"
-                     else nav_metrics.ENU).index(axis)
+                     else nav_metrics.AXES).index(axis)
                 if values[i] is not None:
                     out.setdefault(name, {})[key] = float(values[i])
     return out

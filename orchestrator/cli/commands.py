@@ -160,13 +160,13 @@ def _isolation():
                      meta.get("call_timeout", DEFAULT_CALL_TIMEOUT_S))
 
 
-def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots, title,
-             replay=None, log_sensors=None):
+def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots,
+             replay=None, log_sensors=None, smooth=False):
     from .run_command import run_scenarios
 
     meta = click.get_current_context().meta
-    run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots, title,
-                  echo=click.echo, ssv=ssv,
+    run_scenarios(scenario, filters, out, stop, backend, window, sets, fmt, no_plots,
+                  echo=click.echo, ssv=ssv, smooth=smooth,
                   algorithm=meta.get("algorithm", ALGORITHMS[0]),
                   replay=replay, log_sensors=log_sensors,
                   replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")},
@@ -182,12 +182,15 @@ def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_p
               callback=nonempty_path,
               help="Also write the run's IMU, GNSS and truth signals as a sensor log to this "
               "folder (replay it with --replay).")
+@click.option("--smooth", is_flag=True,
+              help="Also write the filter's smoothed solution (Rauch-Tung-Striebel over the "
+              "recorded run; Kf) with its own metrics, as the run '<filter>-smoothed'.")
 @_common_run_options
-def run(scenario, filter_, log_sensors, out, stop, backend, window, sets, ssv, fmt, no_plots,
-        replay):
+def run(scenario, filter_, log_sensors, smooth, out, stop, backend, window, sets, ssv, fmt,
+        no_plots, replay):
     """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
     _execute(scenario, [filter_], out, stop, backend, window, sets, ssv, fmt, no_plots,
-             title=f"{Path(scenario).name}", replay=replay, log_sensors=log_sensors)
+             replay=replay, log_sensors=log_sensors, smooth=smooth)
 
 
 @cli.command()
@@ -198,7 +201,7 @@ def compare(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_pl
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
     names = filter_names(filters)
     _execute(scenario, names, out, stop, backend, window, sets, ssv, fmt, no_plots,
-             title=f"{Path(scenario).name}: {', '.join(names)}", replay=replay)
+             replay=replay)
 
 
 cli.add_command(convert)
@@ -409,7 +412,7 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @cli.command()
 @click.argument("fmu", type=click.Path())
 @click.option("--role", type=click.Choice(["ins_gnss_filter", "attitude_filter", "imu_sensor",
-                                           "gnss_receiver"]),
+                                           "gnss_receiver", "vehicle"]),
               help="Force the role (default: detected from the FMU's variables).")
 @click.option("--scenario", "scenario_names", multiple=True, help="Scenario of the "
               "consistency runs (a models/ name or .ssd; repeatable; default: the role's).")
@@ -430,8 +433,9 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
 @click.pass_context
 def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers, scheduler,
            local_cluster, quick):
-    """Verify a filter or sensor FMU (ours or not): FMI, contract, consistency and robustness
-    checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one fails."""
+    """Verify a filter, sensor or vehicle FMU (ours or not): FMI, contract, consistency and
+    robustness checks of its role; writes verify.md and verify.json; exit 0 all pass, 1 one
+    fails."""
     from ..running.ssv_bindings import read_fmu_bindings
     from ..verification.verify import verify as verify_fmu
 
@@ -459,8 +463,12 @@ def _write_system(scenario, out, module_name, **options):
     from ..running import scenarios
     from ..results.outputs import check_writable
 
+    from ..running.prechecks import check_initializes
+
     check_writable(out, "--out")
-    scenarios.ensure_fmus(scenarios.load_scenario(scenario), log=lambda m: click.echo(m, err=True))
+    model = scenarios.load_scenario(scenario)
+    scenarios.ensure_fmus(model, log=lambda m: click.echo(m, err=True))
+    check_initializes(model)        # a value its FMU refuses is not packaged
     writer = importlib.import_module(f"..packaging.{module_name}", __package__)
     click.echo(f"wrote {getattr(writer, module_name)(scenario, out, **options)}")
 

@@ -22,6 +22,7 @@ from navcore.sensors.sensorlog import (GNSS_FILE, IMU_FILE, LogError, SensorLog,
 from ..errors import NavfmuError
 from .cli_options import read_yaml_mapping
 from ..results.outputs import check_writable
+from ..results.run_results import check_commit
 
 
 def refuse_existing(destination, force: bool) -> None:
@@ -32,7 +33,7 @@ def refuse_existing(destination, force: bool) -> None:
 
 
 def _write(log: SensorLog, destination) -> SensorLog:
-    write_log(destination, log)
+    write_log(destination, log, before_commit=check_commit)
     return log
 
 
@@ -102,7 +103,8 @@ def convert_rtklib(pos_file, destination, time_scale="week", keep=None, sigma_sc
         span = (f"{absolute_text(table['time'][0], origin)} to "
                 f"{absolute_text(table['time'][-1], origin)} s")
         velocity = "with" if "vn" in table else "without"
-        path = write_log_file(destination, GNSS_FILE, table, origin, source=pos_file)
+        path = write_log_file(destination, GNSS_FILE, table, origin, source=pos_file,
+                              before_commit=check_commit)
     except LogError as exc:
         raise NavfmuError(str(exc)) from None
     qualities = ", ".join(f"{name} {count}" for name, count in counts.items())
@@ -132,7 +134,8 @@ def convert_imu_csv(csv_file, destination, spec: ImuCsvSpec, force=False) -> str
         table, origin = read_imu_csv(csv_file, spec)
         log = SensorLog(table, {}, None, origin)
         period, start, stop = log.imu_period, log.start_time, log.stop_time
-        path = write_log_file(destination, IMU_FILE, table, origin, source=csv_file)
+        path = write_log_file(destination, IMU_FILE, table, origin, source=csv_file,
+                              before_commit=check_commit)
     except LogError as exc:
         raise NavfmuError(str(exc)) from None
     return (f"wrote {path}: {len(table['time'])} IMU intervals of {period:g} s (median) over "

@@ -57,6 +57,10 @@ def convert_kf_gins(imu_file, gnss_file, rest, force, config):
         from .kf_gins_config import with_gnss_velocity, write_filter_ssv
 
         click.echo(write_filter_ssv(with_gnss_velocity(settings, log.gnss), dst))
+    else:
+        from .kf_gins_config import remove_stale_ssv
+
+        click.echo(remove_stale_ssv(dst), nl=False)
 
 
 @convert.command("rtklib")

@@ -23,6 +23,12 @@ KF-GINS key            filter parameter
 ``antlever``           ``lever_arm_x/y/z`` [m], body forward-right-down
 (GNSS file)           ``r_from_receiver`` = true; ``measurement`` = ``position`` (7 columns) or
                        ``position_velocity`` with ``r_vel_n/e/d`` [m/s] (13 columns)
+(not in KF-GINS)       ``imu_noise_factor``: 30 for a MEMS gyro (``arw`` 0.1 deg/sqrt(h) or
+                       more; its figures are a datasheet's, and a real MEMS IMU does worse),
+                       else 1 (:mod:`navcore.filters.process_noise_factor`);
+                       ``gnss_corr_time`` = 4.5 s, the correlation time of an RTK receiver's
+                       errors measured on a real drive (:mod:`navcore.filters.correlated_gnss`;
+                       ``docs/guide/your_real_log.md`` measures one's own)
 ``starttime``          not a filter parameter: the replay's ``--start`` (stated in the
                        ``.ssv`` and printed), with ``endtime`` (-1: the end) as ``--stop``
 =====================  ========================================================================
@@ -46,6 +52,8 @@ from pathlib import Path
 from typing import Any, Dict, List
 
 import numpy as np
+from navcore.filters.correlated_gnss import MEASURED_CORR_TIME
+from navcore.filters.process_noise_factor import recommended_factor
 from navcore.ins.constants import UG
 
 from ..errors import NavfmuError
@@ -78,6 +86,10 @@ def read_config(path) -> Dict[str, Any]:
                           "corrtime)")
     where = f"{path} imunoise"
     lat, lon, h = _numbers(path, config, "initpos")
+    if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 360.0):
+        raise NavfmuError(f"{path}: key 'initpos': latitude {lat:g} deg, longitude {lon:g} "
+                          "deg: expected a latitude in [-90, 90] and a longitude in "
+                          "[-180, 360] deg")
     roll, pitch, yaw = (math.radians(x) for x in _numbers(path, config, "initatt"))
     att_std = [math.radians(x) for x in _numbers(path, config, "initattstd")]
     gb = max(_numbers(where, noise, "gbstd"))
@@ -100,7 +112,9 @@ def read_config(path) -> Dict[str, Any]:
          "q_accel_bias_instability_ug": ab * MGAL / UG, "q_accel_bias_tau_s": tau,
          **dict(zip(("lever_arm_x", "lever_arm_y", "lever_arm_z"),
                     _numbers(path, config, "antlever"))),
-         "measurement": "position", "r_from_receiver": True}
+         "measurement": "position", "r_from_receiver": True,
+         "imu_noise_factor": recommended_factor(max(_numbers(where, noise, "arw"))),
+         "gnss_corr_time": MEASURED_CORR_TIME}
     notes = [f"{key} (scale factors are not filter states)" for key in
              ("gsstd", "asstd") if key in noise]
     notes += [f"{key} = {config[key]} (the filters start with zero bias)"
@@ -139,6 +153,28 @@ def _or_none(t) -> str:
     return "none" if t is None else seconds_text(t)
 
 
+def _real_sensor_text(p) -> str:
+    """Why the .ssv sets ``imu_noise_factor`` and ``gnss_corr_time`` (module docstring)."""
+    grade = ("a MEMS gyro (arw >= 0.1 deg/sqrt(h)): its figures are a datasheet's, a real MEMS "
+             "IMU does worse" if p["imu_noise_factor"] != 1.0 else
+             "a gyro better than MEMS: its figures as given")
+    return (f"imu_noise_factor {p['imu_noise_factor']:g} for {grade}; gnss_corr_time "
+            f"{p['gnss_corr_time']:g} s for a receiver's errors correlated from fix to fix "
+            "(both measured on a real drive; docs/guide/your_real_log.md has the recipes)")
+
+
+def remove_stale_ssv(destination) -> str:
+    """A log replaced without ``--config`` keeps no ``filter.ssv`` of the log it replaced
+    (that file's initial state and start time belong to the old data): removed, said in a
+    line (empty when there was none)."""
+    ssv = Path(destination) / SSV_NAME
+    if not ssv.is_file():
+        return ""
+    ssv.unlink()
+    return (f"removed {ssv}: the configuration of the replaced log (give --config to write "
+            "this log's)\n")
+
+
 def write_filter_ssv(settings, destination) -> str:
     """Write ``destination/filter.ssv`` from :func:`read_config`'s ``settings``; one line
     saying what was written and how to replay with it."""
@@ -150,7 +186,8 @@ def write_filter_ssv(settings, destination) -> str:
     text = ssv_text("filter", {}, typed)
     head, rest = text.split("\n", 1)
     body = (f"from {settings['source']}; KF-GINS starttime {_or_none(settings['start'])} s and "
-            f"endtime {_or_none(settings['stop'])} s: the replay's start and stop options"
+            f"endtime {_or_none(settings['stop'])} s: the replay's start and stop options; "
+            + _real_sensor_text(settings["parameters"])
             + (f"; not representable: {'; '.join(settings['notes'])}"
                if settings["notes"] else ""))
     comment = f"<!-- {body.replace('--', '- -')} -->"     # a comment holds no double hyphen

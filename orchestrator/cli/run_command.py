@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from ..results import mission_metrics, outputs
-from ..running import prechecks, scenarios
+from ..running import prechecks, scenarios, smoothing
 from .cli_options import DEFAULT_OUT, parse_sets, parse_window
 from ..running.comparison import paper_comparison, report_table
 from ..running.comparison_text import format_comparison
@@ -36,16 +36,20 @@ def _consistency_line(run, m) -> str:
 
 
 def _comparable_reference(model, stop, replay, echo):
-    """paper.json's numbers where the run is the paper's scenario over its length, else None
-    (a shorter run or a replayed log does not compare with the paper's table): said once."""
+    """paper.json's numbers where the run is the paper's scenario over its span (paper.json's
+    ``span_s``; without it, the model's experiment), else None (a shorter run, one started
+    later or a replayed log does not compare with the paper's table): said once."""
     reference = scenarios.paper_reference(model)
     if reference is None:
         return None
+    run_span = [model.start_time, model.stop_time if stop is None else stop]
+    paper_span = reference.get("span_s") or [model.start_time, model.stop_time]
     why = None
     if replay:
         why = "the sensors are a replayed log"
-    elif stop is not None and stop != model.stop_time:
-        why = f"the run stops at {stop:g} s, the paper's scenario at {model.stop_time:g} s"
+    elif run_span != paper_span:
+        why = (f"the run spans {run_span[0]:g}-{run_span[1]:g} s, the paper's scenario "
+               f"{paper_span[0]:g}-{paper_span[1]:g} s")
     if why:
         echo(f"(the paper's numbers are left out: {why})")
         return None
@@ -84,6 +88,15 @@ def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, r
     return runs
 
 
+def _smoothed_run(model, filter, stop, window, parameters, replay, replay_options, algorithm):
+    """The smoothed run of ``filter`` (``--smooth``, :mod:`orchestrator.running.smoothing`)."""
+    with progress_bars() as progress_bar:
+        return smoothing.smoothed_run(
+            model, filter=filter, stop_time=stop, parameters=parameters, window=window,
+            progress=progress_bar("smoother"), algorithm=algorithm, log=None, replay=replay,
+            replay_options=replay_options)
+
+
 def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm, echo,
                   isolation=None):
     """The mission's baseline run (its ``mission.json``), reported under its label (kept in
@@ -99,16 +112,18 @@ def _baseline_run(model, baseline, stop, backend, window, parameters, algorithm,
 
 
 def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend, window, sets,
-                  fmt, no_plots, title, echo: Callable, algorithm="gauss-seidel",
+                  fmt, no_plots, echo: Callable, algorithm="gauss-seidel",
                   replay=None, log_sensors=None, replay_options=None, isolation=None,
-                  ssv=()) -> None:
+                  ssv=(), smooth=False) -> None:
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
-    ``navfmu-results/<model>``), each run with its progress bar.  ``replay_options``: the
+    ``navfmu-results/<model>``), each run with its progress bar; the figures are titled from
+    the runs (:func:`orchestrator.results.plots.figure_title`).  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
     ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
     process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones).
-    ``ssv``: the ``--ssv`` items (:mod:`orchestrator.running.ssv_bindings`), under ``sets``."""
+    ``ssv``: the ``--ssv`` items (:mod:`orchestrator.running.ssv_bindings`), under ``sets``.
+    ``smooth``: also the smoothed run of the (single) filter, after the real-time one."""
     replay_options = {k: v for k, v in (replay_options or {}).items() if v is not None}
     if replay_options and replay is None:
         raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
@@ -120,8 +135,16 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     parameters = overrides(ssv, model, parse_sets(sets))
     prechecks.check_stop_time(stop, model.start_time)
     out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
+    if smooth:
+        if fmt == "parquet":
+            raise NavfmuError("--smooth keeps the run's rows in memory: use --format csv or npz "
+                              "with it")
+        smoothing.check_smoothable(model, filters[0])
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
                          log_sensors, algorithm, echo, replay_options, isolation)
+    if smooth:
+        runs.append(_smoothed_run(model, filters[0], stop, window, parameters, replay,
+                                  replay_options, algorithm))
     baseline = scenarios.mission_baseline(model) if replay is None else None
     if baseline is not None:
         runs.append(_baseline_run(model, baseline, stop, backend, window, parameters,
@@ -133,7 +156,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     if not runs[0].metrics:
         echo(f"\n{model.name}: no truth in the run (a sensor log without truth.csv): no "
              "metrics")
-        written = write_outputs(runs, out, fmt=fmt, plots_on=False, title=title)
+        written = write_outputs(runs, out, fmt=fmt, plots_on=False)
         echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
         return
     reference = _comparable_reference(model, stop, replay, echo)
@@ -160,7 +183,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     if text:
         echo(text)
     with progress_bars() as progress_bar:   # a long CSV takes seconds: show the writing
-        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots, title=title,
+        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots,
                                 reference=reference, comparison=comparison,
                                 progress=progress_bar("writing", unit="part"))
     echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))

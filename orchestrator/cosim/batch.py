@@ -189,8 +189,9 @@ class BatchSimulation(Simulation):
         record = _row_recorder(batch.vectors, self._rec_index(batch.position),
                                recording.buffers)
         record(recording.slot(0))
-        loop_ns = self._loop(lambda k: batch.step(k, recording), record, recording, n_steps,
-                             progress)
+        # its components are Python components: none ends the simulation early
+        loop_ns, _, _ = self._loop(lambda k: batch.step(k, recording), record, recording,
+                                   n_steps, progress)
         recording.finish()
         return loop_ns
 

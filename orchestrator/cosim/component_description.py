@@ -11,7 +11,8 @@ from typing import Callable, Dict, Mapping
 from .backends import Instance, VarInfo
 from .direct_instance import DirectInstance
 from ..errors import NavfmuError
-from .fmu_instance import FmuInstance
+from .fmi3_instance import open_fmu
+from .fmi3_variables import variables_of
 from .hosted_instance import HostedFmuInstance
 from .isolation import Isolation
 from ..model.fmu_path import searched_places
@@ -55,16 +56,13 @@ def describe_fmu(spec: ComponentSpec, isolation: Isolation = Isolation()) -> Des
     except Exception as exc:  # fmpy raises plain Exception for unreadable files
         raise NavfmuError(f"component '{spec.name}': cannot read the model description of "
                           f"{path}: {exc}") from None
-    variables = {}
-    for v in md.modelVariables:
-        unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
-        variables[v.name] = VarInfo(v.name, v.type, v.causality, unit, v.valueReference)
+    variables = variables_of(md, spec.name, path)
     if isolation.hosts(path, md.modelName):
         return Described(spec, variables, str(path), md.modelName,
                           lambda: HostedFmuInstance(path, spec.name, isolation.call_timeout),
                           hosted=True)
     return Described(spec, variables, str(path), md.modelName,
-                      lambda: FmuInstance(path, spec.name))
+                      lambda: open_fmu(path, spec.name))
 
 
 def describe_direct(spec: ComponentSpec, registry: Mapping[str, type]) -> Described:

@@ -2,7 +2,8 @@
 (``python -m orchestrator.cosim.fmu_host REQUESTS_FD REPLIES_FD WORKDIR``), so that an FMU
 which crashes or hangs ends this process, not the master.  The master's side is
 :class:`orchestrator.cosim.hosted_instance.HostedFmuInstance`; the instance inside is an
-ordinary :class:`~orchestrator.cosim.fmu_instance.FmuInstance` (same calls, log and messages).
+ordinary :class:`~orchestrator.cosim.fmu_instance.FmuInstance` (or, for an FMI 3.0 FMU, its
+:class:`~orchestrator.cosim.fmi3_instance.Fmi3Instance`; same calls, log and messages).
 
 The protocol, over two pipes: every message is a header ``HEADER`` (kind or status, payload
 length in bytes) and its payload.
@@ -46,6 +47,12 @@ CALLS = ("fmi2Instantiate", "fmi2Set* of the parameters", "fmi2SetupExperiment a
          "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Set* of the inputs",
          "fmi2DoStep", "fmi2Get* of the outputs", "fmi2GetFMUstate", "fmi2SetFMUstate",
          "fmi2FreeFMUstate", "fmi2Terminate and fmi2FreeInstance")
+#: the same calls of an FMI 3.0 FMU
+CALLS_FMI3 = ("fmi3InstantiateCoSimulation", "fmi3Set* of the parameters",
+              "fmi3EnterInitializationMode", "fmi3ExitInitializationMode",
+              "fmi3Set* of the inputs", "fmi3DoStep", "fmi3Get* of the outputs",
+              "fmi3GetFMUState", "fmi3SetFMUState", "fmi3FreeFMUState",
+              "fmi3Terminate and fmi3FreeInstance")
 #: CALL methods -> the FMI call each makes (an index of CALLS)
 METHODS = {"open": 0, "prepare": None, "set_parameters": 1, "enter_initialization": 2,
            "exit_initialization": 3, "get_state": 7, "set_state": 8, "free_state": 9,
@@ -110,9 +117,9 @@ class Host:
         return getattr(self, "_" + method)(*args)
 
     def _open(self, path, name, unzipdir):
-        from .fmu_instance import FmuInstance
+        from .fmi3_instance import open_fmu
 
-        self.instance = inst = FmuInstance(path, name, unzipdir=unzipdir)
+        self.instance = inst = open_fmu(path, name, unzipdir=unzipdir)
         return {"model_name": inst.model_name, "can_get_set_state": inst.can_get_set_state,
                 "build_info": inst.build_info,
                 "variables": [astuple(v) for v in inst.variables.values()]}
@@ -182,9 +189,10 @@ class Host:
 
 
 def _failure(exc: BaseException) -> bytes:
-    from ..errors import NavfmuError, SimulationError, WiringError
+    from ..errors import NavfmuError, SimulationError, SimulationTerminated, WiringError
 
-    kind = ("simulation" if isinstance(exc, SimulationError) else
+    kind = ("terminated" if isinstance(exc, SimulationTerminated) else
+            "simulation" if isinstance(exc, SimulationError) else
             "wiring" if isinstance(exc, WiringError) else
             "navfmu" if isinstance(exc, NavfmuError) else "internal")
     text = str(exc) if kind != "internal" else f"{type(exc).__name__}: {exc}"

@@ -13,7 +13,8 @@ from typing import Any, Dict, Mapping, Optional, Tuple
 import numpy as np
 
 from . import fmu_builds, source_fmus
-from .backends import Instance, VarInfo, coerce
+from .backends import Instance, coerce
+from .fmi3_variables import variables_of
 from ..errors import NavfmuError, SimulationError
 
 STATUS_LABELS = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
@@ -80,15 +81,16 @@ class FmuInstance(Instance):
     instantiated with logging on; its log messages are kept (the last
     :data:`LOG_MESSAGES_KEPT`) and included in every :class:`SimulationError`.  A status
     of Discard, Error or Fatal from any call raises :class:`SimulationError`; Warning is
-    accepted (the message stays in the log).
+    accepted (the message stays in the log).  FMI 3.0 FMUs run through the subclass
+    :class:`~orchestrator.cosim.fmi3_instance.Fmi3Instance`, which replaces the FMI calls
+    (:meth:`_instantiate` and the calls of the life cycle) and keeps the rest.
     """
+
+    FMI_VERSION = "2.0"
 
     def __init__(self, path, name: str, unzipdir: Optional[str] = None):
         super().__init__()
         from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE, \
-            fmi2CallbackFreeMemoryTYPE
-        from fmpy import calloc, free
 
         self.name = name
         self.path = Path(path)
@@ -107,20 +109,13 @@ class FmuInstance(Instance):
         except Exception as exc:  # fmpy raises plain Exception for unreadable files
             raise NavfmuError(f"component '{name}': cannot read the model description of "
                               f"{self.path}: {exc}") from None
-        if md.fmiVersion != "2.0":
+        self.variables = variables_of(md, name, self.path)
+        if md.fmiVersion != self.FMI_VERSION:
             raise NavfmuError(f"component '{name}': {self.path} is an FMI {md.fmiVersion} FMU; "
-                              f"only FMI 2.0 co-simulation FMUs are supported")
-        if md.coSimulation is None:
-            raise NavfmuError(f"component '{name}': {self.path} does not support co-simulation "
-                              f"(model exchange only); only FMI 2.0 co-simulation is supported")
+                              f"{type(self).__name__} runs FMI {self.FMI_VERSION} FMUs")
         self.model_description = md
         self.model_name = md.modelName
         self.can_get_set_state = bool(md.coSimulation.canGetAndSetFMUstate)
-        self.variables = {}
-        for v in md.modelVariables:
-            unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
-            self.variables[v.name] = VarInfo(v.name, v.type, v.causality, unit, v.valueReference)
-
         self._unzipdir = str(extract(str(self.path), unzipdir))
         self._finalizer = weakref.finalize(self, _cleanup_files, self._unzipdir)
         source_fmus.ensure_binary(self.path, md, Path(self._unzipdir), name)
@@ -132,36 +127,45 @@ class FmuInstance(Instance):
         _WARNING_SINKS[self._env_id] = self.warnings
         _WARNING_SINKS_BY_NAME[name.encode("utf-8")] = self.warnings
         try:
-            callbacks = fmi2CallbackFunctions()
-            callbacks.logger = _logger_callback()
-            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            callbacks.componentEnvironment = self._env_id
-            try:
-                from fmpy.logging import addLoggerProxy
-
-                addLoggerProxy(ctypes.byref(callbacks))
-            except Exception:  # no native proxy for this platform: messages arrive unformatted
-                pass
-            self._callbacks = callbacks  # keep alive as long as the instance
-            self._fmu = FMU2Slave(guid=md.guid, unzipDirectory=self._unzipdir,
-                                  modelIdentifier=md.coSimulation.modelIdentifier,
-                                  instanceName=name)
-            self._fmu.instantiate(callbacks=callbacks, loggingOn=True)
+            self._instantiate(md)
             self._state = "instantiated"
         except Exception as exc:
             self.terminate()
             raise NavfmuError(f"component '{name}': cannot instantiate {self.path}: {exc}"
                               f"{self._log_text()}") from None
         self._c = self._fmu.component
+        self._set_calls: Tuple = ()
+        self._get_calls: Tuple = ()
+
+    def _instantiate(self, md) -> None:
+        """Load and instantiate the FMU (logging on, messages into ``log``) and keep the
+        per-step FMI functions."""
+        from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackAllocateMemoryTYPE, \
+            fmi2CallbackFreeMemoryTYPE
+        from fmpy import calloc, free
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = _logger_callback()
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        callbacks.componentEnvironment = self._env_id
+        try:
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(ctypes.byref(callbacks))
+        except Exception:  # no native proxy for this platform: messages arrive unformatted
+            pass
+        self._callbacks = callbacks  # keep alive as long as the instance
+        self._fmu = FMU2Slave(guid=md.guid, unzipDirectory=self._unzipdir,
+                              modelIdentifier=md.coSimulation.modelIdentifier,
+                              instanceName=self.name)
+        self._fmu.instantiate(callbacks=callbacks, loggingOn=True)
         f = self._fmu._functions
         self._fn_get = {"Real": f["fmi2GetReal"], "Integer": f["fmi2GetInteger"],
                         "Boolean": f["fmi2GetBoolean"]}
         self._fn_set = {"Real": f["fmi2SetReal"], "Integer": f["fmi2SetInteger"],
                         "Boolean": f["fmi2SetBoolean"]}
         self._fn_do_step = f["fmi2DoStep"]
-        self._set_calls: Tuple = ()
-        self._get_calls: Tuple = ()
 
     # -- messages -----------------------------------------------------------------------
     def _log_text(self) -> str:
@@ -264,8 +268,8 @@ class FmuInstance(Instance):
         self._state = "initializing"
 
     def exit_initialization(self) -> None:
-        self._checked("fmi2ExitInitializationMode", self._fmu.exitInitializationMode,
-                      time=self.time)
+        self._checked(f"fmi{self.FMI_VERSION[0]}ExitInitializationMode",
+                      self._fmu.exitInitializationMode, time=self.time)
         self._state = "running"
 
     def set_inputs(self, real_values=None, int_values=None, bool_values=None) -> None:
@@ -300,20 +304,24 @@ class FmuInstance(Instance):
                              at=False)
         self.time = t + h
 
-    def get_state(self):
+    def _require_state(self) -> None:
         if not self.can_get_set_state:
             raise NavfmuError(f"component '{self.name}': {self.path.name} cannot get/set its "
                               f"state (canGetAndSetFMUstate is false)")
+
+    def get_state(self):
+        self._require_state()
         return self._checked("fmi2GetFMUstate", self._fmu.getFMUstate)
 
     def set_state(self, state) -> None:
-        if not self.can_get_set_state:
-            raise NavfmuError(f"component '{self.name}': {self.path.name} cannot get/set its "
-                              f"state (canGetAndSetFMUstate is false)")
+        self._require_state()
         self._checked("fmi2SetFMUstate", self._fmu.setFMUstate, state)
 
     def free_state(self, state) -> None:
         self._checked("fmi2FreeFMUstate", self._fmu.freeFMUstate, state)
+
+    def _free_instance(self, fmu) -> None:
+        fmu.fmi2FreeInstance(fmu.component)
 
     def take_warnings(self):
         warnings, self.warnings[:] = list(self.warnings), []
@@ -335,7 +343,7 @@ class FmuInstance(Instance):
                     # free the instance but never unload the shared library: a pythonfmu
                     # FMU leaves Python objects behind that point into its library, and the
                     # interpreter crashes when it later collects them after a dlclose
-                    fmu.fmi2FreeInstance(fmu.component)
+                    self._free_instance(fmu)
                     fmu.component = None
             except Exception:
                 pass

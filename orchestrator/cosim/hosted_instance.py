@@ -39,11 +39,12 @@ import numpy as np
 
 from . import interrupts
 from .backends import Instance, VarInfo
-from .fmu_host import (CALL, CALL_FILE, CALLS, DO_STEP, EXIT, FAILED, GET, HEADER, LOG_FILE,
-                       OK, SET, STEP, STEP_HEAD, read_exactly, step_layout, typed_views,
-                       write_all)
+from .fmi3_variables import fmi_version
+from .fmu_host import (CALL, CALL_FILE, CALLS, CALLS_FMI3, DO_STEP, EXIT, FAILED, GET, HEADER,
+                       LOG_FILE, OK, SET, STEP, STEP_HEAD, read_exactly, step_layout,
+                       typed_views, write_all)
 from .host_process import child_environment, ending
-from ..errors import NavfmuError, SimulationError, WiringError
+from ..errors import NavfmuError, SimulationError, SimulationTerminated, WiringError
 
 #: how often a wait for the host looks for Ctrl-C / SIGTERM [s]
 POLL_S = 0.1
@@ -117,13 +118,13 @@ class _Host:
             self.kill()
             return self.proc.returncode
 
-    def last_call(self) -> Optional[str]:
-        """The FMI call the host marked last (see :mod:`.fmu_host`)."""
+    def last_call(self, calls=CALLS) -> Optional[str]:
+        """The FMI call the host marked last (see :mod:`.fmu_host`), named from ``calls``."""
         try:
             index = (self.workdir / CALL_FILE).read_bytes()[0]
         except (OSError, IndexError):
             return None
-        return CALLS[index] if index < len(CALLS) else None
+        return calls[index] if index < len(calls) else None
 
     def output(self) -> list:
         try:
@@ -170,7 +171,7 @@ class HostedState:
 
 
 class HostedFmuInstance(Instance):
-    """An FMI 2.0 co-simulation FMU run in a host process of its own (module docstring);
+    """An FMI 2.0 or 3.0 co-simulation FMU run in a host process of its own (module docstring);
     the same calls, statuses and messages as :class:`~.fmu_instance.FmuInstance`, plus the
     host's death, a call's timeout and Ctrl-C reported in one line."""
 
@@ -182,6 +183,8 @@ class HostedFmuInstance(Instance):
         self.call_timeout = float(call_timeout)
         self.time: Optional[float] = None
         self._header = bytearray(HEADER.size)
+        #: the names of the FMI calls for messages, by the FMU's FMI version
+        self._calls = CALLS_FMI3 if fmi_version(self.path) == "3.0" else CALLS
         self._pending_set = False
         self._fresh = False
         self._busy = False
@@ -201,7 +204,7 @@ class HostedFmuInstance(Instance):
     def _failed(self, what: str, time: Optional[float], reason: str,
                 after: str = "") -> SimulationError:
         host, self._host = self._host, None
-        call = host.last_call() or what
+        call = host.last_call(self._calls) or what
         log = tuple(host.output())
         host.close()
         self._finalizer.detach()
@@ -242,9 +245,9 @@ class HostedFmuInstance(Instance):
 
     def _error(self, body) -> NavfmuError:
         kind, message = body["kind"], body["message"]
-        if kind == "simulation":
-            return SimulationError(message, component=self.name, time=body["time"],
-                                   log=tuple(body["log"]))
+        if kind in ("simulation", "terminated"):
+            cls = SimulationTerminated if kind == "terminated" else SimulationError
+            return cls(message, component=self.name, time=body["time"], log=tuple(body["log"]))
         if kind == "wiring":
             return WiringError(message)
         if kind == "navfmu":
@@ -265,7 +268,7 @@ class HostedFmuInstance(Instance):
             flags |= SET
         self._flags[0] = flags
         self._times[0], self._times[1] = t, h
-        what = "fmi2DoStep" if flags & DO_STEP else "fmi2Get* of the outputs"
+        what = self._calls[5] if flags & DO_STEP else self._calls[6]
         if self._round_trip(self._request, what, self.time if time is None else time,
                             into=self._reply_bytes):
             self.real_out[:], self.int_out[:], self.bool_out[:] = self._replied

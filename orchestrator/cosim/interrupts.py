@@ -19,7 +19,11 @@ that signal when it passes :func:`safe_point` ``POINT`` the first time.  The poi
 ``writing`` (after each output file), ``campaign-started`` (the manifest written),
 ``campaign-run-FILTER-INDEX`` (that campaign run starting, in the process that runs it),
 ``campaign-ran-N`` (the driver has the N-th result of this invocation), ``pool-waiting`` (the
-driver waiting for its process pool, from the pool's start) and the command line's progress
+driver waiting for its process pool, from the pool's start), ``commit`` (a written file or
+sensor log about to be moved into place: a signal pending there commits nothing, so a command
+ends with its output complete and status 0, or with nothing of it written and the status of
+the signal), ``verify-probe`` (before each FMI probe of ``verify``) and the command line's
+progress
 updates ``UNIT-P%`` (``step-50%``: half the steps of a run done; ``part-0%``: the output
 writing begun).  ``KILL`` (SIGKILL) stands for a crash.
 """
@@ -29,6 +33,8 @@ import contextlib
 import os
 import signal
 import threading
+
+from ..results import run_results
 
 #: ``POINT:SIGNAL``: send SIGNAL (INT or TERM) to this process at safe point POINT (tests)
 SIGNAL_AT_ENV = "NAVFMU_TEST_SIGNAL_AT"
@@ -92,6 +98,10 @@ def ignored():
         signal.signal(signal.SIGINT, previous)
 
 
+def _commit_point() -> None:
+    safe_point("commit")
+
+
 @contextlib.contextmanager
 def deferred():
     """Within the block, SIGINT and SIGTERM set a flag instead of raising; the block ends with
@@ -102,6 +112,7 @@ def deferred():
         return
     _pending["signal"] = None
     previous = {s: signal.signal(s, _handler) for s in _HANDLED}
+    run_results.COMMIT_CHECKS.append(_commit_point)
     try:
         yield
     except Interrupted:
@@ -116,6 +127,7 @@ def deferred():
                 raise stop from None
         raise
     finally:
+        run_results.COMMIT_CHECKS.remove(_commit_point)
         for s, handler in previous.items():
             signal.signal(s, handler)
     check()

@@ -33,6 +33,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from .backends import NUMERIC_TYPES
+from .fmi3_variables import refuse_fmi3
 from .host_process import run_child
 from ..errors import NavfmuError, SimulationError
 from ..results.run_results import Results
@@ -100,6 +101,7 @@ def run_libcosim(source, stop_time: Optional[float] = None) -> Results:
     the model's start time to ``stop_time`` (default: the model's); every output recorded at
     every base step."""
     model = load_model(source)
+    refuse_fmi3(model.components, "libcosim")
     Execution, Observer, lib = _libcosimpy()
     start = model.start_time
     stop = float(stop_time) if stop_time is not None else model.stop_time
@@ -224,6 +226,7 @@ def _results(model, start, stop, n_steps, table, names, outputs, offsets, wall, 
 def _run_unrecorded(source, stop_time: float) -> float:
     """Wall time of libcosim's own loop (``simulate_until``), nothing read back."""
     model = load_model(source)
+    refuse_fmi3(model.components, "libcosim")
     Execution, _, _ = _libcosimpy()
     h_ns = int(round(model.base_step * NS))
     execution = Execution.from_ssp_file(str(model.archive or model.path.parent), h_ns)
@@ -249,6 +252,7 @@ def bench_against_libcosim(source, stop_time: float, repeat: int = 3) -> Dict[st
     from .component_description import describe_fmu
 
     model = load_model(source)
+    refuse_fmi3(model.components, "libcosim")
     if not any(describe_fmu(spec).hosted for spec in model.components):
         return _bench(source, stop_time, repeat)
     out = run_child(__name__, {"source": str(Path(source).resolve()),

@@ -117,6 +117,13 @@ The exchange itself (both algorithms, sharing one input-copying path) is
    component raising ParameterError/InputError) raises
    :class:`~orchestrator.errors.SimulationError` naming the component and the time, with the
    component's log; every instance is terminated and freed, and no results are returned.
+   A component that *asks* to end the simulation (an FMI 3.0 FMU returning
+   ``terminateSimulation`` from ``fmi3DoStep`` in macro step ``k``:
+   :class:`~orchestrator.errors.SimulationTerminated`) ends the run cleanly: the results
+   keep the rows up to the last one recorded at or before ``t_k`` (the last communication
+   point every component reached), ``metadata["ended_by"]`` names the component, its time
+   and message, and a :class:`~orchestrator.errors.NavfmuWarning` says so; had no row been
+   recorded after the initial one, the run fails with that error instead.
 
 10. **Host processes.**  An FMU the isolation puts in a host process of its own (by
    default every foreign FMU: :mod:`orchestrator.cosim.isolation`) is stepped by these same
@@ -138,7 +145,8 @@ from navcore.core.timing import TIME_TOLERANCE
 
 from .backends import NUMERIC_TYPES, Instance
 from .component_description import describe_direct, describe_fmu
-from ..errors import NavfmuError, NavfmuWarning, SkippedParametersWarning, WiringError
+from ..errors import (NavfmuError, NavfmuWarning, SimulationTerminated,
+                      SkippedParametersWarning, WiringError)
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from .isolation import Isolation
 from .lever_arm_wiring import unconnected_lever_arms
@@ -147,6 +155,8 @@ from ..results.run_results import Results
 from ..model.ssp import ComponentSpec, Connection, SystemModel
 from ..model import units
 from ..model.suggestions import did_you_mean
+#: the types a parameter value can be set to
+SETTABLE_TYPES = ("Real", "Integer", "Enumeration", "Boolean", "String")
 _DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
 
 
@@ -188,6 +198,15 @@ def _parameter_hint(d, name: str) -> str:
     """The component's parameters close to the unknown ``name``, or all of them."""
     names = sorted(v.name for v in d.variables.values() if v.causality == "parameter")
     return did_you_mean(name, names) or f" (its parameters: {', '.join(names)})"
+
+
+def _check_settable(d, var) -> None:
+    """Refuse setting a parameter of a type no parameter value maps onto (an FMI 3.0
+    Float32, UInt8, array...: :mod:`orchestrator.cosim.fmi3_variables`)."""
+    if var.type not in SETTABLE_TYPES:
+        raise WiringError(f"component '{d.spec.name}' ({d.source}): parameter '{var.name}' has "
+                          f"type {var.type}, which cannot be set (settable: "
+                          f"{', '.join(SETTABLE_TYPES)})")
 
 
 # ----------------------------------------------------------------------------------------
@@ -310,6 +329,7 @@ class Simulation:
                         + ("does not exist" if var is None else
                            f"has causality '{var.causality}' (not settable)")
                     )
+                _check_settable(d, var)
                 unit = d.spec.parameter_units.get(pname)
                 if unit:
                     value = units.convert(value, unit, var.unit,
@@ -329,6 +349,7 @@ class Simulation:
                     f"parameter '{var_name}'" + (_parameter_hint(d, var_name) if var is None
                                                  else f" (it is an {var.causality})")
                 )
+            _check_settable(d, var)
             values[comp][var_name] = value
         return values, skipped
 
@@ -452,7 +473,10 @@ class Simulation:
                 inst.set_parameters(self.parameter_values[d.spec.name])
             exchange.initialize(start, stop)
             record(recording.slot(0))
-            loop_ns = self._loop(exchange.step, record, recording, n_steps, progress)
+            loop_ns, done, ended = self._loop(exchange.step, record, recording, n_steps,
+                                              progress)
+            if ended is not None:
+                stop, n_steps = self._ended(ended, start, done, recording)
             recording.finish()
             warnings_reported = [w for inst in instances for w in inst.take_warnings()]
         except BaseException:
@@ -466,21 +490,30 @@ class Simulation:
         results = self._results(start, stop, n_steps, recording.size if sink is None else 0,
                                 recording.buffers, rec_index, position, timing, loop_ns)
         results.metadata["warnings"] = warnings_reported
+        if ended is not None:
+            results.metadata["ended_by"] = {"component": ended.component, "time": ended.time,
+                                            "message": str(ended)}
         results.metadata["builds"] = {d.spec.name: inst.build_info
                                       for d, inst in zip(self.components, instances)}
         if sink is not None:
             sink.close(results)
         return results
 
-    def _loop(self, step, record, recording, n_steps: int, progress) -> int:
+    def _loop(self, step, record, recording, n_steps: int, progress):
         """The macro steps 0 .. n_steps-1, each row recorded when due; returns the loop's
-        wall time [ns].  ``progress`` is called about every 1 % and at the end."""
+        wall time [ns], the macro steps done and the :class:`SimulationTerminated` that
+        ended it early (or None).  ``progress`` is called about every 1 % and at the end."""
         record_every = self.record_every
         progress_every = max(1, n_steps // 100)
         next_progress = progress_every if progress is not None else n_steps + 1
+        ended = None
         loop_start = _time.perf_counter_ns()
         for k in range(n_steps):
-            step(k)
+            try:
+                step(k)
+            except SimulationTerminated as exc:
+                ended, n_steps = exc, k
+                break
             kp1 = k + 1
             if kp1 % record_every == 0:
                 record(recording.slot(kp1 // record_every))
@@ -490,7 +523,22 @@ class Simulation:
         loop_ns = _time.perf_counter_ns() - loop_start
         if progress is not None and n_steps % progress_every:
             progress(n_steps, n_steps)
-        return loop_ns
+        return loop_ns, n_steps, ended
+
+    def _ended(self, ended: SimulationTerminated, start: float, done: int, recording):
+        """A component ended the simulation in macro step ``done`` (rule 9): the run ends at
+        its last recorded row before it, which every component reached; returns that stop
+        time and its macro steps.  With no row past the initial one, the run fails."""
+        rows = done // self.record_every
+        if rows == 0:
+            raise ended
+        recording.end_at(rows + 1)
+        n_steps = rows * self.record_every
+        stop = start + n_steps * self.base_step
+        warnings.warn(f"{ended}; the results end at t = {stop:.9g} s, the last recorded "
+                      f"communication point every component reached", NavfmuWarning,
+                      stacklevel=3)
+        return stop, n_steps
 
     # -- results ------------------------------------------------------------------------
     def _chunk(self, first_row, n_rows, recordings, rec_index, position) -> Results:

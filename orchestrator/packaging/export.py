@@ -38,6 +38,8 @@ from typing import Dict, List, Set
 
 from navcore.core.start_text import start_text
 
+from ..cosim.fmi3_variables import FMI3_TYPES, check_version
+from ..building.build import binary_platforms
 from ..errors import NavfmuError
 from ..model.ssp import SystemModel
 from ..model.ssp_archive import load_model
@@ -49,12 +51,33 @@ _FMI_TYPES = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean", "Strin
 #: the container's own type names for a connection (its configuration reader knows no FMI 2
 #: names, and fmpy's writer passes a connection's type through unconverted)
 _CONTAINER_TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}
+#: FMI 3.0 platform tuple -> the FMI 2.0 platform name of the container's binary for it
+_FMI2_PLATFORMS = {"x86_64-linux": "linux64", "x86_64-windows": "win64",
+                   "x86_64-darwin": "darwin64"}
 
 
-def _as_connector(variable):
+def _container_type(spec, variable) -> str:
+    """The exported FMU's (FMI 2.0) type of a component's ``variable``: its own for an FMI 2.0
+    component, the connector type of an FMI 3.0 one (:mod:`orchestrator.cosim.fmi3_variables`);
+    what the container cannot pass is refused by name (it reads and writes an Integer as
+    Int32, so an FMI 3.0 Int64 cannot go through it)."""
+    typ = _FMI_TYPES.get(variable.type) or (
+        FMI3_TYPES.get(variable.type) if variable.type != "Int64" and not variable.dimensions
+        else None)
+    if typ is None:
+        raise NavfmuError(f"component '{spec.name}' ({spec.source.name}): {variable.causality} "
+                          f"'{variable.name}' has type {variable.type}"
+                          f"{' (an array)' if variable.dimensions else ''}, which the exported FMU "
+                          f"cannot pass (fmpy's container reads Float64, Int32 and Boolean)")
+    return typ
+
+
+def _as_connector(spec, variable):
+    """A connection end as the container names its type (FMI 3.0 names for FMI 2.0 types)."""
     import attrs
 
-    return attrs.evolve(variable, type=_CONTAINER_TYPES[variable.type])
+    return attrs.evolve(variable,
+                        type=_CONTAINER_TYPES[_container_type(spec, variable)])
 
 
 def without_step_hints(model: SystemModel) -> SystemModel:
@@ -72,9 +95,7 @@ def _configuration(model: SystemModel, copies: Dict[str, Path]):
     components, variables, units = {}, {}, {}
     for spec in model.components:
         md = read_model_description(str(copies[spec.name]))
-        if md.fmiVersion != "2.0":
-            raise NavfmuError(f"component '{spec.name}': {spec.source} is FMI {md.fmiVersion}; "
-                              "the export holds FMI 2.0 components only")
+        check_version(md, spec.name, spec.source)
         components[spec.name] = Component(name=spec.name, filename=copies[spec.name],
                                           modelDescription=md)
         variables[spec.name] = {v.name: v for v in md.modelVariables}
@@ -87,24 +108,28 @@ def _configuration(model: SystemModel, copies: Dict[str, Path]):
         comp, own = components[spec.name], variables[spec.name]
         for pname, (type_name, value) in spec.parameters.items():
             v = own[pname]
-            cv = ModelVariable(name=f"{spec.name}.{pname}", type=_FMI_TYPES[v.type],
+            cv = ModelVariable(name=f"{spec.name}.{pname}", type=_container_type(spec, v),
                                causality="parameter", variability="fixed", initial="exact",
                                start=start_text(type_name, value), unit=v.unit,
                                description=v.description)
             container_vars.append(cv)
             mappings[cv] = [(comp, v)]
         for v in own.values():
-            if v.causality != "output" or v.type not in _FMI_TYPES or v.type == "String":
+            if v.causality != "output" or v.type in ("String", "Enumeration"):
                 continue
-            cv = ModelVariable(name=f"{spec.name}.{v.name}", type=v.type, causality="output",
+            cv = ModelVariable(name=f"{spec.name}.{v.name}", type=_container_type(spec, v),
+                               causality="output",
                                variability=v.variability, initial="calculated", unit=v.unit,
                                description=v.description)
             container_vars.append(cv)
             mappings[cv] = [(comp, v)]
+    specs = {spec.name: spec for spec in model.components}
     connections = [Connection(components[c.start_component],
-                              [_as_connector(variables[c.start_component][c.start_connector])],
+                              [_as_connector(specs[c.start_component],
+                                             variables[c.start_component][c.start_connector])],
                               components[c.end_component],
-                              [_as_connector(variables[c.end_component][c.end_connector])])
+                              [_as_connector(specs[c.end_component],
+                                             variables[c.end_component][c.end_connector])])
                    for c in model.connections]
     outputs = [Unknown(index=i, variable=v) for i, v in enumerate(container_vars, start=1)
                if v.causality == "output"]
@@ -163,12 +188,13 @@ def _write_copies(model: SystemModel, folder: Path) -> Dict[str, Path]:
 
 
 def _common_platforms(fmus) -> Set[str]:
-    """The FMI 2.0 platforms (``binaries/<platform>``) every one of ``fmus`` has a binary for."""
+    """The FMI 2.0 platforms (``binaries/<platform>``) every one of ``fmus`` has a binary for
+    (an FMI 3.0 component's platform tuples by their FMI 2.0 names)."""
     common = None
     for fmu in fmus:
         with zipfile.ZipFile(fmu) as z:
-            have = {n.split("/")[1] for n in z.namelist()
-                    if n.startswith("binaries/") and n.count("/") >= 2 and not n.endswith("/")}
+            have = binary_platforms(z.namelist())
+        have = {_FMI2_PLATFORMS.get(p, p) for p in have}
         common = have if common is None else common & have
     return common or set()
 

@@ -82,6 +82,25 @@ def component_copies(model: SystemModel) -> Dict[str, FmuCopy]:
     return copies
 
 
+def _fmi3_starts(root, starts: Dict[str, str]) -> set:
+    """Set the start values of an FMI 3.0 model description: an attribute of the variable's
+    element, a ``<Start value>`` child for a String; returns the names set."""
+    found = set()
+    variables = root.find("ModelVariables")
+    for v in (variables if variables is not None else ()):
+        name = v.get("name")
+        if name not in starts:
+            continue
+        if v.tag == "String":
+            for old in v.findall("Start"):
+                v.remove(old)
+            ET.SubElement(v, "Start", {"value": starts[name]})
+        else:
+            v.set("start", starts[name])
+        found.add(name)
+    return found
+
+
 def _model_description(xml: bytes, copy: FmuCopy, where: str) -> bytes:
     """The model description with the copy's start values and DefaultExperiment."""
     root = parse_xml(xml, forbid_dtd=True)
@@ -91,6 +110,8 @@ def _model_description(xml: bytes, copy: FmuCopy, where: str) -> bytes:
             experiment.set(attr, repr(float(value)))
     starts = copy.starts
     found = set()
+    if root.get("fmiVersion") == "3.0":
+        found = _fmi3_starts(root, starts)
     for sv in root.iter("ScalarVariable"):
         name = sv.get("name")
         if name in starts and len(sv):

@@ -23,6 +23,7 @@ import zipfile
 from pathlib import Path
 from typing import Dict
 
+from ..cosim.fmi3_variables import refuse_fmi3
 from ..errors import NavfmuError
 from ..results.outputs import check_writable
 from ..results.run_results import atomic_write
@@ -90,6 +91,7 @@ def package(model_dir, out, step_hints: bool = True) -> Path:
     model = load_model(model_dir)
     if model.archive is not None:
         raise NavfmuError(f"{model_dir} is already an SSP archive")
+    refuse_fmi3(model.components, "libcosim, for which the archive is written,")
     out = Path(out)
     if out.suffix.lower() != ".ssp":
         raise NavfmuError(f"--out {out}: an SSP archive needs the extension .ssp")

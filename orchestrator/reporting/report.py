@@ -36,7 +36,7 @@ from ..campaigns.executor import Executor
 from ..model.suggestions import did_you_mean
 from ..errors import NavfmuError, SkippedParametersWarning, WiringError
 from ..results import mission_metrics
-from ..results.metric_comparisons import (GROUP_KEYS, improvement_percent, per_axis_enu, rms_3d,
+from ..results.metric_comparisons import (GROUP_KEYS, improvement_percent, per_axis, rms_3d,
     rms_ratio)
 from ..results.run_results import atomic_write
 from ..running.prechecks import check_stop_time
@@ -385,13 +385,13 @@ def _improvement(plan) -> List[str]:
             lines.append(f"| {group} 3-D RMS reduction [%] | {_ci(st.t_interval(v), 1)} | "
                          f"{imp[group]} |")
         for suffix, fn, what, interval in (
-                ("_enu", improvement_percent, "reduction [%]", st.t_interval),
-                ("_ratio_enu", rms_ratio, "ratio base/filter", st.log_interval)):
+                ("_ned", improvement_percent, "reduction [%]", st.t_interval),
+                ("_ratio_ned", rms_ratio, "ratio base/filter", st.log_interval)):
             if group + suffix not in imp:
                 continue
-            for i, axis in enumerate("ENU"):
-                v = [fn(per_axis_enu(b["metrics"], group)[i],
-                        per_axis_enu(f["metrics"], group)[i]) for b, f in pairs]
+            for i, axis in enumerate("NED"):
+                v = [fn(per_axis(b["metrics"], group)[i],
+                        per_axis(f["metrics"], group)[i]) for b, f in pairs]
                 lines.append(f"| {group} {axis} {what} | {_ci(interval(v), 2)} | "
                              f"{imp[group + suffix][i]} |")
     return lines + [""]

@@ -14,11 +14,11 @@ import math
 
 import numpy as np
 
-from .metrics import ATTITUDE, ENU
+from .metrics import ATTITUDE, AXES
 
 
-def reference_metrics(position_enu=None, velocity_enu=None, attitude_deg=None):
-    """A paper's row (lists in the tables' order: E/N/U, roll/pitch/yaw; None where the paper
+def reference_metrics(position_ned=None, velocity_ned=None, attitude_deg=None):
+    """A paper's row (lists in the tables' order: N/E/D, roll/pitch/yaw; None where the paper
     gives no number) in the shape of :func:`orchestrator.results.metrics.filter_metrics`' RMS
     groups, for
     :func:`rms_table`."""
@@ -27,8 +27,8 @@ def reference_metrics(position_enu=None, velocity_enu=None, attitude_deg=None):
             return None
         return {k: (None if v is None else float(v)) for k, v in zip(keys, values)}
 
-    return {"position_rms_m": group(position_enu, ENU),
-            "velocity_rms_mps": group(velocity_enu, ENU),
+    return {"position_rms_m": group(position_ned, AXES),
+            "velocity_rms_mps": group(velocity_ned, AXES),
             "attitude_rms_deg": group(attitude_deg, ATTITUDE)}
 
 
@@ -40,12 +40,12 @@ def _cell(group, key, width, decimals):
 
 
 def rms_table(rows, reference=None):
-    """Text table in the shape of paper 001's Table 1 (position and velocity RMS east, north,
-    up) plus attitude RMS (paper 000's Table 4).
+    """Text table of the position and velocity RMS per axis north, east, down (paper 001's
+    Table 1 rearranged from its east, north, up) plus attitude RMS (paper 000's Table 4).
 
     ``rows``: list of (label, metrics dict) in the given order, metrics from
     :func:`orchestrator.results.metrics.filter_metrics` or :func:`reference_metrics` (a missing
-    group or None value prints '-'); ``reference``: list of (label, pos_enu, vel_enu[, att_deg])
+    group or None value prints '-'); ``reference``: list of (label, pos_ned, vel_ned[, att_deg])
     from a paper, printed under the rows.
     """
     rows = list(rows)
@@ -53,16 +53,16 @@ def rms_table(rows, reference=None):
         label, pos, vel = ref[:3]
         rows.append((label, reference_metrics(pos, vel, ref[3] if len(ref) > 3 else None)))
     w = max([len("RMS error")] + [len(label) for label, _ in rows])
-    head = (f"{'RMS error':{w}s} {'pos E/lon':>10s} {'pos N/lat':>10s} {'pos U/h':>10s} "
-            f"{'vel E':>8s} {'vel N':>8s} {'vel U':>8s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s}")
+    head = (f"{'RMS error':{w}s} {'pos N':>10s} {'pos E':>10s} {'pos D':>10s} "
+            f"{'vel N':>8s} {'vel E':>8s} {'vel D':>8s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s}")
     units = (f"{'':{w}s} {'[m]':>10s} {'[m]':>10s} {'[m]':>10s} {'[m/s]':>8s} {'[m/s]':>8s} "
              f"{'[m/s]':>8s} {'[deg]':>7s} {'[deg]':>7s} {'[deg]':>7s}")
     lines = [head, units]
     for label, m in rows:
         p, v, a = (m.get("position_rms_m"), m.get("velocity_rms_mps"),
                    m.get("attitude_rms_deg"))
-        lines.append(" ".join([f"{label:{w}s}"] + [_cell(p, k, 10, 4) for k in ENU]
-                              + [_cell(v, k, 8, 4) for k in ENU]
+        lines.append(" ".join([f"{label:{w}s}"] + [_cell(p, k, 10, 4) for k in AXES]
+                              + [_cell(v, k, 8, 4) for k in AXES]
                               + [_cell(a, k, 7, 4) for k in ATTITUDE]))
     return "\n".join(lines)
 
@@ -99,11 +99,11 @@ def rms_ratio(baseline, value):
     return baseline / value if value != 0.0 else float("nan")
 
 
-def per_axis_enu(metrics, group):
-    """RMS of ``group`` in the papers' order E, N, U (position, velocity) or roll, pitch, yaw."""
-    keys = ATTITUDE if group == "attitude" else ENU
+def per_axis(metrics, group):
+    """RMS of ``group`` in the tables' order N, E, D (position, velocity) or roll, pitch, yaw."""
+    keys = ATTITUDE if group == "attitude" else AXES
     return [float(metrics[GROUP_KEYS[group]][k]) for k in keys]
 
 
 __all__ = ["reference_metrics", "rms_table", "GROUP_KEYS", "rms_3d", "pooled_rms",
-           "improvement_percent", "rms_ratio", "per_axis_enu"]
+           "improvement_percent", "rms_ratio", "per_axis"]

@@ -9,8 +9,11 @@ depend on the master's stepping order.
 Definitions (errors are estimate - truth):
 
 * position error in NED metres: north = dlat (R_N + h), east = dlon (R_E + h) cos(lat),
-  down = -dh.  Paper 001's table lists "longitude, latitude, height" = east, north, up.
-* velocity error per NED axis [m/s] (reported east/north/up as in paper 001).
+  down = -dh.
+* velocity error per NED axis [m/s].
+* Every table, key, column and figure gives the axes in one order, :data:`AXES`: north, east,
+  down (docs/guide/index.md, "Axis order"); a paper's east/north/up numbers are rearranged
+  (down RMS = up RMS).
 * attitude error: roll, pitch, yaw differences wrapped to (-pi, pi] [deg], and the error angle
   phi (NED) with C_bn_est = (I - [phi x]) C_bn_true for NEES.
 * RMS per axis over the window ``[t0, t1]`` of nav_time (every recorded row, or only the
@@ -73,9 +76,8 @@ from navcore.ins.rotations import wrap_angle as _wrap
 
 from ..errors import NavfmuError
 
+#: the one axis order of every table, metric key, column and figure: north, east, down
 AXES = ("n", "e", "d")
-#: paper order of the tables: east, north, up (up error RMS = down error RMS)
-ENU = ("e", "n", "d")
 ATTITUDE = ("roll", "pitch", "yaw")
 
 
@@ -360,7 +362,8 @@ def inconsistency_warning(label, metrics):
         return None
     return (f"filter '{label}' is inconsistent: {outside:.0f} % of its position errors are "
             "outside +/-3 sigma (its reported sigmas understate its error; real GNSS errors "
-            "are biased and time-correlated)")
+            "are biased and time-correlated: gnss_corr_time; a real IMU does worse than its "
+            "datasheet: imu_noise_factor)")
 
 
 def nis_band95(updates, dof):

@@ -6,7 +6,7 @@ import numpy as np
 from navcore.vehicles.route_guidance import LocalPlane, parse_route
 
 from . import mission_metrics
-from .plots import _save, plt
+from .plots import _save, plt, titled
 
 
 #: margin around the route and the true paths, as a fraction of their larger extent
@@ -76,6 +76,6 @@ def plot_mission(entries, vehicle, path, title=""):
     ax_t.set_ylabel("cross-track error of the true path [m]")
     ax_t.legend(fontsize=7)
     ax_t.grid(True, alpha=0.3)
-    fig.suptitle(title or "mission")
+    fig.suptitle(titled("mission", title))
     fig.tight_layout()
     return _save(fig, path)

@@ -26,17 +26,13 @@ from .phases import shade_phases  # noqa: E402
 from .run_results import atomic_write  # noqa: E402
 
 #: the panels of the error plots, named as in the RMS tables: (group, unit, scale to the
-#: unit, [(axis label, error key, sign, sigma keys)]).  Position and velocity E/N/U (up = -down);
+#: unit, [(axis label, error key, sigma keys)]).  Position and velocity N/E/D;
 #: attitude as the Euler-angle errors roll/pitch/yaw of the tables, whose sigmas come from
 #: the filter's N/E/D tilt sigmas (see :func:`_attitude_sigmas`).
 _PANELS = (
-    ("position", "m", 1.0, [("E", "pos_e", 1.0, "std_pe"), ("N", "pos_n", 1.0, "std_pn"),
-                            ("U", "pos_d", -1.0, "std_pd")]),
-    ("velocity", "m/s", 1.0, [("E", "vel_e", 1.0, "std_ve"), ("N", "vel_n", 1.0, "std_vn"),
-                              ("U", "vel_d", -1.0, "std_vd")]),
-    ("attitude", "deg", math.degrees(1.0), [("roll", "att_roll", 1.0, "roll"),
-                                            ("pitch", "att_pitch", 1.0, "pitch"),
-                                            ("yaw", "att_yaw", 1.0, "yaw")]),
+    ("position", "m", 1.0, [(a.upper(), f"pos_{a}", f"std_p{a}") for a in nav_metrics.AXES]),
+    ("velocity", "m/s", 1.0, [(a.upper(), f"vel_{a}", f"std_v{a}") for a in nav_metrics.AXES]),
+    ("attitude", "deg", math.degrees(1.0), [(a, f"att_{a}", a) for a in nav_metrics.ATTITUDE]),
 )
 ATTITUDE_NOTE = ("attitude: Euler-angle errors roll/pitch/yaw as in the tables; their sigmas "
                  "come from the filter's tilt sigmas about N/E/D, turned by the heading psi: "
@@ -109,6 +105,22 @@ def run_title(results, title="", truth_name=None):
     return ", ".join(parts)
 
 
+def figure_title(entries):
+    """Whose figure it is, from the run itself: the model's name, the filters' labels of
+    ``entries`` and, for the truth, its motion profile and the time span simulated
+    (:func:`run_title`), e.g. ``aircraft_500s: Kf, Iakf, profile 'climb', 0-500 s``."""
+    results = entries[0][1]
+    labels = ", ".join(dict.fromkeys(entry[0] for entry in entries))
+    model = (results.metadata or {}).get("model") or ""
+    truth = next((c for c in results.components if "truth_time" in results.columns[c]), None)
+    return run_title(results, f"{model}: {labels}" if model else labels, truth)
+
+
+def titled(what: str, title: str) -> str:
+    """A figure's title: what it shows, then whose it is (``title``, when given)."""
+    return f"{what}\n{title}" if title else what
+
+
 def _error_limit(values, valid):
     """Half-height of a panel: from the errors (their 99.9 % |error| quantile, plus 30 %),
     never from a sigma, so a diverging filter's envelope cannot flatten the others."""
@@ -133,9 +145,9 @@ def plot_errors(entries, path, title=""):
     fig, axes = plt.subplots(3, 3, figsize=(14, 9.5), sharex=True)
     t = e["time"]
     for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
-        for col, (axis, key, sign, std) in enumerate(axes_spec):
+        for col, (axis, key, std) in enumerate(axes_spec):
             ax = axes[row, col]
-            err = np.where(invalid, np.nan, sign * e[key] * scale)
+            err = np.where(invalid, np.nan, e[key] * scale)
             ax.plot(t, err, color="C0", lw=0.8, label=f"{label} error")
             limit = _error_limit([err], e["valid"])
             sigma = _sigma(results, name, std, attitude)
@@ -155,7 +167,7 @@ def plot_errors(entries, path, title=""):
     for ax in axes.flat:  # the first panel, and every panel whose sigma is off its scale
         if ax is axes[0, 0] or any("beyond" in t for t in ax.get_legend_handles_labels()[1]):
             ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle(title or errors_caption(entries))
+    fig.suptitle(titled(errors_caption(entries), title))
     fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
     fig.tight_layout(rect=(0, 0.035, 1, 1))
     return _save(fig, path)
@@ -186,7 +198,7 @@ def plot_error_rms(entries, path, title=""):
     window = max(RMS_WINDOW_S, RMS_WINDOW_FRACTION * span)
     widths = np.linspace(2.4, 0.9, len(entries))
     for row, (group, unit, scale, axes_spec) in enumerate(_PANELS):
-        for col, (axis, key, sign, std) in enumerate(axes_spec):
+        for col, (axis, key, std) in enumerate(axes_spec):
             ax = axes[row, col]
             sigmas = []
             for f_i, (label, results, name, e) in enumerate(entries):
@@ -211,7 +223,7 @@ def plot_error_rms(entries, path, title=""):
     handles, labels = _legend_entries(axes.flat)
     fig.legend(handles, labels, loc="lower center", ncol=min(4, len(labels)), fontsize=8,
                frameon=False, bbox_to_anchor=(0.5, 0.03))
-    fig.suptitle(title or f"RMS errors over a sliding {window:g} s window")
+    fig.suptitle(titled(f"RMS errors over a sliding {window:g} s window", title))
     fig.text(0.01, 0.005, ATTITUDE_NOTE, fontsize=7, va="bottom", wrap=True)
     rows = 1 + (len(labels) - 1) // 4
     fig.tight_layout(rect=(0, 0.05 + 0.025 * rows, 1, 1))
@@ -263,7 +275,7 @@ def plot_attitude_errors(entries, path, title="", angles=nav_metrics.ATTITUDE):
             ax.grid(True, alpha=0.3)
     legend_outside(axes[0, 0])
     axes[-1, 0].set_xlabel("time [s]")
-    fig.suptitle(title or ATTITUDE_ERRORS_CAPTION)
+    fig.suptitle(titled(ATTITUDE_ERRORS_CAPTION, title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -309,7 +321,7 @@ def plot_nis(entries, path, title=""):
     ax.set_ylabel("NIS")
     ax.grid(True, alpha=0.3)
     legend_outside(ax)
-    ax.set_title(title or "normalized innovation squared")
+    ax.set_title(titled("normalized innovation squared", title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -387,7 +399,7 @@ def plot_r_estimate(entries, path, title=""):
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, ncol=3, loc="best")
     axes[-1].set_xlabel("time [s]")
-    fig.suptitle(title or "estimated GNSS measurement noise (diagonal of R, as 1 sigma)")
+    fig.suptitle(titled("estimated GNSS measurement noise (diagonal of R, as 1 sigma)", title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -427,7 +439,7 @@ def plot_chi2(entries, path, title="", phases=()):
     ax.set_ylabel("chi-square statistic")
     ax.grid(True, alpha=0.3)
     legend_outside(ax)
-    ax.set_title(title or "chi-square statistic of the innovations")
+    ax.set_title(titled("chi-square statistic of the innovations", title))
     fig.tight_layout()
     return _save(fig, path)
 
@@ -480,13 +492,13 @@ def plot_outliers(entries, path, title=""):
     ax_ev.set_ylim(-len(rows) + 0.5, 0.5)
     ax_ev.grid(True, axis="x", alpha=0.3)
     ax_ev.set_xlabel("time [s]")
-    ax.set_title(title or "per-observation chi-square test and outlier epochs")
+    ax.set_title(titled("per-observation chi-square test and outlier epochs", title))
     fig.tight_layout()
     return _save(fig, path)
 
 
 def plot_trajectory(results, truth_name, path, title=""):
-    """The truth: ground track, height, velocity east/north/up, speed, roll and pitch, yaw;
+    """The truth: ground track, height, velocity north/east/down, speed, roll and pitch, yaw;
     the title names the run's profile and span (:func:`run_title`)."""
     col = results.column
     t = col(truth_name, "truth_time")
@@ -505,7 +517,7 @@ def plot_trajectory(results, truth_name, path, title=""):
     axes[0, 1].plot(t, h)
     axes[0, 1].set_ylabel("height [m]")
     v = {a: col(truth_name, f"truth_v{a}") for a in "ned"}
-    for name, values in (("east", v["e"]), ("north", v["n"]), ("up", -v["d"])):
+    for name, values in (("north", v["n"]), ("east", v["e"]), ("down", v["d"])):
         axes[1, 0].plot(t, values, lw=0.8, label=name)
     axes[1, 0].set_ylabel("velocity [m/s]")
     axes[1, 0].legend(fontsize=8)

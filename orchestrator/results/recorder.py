@@ -75,6 +75,12 @@ class Recording:
             self.sink.write(self._to_chunk(self.first_row, n, self.buffers))
         self.first_row += n
 
+    def end_at(self, n_rows: int) -> None:
+        """The recording ends after its first ``n_rows`` rows (a run that stopped early)."""
+        self.n_rows = int(n_rows)
+        if self.sink is None:
+            self.size = self.n_rows
+
     def finish(self) -> None:
         """Hand over the rows not yet written (streamed runs)."""
         if self.sink is not None:

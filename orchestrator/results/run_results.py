@@ -41,6 +41,19 @@ def _umask() -> int:
     return mask
 
 
+#: checks run just before a written file replaces its target; the command line's deferred
+#: interrupts (:func:`orchestrator.cosim.interrupts.deferred`) add theirs, so a Ctrl-C that
+#: arrives while a file is written commits nothing: a command ends either with its output
+#: complete or with nothing of it written and the status of the interrupt
+COMMIT_CHECKS: List[Callable[[], None]] = []
+
+
+def check_commit() -> None:
+    """Run :data:`COMMIT_CHECKS` (an output about to be moved into place)."""
+    for check in COMMIT_CHECKS:
+        check()
+
+
 def atomic_write(path, write: Callable[[Any], None], binary: bool = False) -> Path:
     """Call ``write(file)`` on a temporary file next to ``path``, then move it onto ``path``.
 
@@ -63,6 +76,7 @@ def atomic_write(path, write: Callable[[Any], None], binary: bool = False) -> Pa
                 f.flush()
                 os.fsync(f.fileno())
             os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; the usual permissions
+            check_commit()
             os.replace(tmp, path)
         except OSError as exc:      # a full disk, a quota: the file named, the cause kept
             raise NavfmuError(f"cannot write {path}: {exc.strerror or exc}") from exc

@@ -9,7 +9,7 @@ from typing import Any, Dict, Sequence
 from ..results import metrics as nav_metrics
 from ..results import phases as scenario_phases
 from ..results import windows as paper_windows
-from ..results.metric_comparisons import (improvement_percent, per_axis_enu, reference_metrics,
+from ..results.metric_comparisons import (improvement_percent, per_axis, reference_metrics,
     rms_3d, rms_ratio, rms_table)
 from .scenarios import FILTER_COMPONENT, Run
 
@@ -24,7 +24,7 @@ def report_table(runs: Sequence[Run], reference=None) -> str:
     Missing numbers of the paper (null) print '-'."""
     ref_rows = []
     for r in (reference or {}).get("table", ()):
-        values = (r.get("position_enu_m"), r.get("velocity_enu_mps"), r.get("attitude_deg"))
+        values = (r.get("position_ned_m"), r.get("velocity_ned_mps"), r.get("attitude_deg"))
         if all(v is None for v in values):
             continue  # the paper gives no number for this row (e.g. only in a figure)
         ref_rows.append((r.get("filter"), f"paper: {r['label']}",
@@ -60,11 +60,11 @@ def _improvement_items(imp, b, f):
             items.append({"key": group, "kind": "percent_3d", "baseline_rms": b3,
                           "filter_rms": f3, "ours": improvement_percent(b3, f3),
                           "paper": imp[group]})
-        for suffix, kind in (("_enu", "percent_axes"), ("_ratio_enu", "ratio_axes")):
+        for suffix, kind in (("_ned", "percent_axes"), ("_ratio_ned", "ratio_axes")):
             key = group + suffix
             if key not in imp:
                 continue
-            bs, fs = per_axis_enu(b, group), per_axis_enu(f, group)
+            bs, fs = per_axis(b, group), per_axis(f, group)
             fn = (improvement_percent if kind == "percent_axes"
                   else rms_ratio)
             items.append({"key": key, "kind": kind, "baseline_rms": bs, "filter_rms": fs,
@@ -106,9 +106,9 @@ def _time_per_cycle_block(times, ours, runs):
 def paper_comparison(runs: Sequence[Run], reference=None) -> Dict[str, Any]:
     """Our numbers next to the paper's, for the blocks ``reference`` (paper.json) has:
 
-    * ``improvement_percent`` (baseline and filter names): per-axis entries (``position_enu``,
-      ``velocity_enu`` [%], ``position_ratio_enu``, ``velocity_ratio_enu`` [baseline RMS /
-      filter RMS], east/north/up) and 3-D entries (``position``, ``velocity`` [%], of the 3-D
+    * ``improvement_percent`` (baseline and filter names): per-axis entries (``position_ned``,
+      ``velocity_ned`` [%], ``position_ratio_ned``, ``velocity_ratio_ned`` [baseline RMS /
+      filter RMS], north/east/down) and 3-D entries (``position``, ``velocity`` [%], of the 3-D
       RMS, see :func:`orchestrator.results.metric_comparisons.rms_3d`);
     * ``time_per_cycle_ms`` (filter -> ms; the first listed is the baseline of the ratios):
       our filter's mean do_step time per call next to it;

@@ -37,7 +37,7 @@ def _improvement_lines(imp) -> List[str]:
             continue
         what = (f"{key.split('_')[0]} RMS ratio {base}/{filt}" if item["kind"] == "ratio_axes"
                 else f"{key.split('_')[0]} RMS reduction [%]")
-        lines.append(f"  {what:40s} {'E':>8s} {'N':>8s} {'U':>8s}")
+        lines.append(f"  {what:40s} {'N':>8s} {'E':>8s} {'D':>8s}")
         fmt = "8.2f" if item["kind"] == "ratio_axes" else "8.1f"
         lines.append(f"  {'    ours':40s} " + " ".join(_num(v, fmt) for v in item["ours"]))
         lines.append(f"  {'    paper':40s} " + " ".join(_num(v, fmt) for v in item["paper"]))

@@ -1,5 +1,6 @@
-"""What can be checked before a run starts: its stop time, the memory it will need, and that
-the scenario's components are connected at all.
+"""What can be checked before a run starts (or a model is written for another master): its
+stop time, the memory it will need, that the scenario's components are connected at all, and
+that they accept their parameter values.
 
 The master preallocates the recording (one float64 per recorded variable and row), and the
 result files and metrics need copies of it; a run whose recording cannot fit is refused up
@@ -43,6 +44,23 @@ def check_connected(model) -> None:
                           "nothing; connect the sensors to the filter")
 
 
+def check_initializes(model, parameters=None) -> None:
+    """Every component of ``model`` accepts the model's parameter values: the model is
+    initialized and stepped once on its FMUs (each FMU's own checks, ours or not), so that a
+    model written for another master (``navfmu package``, ``export``) does not carry a value
+    its FMU refuses, e.g. a negative sigma.  ``parameters``: overrides
+    (``component.name`` -> value).  The refusal comes as the run's error, naming the
+    component and the parameter."""
+    import warnings
+
+    from ..cosim.master import simulate
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")     # a one-step run's filter warnings say nothing here
+        simulate(model, backend="fmu", stop_time=model.start_time + model.base_step,
+                 parameters=parameters)
+
+
 def available_memory() -> Optional[int]:
     """Bytes of memory available to a new allocation (Linux MemAvailable; None if unknown)."""
     try:
@@ -81,5 +99,5 @@ def check_simulation(sim, stop_time: Optional[float]) -> None:
     check_memory(n_rows, sum(len(v) for v in sim.recorded.values()))
 
 
-__all__ = ["check_stop_time", "check_connected", "check_memory", "check_simulation",
-           "available_memory"]
+__all__ = ["check_stop_time", "check_connected", "check_initializes", "check_memory",
+           "check_simulation", "available_memory"]

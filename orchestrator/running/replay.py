@@ -29,7 +29,7 @@ from navcore.sensors.sensorlog import LogError, SensorLog, read_log, write_log
 from ..building import build as fmu_build
 from ..errors import NavfmuError
 from ..results.metrics import find_component
-from ..results.run_results import Results
+from ..results.run_results import Results, check_commit
 from ..model.ssp import ComponentSpec, Connection, SystemModel
 
 REPLAY_MODEL = "ImuGnssReplay"
@@ -83,7 +83,7 @@ def write_sensor_log(results: Results, folder) -> Path:
     """Write the sensor log of ``results`` to ``folder`` (atomically, see
     :func:`navcore.sensors.sensorlog.write_log`)."""
     try:
-        return write_log(folder, sensor_log_from_results(results))
+        return write_log(folder, sensor_log_from_results(results), before_commit=check_commit)
     except LogError as exc:
         raise NavfmuError(str(exc)) from None
 
@@ -150,7 +150,11 @@ def _log_span(log: SensorLog, folder, start_time, stop_time) -> Tuple[float, flo
                               f"{folder}, which ends at "
                               f"{absolute_text(log.stop_time, origin)} s")
         start = float(begins[k])
-    end = log.stop_time if stop_time is None else min(float(stop_time) - origin, log.stop_time)
+    if stop_time is not None and float(stop_time) - origin > log.stop_time:
+        raise NavfmuError(f"--stop {stop_time:g}: after the end of the log {folder} "
+                          f"({absolute_text(log.stop_time, origin)} s); give a stop time up "
+                          "to it, or no --stop to replay to the log's end")
+    end = log.stop_time if stop_time is None else float(stop_time) - origin
     return start, end
 
 

@@ -109,7 +109,7 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
     navigation = [en for en in entries if "pos_n" in en[3]]
     attitude = [en for en in entries if "pos_n" not in en[3]]
     if attitude:
-        for path in _attitude_plots(attitude, out, title):
+        for path in _attitude_plots(attitude, out, title or plots.figure_title(attitude)):
             written.add(path)
     if navigation:
         _navigation_plots(navigation, out, title, reference, written)
@@ -123,20 +123,25 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
     if vehicle is not None:
         from ..results.mission_plots import plot_mission
 
-        written.add(plot_mission(missions, vehicle, out / "mission.png", title))
+        written.add(plot_mission(missions, vehicle, out / "mission.png",
+                                 title or (plots.figure_title(shown) if shown else "")))
 
 
 def _navigation_plots(entries, out: Path, title, reference, written: _Written) -> None:
     """Plots of INS/GNSS filters: errors (and each filter's +-3 sigma apart when several),
-    NIS, the adaptive diagnostics, the R estimate, chi-square and the outliers."""
+    NIS, the adaptive diagnostics, the R estimate, chi-square and the outliers.  ``title``:
+    the caller's, else each figure's from the run (:func:`~orchestrator.results.plots.
+    figure_title`: the model, the filters it shows, the profile and the span)."""
     from ..results import plots
 
-    written.add(plots.plot_errors(entries, out / "errors.png", title))
     if len(entries) > 1:  # errors.png compares RMS; each filter's +-3 sigma apart
         for entry in entries:
             safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in entry[0])
             written.add(plots.plot_errors([entry], out / f"errors_{safe}.png",
-                                          f"{entry[0]} ({title})" if title else entry[0]))
+                                          f"{entry[0]} ({title})" if title
+                                          else plots.figure_title([entry])))
+    title = title or plots.figure_title(entries)
+    written.add(plots.plot_errors(entries, out / "errors.png", title))
     written.add(plots.plot_nis(entries, out / "nis.png", title))
     windows = scenario_phases.phase_windows(reference)
     written.add(plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png", title,

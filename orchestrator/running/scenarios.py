@@ -137,7 +137,7 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
                       stop_time: Optional[float] = None, parameters=None, window=None,
                       progress=None, build=True, log=print, replay=None,
                       algorithm="gauss-seidel", stream_to=None, replay_options=None,
-                      isolation=None) -> Run:
+                      isolation=None, components=None) -> Run:
     """Run one scenario (optionally with the filter component swapped, and with its sensor
     components replaced by a replay of the sensor log in folder ``replay``, see
     :func:`orchestrator.running.replay.replay_model`, with its keyword arguments
@@ -147,7 +147,8 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
     ``stream_to``: a ``.parquet`` path; the rows then go to that file and to the metrics in
     chunks (memory flat in the flight length) instead of staying in ``results``.
     ``isolation``: which FMUs run in a host process of their own
-    (:class:`~orchestrator.cosim.isolation.Isolation`; default: the foreign ones)."""
+    (:class:`~orchestrator.cosim.isolation.Isolation`; default: the foreign ones).
+    ``components``: model name -> component class over the registry's (direct backend)."""
     label = filter_label(model, filter)
     if filter:
         model = swap_filter(model, filter)
@@ -164,7 +165,8 @@ def simulate_scenario(model: SystemModel, filter: Optional[str] = None, backend:
         origin = notes["time_origin"]
     if backend == "fmu" and build:
         ensure_fmus(model, log=log)
-    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
+    known = {**registry(), **(components or {})} if backend == "direct" else None
+    sim = Simulation(model, backend=backend, registry=known,
                      parameters=parameters, record=record, algorithm=algorithm,
                      isolation=isolation)
     prechecks.check_simulation(sim, stop_time)

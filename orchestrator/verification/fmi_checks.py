@@ -13,6 +13,7 @@ from typing import List
 
 import numpy as np
 
+from ..cosim import interrupts
 from .roles import ROLE_TITLES, contract
 from .setting import Setting, input_table
 from .run_failures import crash_failure
@@ -76,6 +77,7 @@ def check_ports(setting: Setting) -> Check:
 def _probe(setting: Setting, probe: str, table_file: Path, h: float, **extra):
     job = {"fmu": str(setting.facts.path), "probe": probe, "table": str(table_file), "h": h,
            "parameters": setting.parameters, **extra}
+    interrupts.safe_point("verify-probe")   # a Ctrl-C stops between the probes
     result = run_child(PROBE_MODULE, job)
     if result.get("crashed") and probe != "hostile":    # a crash is retried once
         result = run_child(PROBE_MODULE, job)
@@ -134,8 +136,9 @@ def _variable_step_check(setting: Setting, result) -> Check:
 def _hostile_check(result) -> Check:
     criterion = ("an unknown value reference, a set of an output and a step back in time each "
                  "return fmi2Discard or worse; the host process lives on")
-    if "error" in result:
-        return Check("fmi.hostile", "hostile host calls", criterion, "host ended", "fail",
+    if "error" in result:      # the host died, or the probe could not make its instances
+        return Check("fmi.hostile", "hostile host calls", criterion,
+                     "host ended" if result.get("crashed") else "probe failed", "fail",
                      result["error"], result)
     statuses = result["statuses"]
     accepted = [name for name, status in statuses.items()

@@ -15,7 +15,8 @@ Probes, each on fresh instances driven through raw fmpy calls:
 * ``hostile``: an unknown value reference read, an output set, a step back in time; each
   must return an error status (fmi2Discard or worse), and the child must live on.
 
-Nothing here imports navcore: the probes need nothing of navfmu inside the FMU.
+Nothing here imports navcore's algorithms: the probes need nothing of navfmu inside the
+FMU.  FMI 3.0 FMUs are probed through fmpy's ``FMU3Slave`` with the same calls.
 """
 from __future__ import annotations
 
@@ -25,55 +26,109 @@ import sys
 
 import numpy as np
 
+from ..cosim.fmi3_variables import FMI3_TYPES
+
 INCREMENTS = ("imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x", "imu_dvel_y",
               "imu_dvel_z")
 RATES = {"imu_gyro_x": "imu_dtheta_x", "imu_gyro_y": "imu_dtheta_y",
          "imu_gyro_z": "imu_dtheta_z", "imu_accel_x": "imu_dvel_x",
          "imu_accel_y": "imu_dvel_y", "imu_accel_z": "imu_dvel_z"}
-ERROR_STATUS = 2  # fmi2Discard or worse counts as a refusal
+ERROR_STATUS = 2  # Discard or worse (fmi2 and fmi3 alike) counts as a refusal
+
+
+AUTHORING = "docs/guide/authoring_fmus.md#packaging-the-slaves-own-code-a-second-instance-must-work"
+
+
+class SecondInstanceError(RuntimeError):
+    """The second instance of the FMU in this process failed where the first did not."""
+
+
+def second_instance_message(model: str, exc) -> str:
+    """What a failed instantiation after a successful one in the same process means."""
+    return (f"the second instance of {model} in one process failed to instantiate, the first "
+            f"did not ({exc}): the FMU's code shares state between its instances, typically a "
+            "pythonfmu slave importing a module of its own project, which lives in the "
+            "process's one sys.modules; package the module in the FMU's resources under a name "
+            f"private to the FMU, or keep the slave's code in its one script (see {AUTHORING})")
 
 
 class Instance:
-    """One initialized instance of the FMU, with its variables grouped by type."""
+    """One initialized instance of the FMU (FMI 2.0 or 3.0), with its variables grouped by
+    their connector type (:mod:`orchestrator.cosim.fmi3_variables` maps FMI 3.0's).  A failed
+    instantiation after a successful one in this process says what that means
+    (:func:`second_instance_message`)."""
 
-    def __init__(self, path, md, unzip, name, parameters):
-        from fmpy.fmi2 import FMU2Slave
+    #: instances created in this process so far
+    created = 0
 
+    def __init__(self, path, md, unzip, name, parameters, in_initialization=None,
+                 parameters_first=False):
+        """``in_initialization(self)``: called in initialization mode, the parameters set;
+        ``parameters_first``: set them before entering initialization mode (as fmpy's
+        simulate_fmu and our master do), else in initialization mode."""
         self.md = md
+        self.fmi3 = md.fmiVersion == "3.0"
         self.vars = {v.name: v for v in md.modelVariables}
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, instanceName=name,
-                             modelIdentifier=md.coSimulation.modelIdentifier)
-        self.fmu.instantiate()
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        for key, value in parameters.items():
-            self.set(key, value)
+        if self.fmi3:
+            from fmpy.fmi3 import FMU3Slave as Slave
+        else:
+            from fmpy.fmi2 import FMU2Slave as Slave
+        self.fmu = Slave(guid=md.guid, unzipDirectory=unzip, instanceName=name,
+                         modelIdentifier=md.coSimulation.modelIdentifier)
+        try:
+            self.fmu.instantiate()
+        except Exception as exc:
+            if Instance.created:
+                raise SecondInstanceError(second_instance_message(md.modelName, exc)) from None
+            raise
+        Instance.created += 1
+        if not self.fmi3:
+            self.fmu.setupExperiment(startTime=0.0)
+        if parameters_first:
+            for key, value in parameters.items():
+                self.set(key, value)
+        if self.fmi3:
+            self.fmu.enterInitializationMode(startTime=0.0)
+        else:
+            self.fmu.enterInitializationMode()
+        if not parameters_first:
+            for key, value in parameters.items():
+                self.set(key, value)
+        # the outputs by connector type, within one by FMI type (fmpy's get<type> for each)
+        self.groups = []
+        for kind in ("Real", "Integer", "Boolean"):
+            by_type = {}
+            for v in md.modelVariables:
+                if v.causality == "output" and self.kind(v) == kind:
+                    by_type.setdefault(v.type, []).append(v)
+            self.groups += list(by_type.items())
+        if in_initialization is not None:
+            in_initialization(self)
         self.fmu.exitInitializationMode()
-        self.outputs = {t: [v for v in md.modelVariables
-                            if v.causality == "output" and v.type == t]
-                        for t in ("Real", "Integer", "Boolean")}
+
+    def kind(self, v) -> str:
+        """The connector type of ``v``."""
+        return FMI3_TYPES.get(v.type, v.type) if self.fmi3 else v.type
 
     def set(self, name, value):
         v = self.vars[name]
-        setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
-                  "Boolean": self.fmu.setBoolean, "String": self.fmu.setString}[v.type]
-        cast = {"Real": float, "Integer": int, "Boolean": bool, "String": str}[v.type]
-        setter([v.valueReference], [cast(value)])
+        cast = {"Real": float, "Integer": int, "Boolean": bool, "String": str}[self.kind(v)]
+        getattr(self.fmu, "set" + v.type)([v.valueReference], [cast(value)])
 
     def read(self):
         """All outputs as one float64 vector (Integers and Booleans as numbers)."""
-        parts = [np.array(self.fmu.getReal([v.valueReference for v in self.outputs["Real"]]),
-                          dtype=float)]
-        if self.outputs["Integer"]:
-            parts.append(np.array(self.fmu.getInteger(
-                [v.valueReference for v in self.outputs["Integer"]]), dtype=float))
-        if self.outputs["Boolean"]:
-            parts.append(np.array(self.fmu.getBoolean(
-                [v.valueReference for v in self.outputs["Boolean"]]), dtype=float))
-        return np.concatenate(parts)
+        parts = [np.asarray(getattr(self.fmu, "get" + typ)([v.valueReference for v in vs]),
+                            dtype=float) for typ, vs in self.groups]
+        return np.concatenate(parts) if parts else np.zeros(0)
 
     def output_names(self):
-        return [v.name for t in ("Real", "Integer", "Boolean") for v in self.outputs[t]]
+        return [v.name for _, vs in self.groups for v in vs]
+
+    def state(self, verb, *args):
+        """fmpy's ``<verb>FMUstate`` (FMI 2.0) or ``<verb>FMUState`` (FMI 3.0) call."""
+        if verb == "deserialize" and not self.fmi3:
+            verb = "deSerialize"
+        return getattr(self.fmu, f"{verb}FMU{'S' if self.fmi3 else 's'}tate")(*args)
 
     def run(self, table, k0, k1, h):
         rows = []
@@ -113,18 +168,18 @@ def probe_state(path, md, unzip, parameters, table, h):
     first = Instance(path, md, unzip, "state_a", parameters)
     names = first.output_names()
     first.run(table, 0, k0, h)
-    state = first.fmu.getFMUstate()
+    state = first.state("get")
     result = {"steps": n, "restored_at_s": k0 * h}
-    blob = first.fmu.serializeFMUstate(state) if md.coSimulation.canSerializeFMUstate else None
+    blob = first.state("serialize", state) if md.coSimulation.canSerializeFMUstate else None
     a = first.run(table, k0, n, h)
-    first.fmu.setFMUstate(state)
+    first.state("set", state)
     b = first.run(table, k0, n, h)
     result["set_state"] = _difference(a, b, names, h, k0)
     first.free()
     if blob is not None:
         second = Instance(path, md, unzip, "state_c", parameters)
-        restored = second.fmu.deSerializeFMUstate(blob)
-        second.fmu.setFMUstate(restored)
+        restored = second.state("deserialize", blob)
+        second.state("set", restored)
         c = second.run(table, k0, n, h)
         result["serialized_bytes"] = len(blob)
         result["deserialize"] = _difference(a, c, names, h, k0)
@@ -180,15 +235,16 @@ def _status(call):
 
 def probe_hostile(path, md, unzip, parameters, table, h):
     cases = {}
-    outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+    real = "Float64" if md.fmiVersion == "3.0" else "Real"
+    outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == real]
     top = max(v.valueReference for v in md.modelVariables) + 1000
     inst = Instance(path, md, unzip, "hostile_vr", parameters)
-    cases["unknown value reference"] = _status(lambda: inst.fmu.getReal([top]))
+    cases["unknown value reference"] = _status(lambda: getattr(inst.fmu, "get" + real)([top]))
     inst.free()
     if outputs:
         inst = Instance(path, md, unzip, "hostile_set", parameters)
         cases["set of an output"] = _status(
-            lambda: inst.fmu.setReal([outputs[0].valueReference], [0.5]))
+            lambda: getattr(inst.fmu, "set" + real)([outputs[0].valueReference], [0.5]))
         inst.free()
     inst = Instance(path, md, unzip, "hostile_back", parameters)
     inst.run(table, 0, 2, h)
@@ -213,7 +269,8 @@ def main(job_file):
     try:
         result = probe(job["fmu"], md, unzip, job["parameters"], table, job["h"], **extra)
     except Exception as exc:   # an FMI error status on a legal call, or a broken FMU
-        result = {"error": f"{type(exc).__name__}: {exc}"}
+        result = {"error": str(exc) if isinstance(exc, SecondInstanceError)
+                  else f"{type(exc).__name__}: {exc}"}
     print(json.dumps(result), flush=True)
     # the instances' shared libraries stay loaded; leave their files to the OS at exit
     shutil.rmtree(unzip, ignore_errors=True)

@@ -6,7 +6,9 @@ A role is detected from the variables alone (nothing inside the FMU needs navfmu
 * ``ins_gnss_filter``: outputs ``nav_lat`` and takes ``gnss_lat`` and ``imu_dtheta_x``;
 * ``attitude_filter``: outputs ``nav_roll`` but no ``nav_lat`` and takes ``imu_dtheta_x``;
 * ``imu_sensor``: outputs ``imu_dtheta_x`` and no ``gnss_lat``;
-* ``gnss_receiver``: outputs ``gnss_lat`` and takes ``truth_lat``.
+* ``gnss_receiver``: outputs ``gnss_lat`` and takes ``truth_lat``;
+* ``vehicle``: outputs ``truth_lat`` and ``truth_roll`` but no ``imu_dtheta_x`` (the truth of
+  docs/guide/vehicle_in_the_loop.md; body rates and specific force optional).
 
 The contract of each role comes from :mod:`navcore.signals`.  *Required* ports are those the
 checks cannot do without (a filter's inputs and its solution); the others are *optional*: a
@@ -19,14 +21,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, Optional, Tuple
 
+from navcore.components import imu_sensor
 from navcore.core import signals
 
+from ..cosim.fmi3_variables import SUPPORTED_VERSIONS, variables_of
+from ..building.build import binary_platforms
 from ..errors import NavfmuError
 
-ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver")
+ROLES = ("ins_gnss_filter", "attitude_filter", "imu_sensor", "gnss_receiver", "vehicle")
 
 ROLE_TITLES = {"ins_gnss_filter": "INS/GNSS filter", "attitude_filter": "attitude filter",
-               "imu_sensor": "IMU sensor", "gnss_receiver": "GNSS receiver"}
+               "imu_sensor": "IMU sensor", "gnss_receiver": "GNSS receiver",
+               "vehicle": "vehicle"}
 
 
 @dataclass(frozen=True)
@@ -61,6 +67,22 @@ class FmuFacts:
         return {n: v for n, v in self.variables.items() if v.causality == "parameter"}
 
 
+def _check_runnable(path: Path, identifier: str, version: str = "2.0") -> None:
+    """An FMU with neither a binary for this platform nor ``sources/`` to build one from
+    cannot run at all: one line, instead of every check failing on it."""
+    from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+    folder = platform_tuple if version == "3.0" else platform
+    binary = f"binaries/{folder}/{identifier}{sharedLibraryExtension}"
+    if binary in names or any(n.startswith("sources/") and not n.endswith("/") for n in names):
+        return
+    have = ", ".join(sorted(binary_platforms(names))) or "none"
+    raise NavfmuError(f"{path}: no binary for this platform ({binary}) and no sources/ to "
+                      f"build one from (the FMU has binaries for: {have})")
+
+
 def read_fmu(path) -> FmuFacts:
     """The facts of the FMU file ``path``; :class:`NavfmuError` naming the file when it is
     missing, not an FMU, or not a co-simulation FMU."""
@@ -76,14 +98,17 @@ def read_fmu(path) -> FmuFacts:
     except Exception as exc:  # fmpy raises plain exceptions for broken archives
         raise NavfmuError(f"{p}: cannot read the FMU's model description: {exc}") from None
     cs = md.coSimulation
-    if cs is None:
-        raise NavfmuError(f"{p}: not a co-simulation FMU (verify runs FMI 2.0 co-simulation)")
+    if cs is None or md.fmiVersion not in SUPPORTED_VERSIONS:
+        raise NavfmuError(f"{p}: not a co-simulation FMU of FMI {' or '.join(SUPPORTED_VERSIONS)} "
+                          f"(verify runs FMI 2.0 and 3.0 co-simulation)")
+    _check_runnable(p, cs.modelIdentifier, md.fmiVersion)
     units = {}
     variables = {}
+    connector = variables_of(md, md.modelName, p)
     for v in md.modelVariables:
-        unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or ""
+        unit = connector[v.name].unit
         units[v.name] = unit
-        variables[v.name] = Variable(v.name, v.causality, v.type, unit,
+        variables[v.name] = Variable(v.name, v.causality, connector[v.name].type, unit,
                                      None if v.start is None else str(v.start))
     step = md.defaultExperiment.stepSize if md.defaultExperiment is not None else None
     return FmuFacts(path=p.resolve(), model_name=md.modelName, variables=variables,
@@ -109,6 +134,8 @@ def detect_role(facts: FmuFacts, forced: Optional[str] = None) -> str:
         fits.append("imu_sensor")
     if "gnss_lat" in outs and "truth_lat" in ins:
         fits.append("gnss_receiver")
+    if {"truth_lat", "truth_roll"} <= outs and "imu_dtheta_x" not in outs:
+        fits.append("vehicle")
     if len(fits) == 1:
         return fits[0]
     if not fits:
@@ -153,6 +180,9 @@ def contract(role: str):
         return (_ports(truth, "input", {p.name for p in truth})
                 + _ports(signals.GNSS + signals.GNSS_INJECTED, "output",
                          {p.name for p in signals.GNSS}))
+    if role == "vehicle":
+        return (_ports(signals.TRUTH, "output", {p.name for p in signals.TRUTH})
+                + _ports(imu_sensor.RATES, "output", set()))
     raise NavfmuError(f"unknown role {role!r}")
 
 

@@ -10,6 +10,7 @@ reported the same way.  :func:`summarize_run` is what the child computes.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -30,6 +31,7 @@ from ..running import scenarios
 from .run_failures import crash_failure, failure_of
 from .sensor_checks import allan_curves
 from .verdicts import run_child
+from . import vehicle_probe
 
 MODULE = "orchestrator.verification.scenario_run"
 
@@ -138,13 +140,30 @@ def imu_static(job: Dict[str, Any]) -> Dict[str, Any]:
     return {"samples": int(new.sum()), "allan": allan_curves(rates, float(np.median(dt)))}
 
 
+def without_absent_inputs(model, component):
+    """``model`` without the connections into inputs ``component``'s FMU does not have (a
+    vehicle flying on its own, without the guided vehicle's ``nav_*`` inputs)."""
+    from fmpy import read_model_description
+
+    names = {v.name for v in read_model_description(
+        str(model.component(component).source), validate=False).modelVariables}
+    kept = [c for c in model.connections
+            if c.end_component != component or c.end_connector in names]
+    return dataclasses.replace(model, connections=kept)
+
+
 def summarize_run(job: Dict[str, Any]) -> Dict[str, Any]:
     """Run ``job`` in this process and summarize it (see the module docstring)."""
     if job.get("kind") == "imu_static":
         return imu_static(job)
+    if job.get("kind") == "vehicle_trajectory":
+        return vehicle_probe.record(job)
     model = scenarios.load_scenario(job["ssd"])
     if job.get("fmu"):
-        model = model.replace_source(job["component"], job["fmu"])
+        swapped = job.get("swap", job["component"])
+        model = model.replace_source(swapped, job["fmu"])
+        if job.get("prune_inputs"):
+            model = without_absent_inputs(model, swapped)
     if job.get("receiver_attitude"):
         model = connect_receiver_attitude(model, job["receiver_attitude"])
     with warnings.catch_warnings():

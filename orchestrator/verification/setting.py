@@ -11,12 +11,14 @@ INS/GNSS        ``aircraft_500s``      ``filter``
 attitude        ``ahrs_turntable``     ``filter``
 IMU sensor      ``aircraft_500s``      ``trajectory``
 GNSS receiver   ``aircraft_500s``      ``gnss``
+vehicle         ``uav_mission``        ``vehicle``
 ============== ====================== ============
 
 The FMU gets the scenario's bindings of that component for the parameters it has (a swapped
 FMU skips the others, as ``navfmu run --filter`` does) and then the user's ``--set`` values.
 A scenario fits a role when it has that component and the FMU has every variable the
-component's connections use.
+component's connections use (a vehicle: every output; the inputs it lacks, a vehicle not
+guided on the navigation solution, are left unconnected).
 """
 from __future__ import annotations
 
@@ -35,9 +37,10 @@ from .roles import FmuFacts
 
 MODELS = ROOT / "models"
 DEFAULT_SCENARIO = {"ins_gnss_filter": "aircraft_500s", "attitude_filter": "ahrs_turntable",
-                    "imu_sensor": "aircraft_500s", "gnss_receiver": "aircraft_500s"}
+                    "imu_sensor": "aircraft_500s", "gnss_receiver": "aircraft_500s",
+                    "vehicle": "uav_mission"}
 COMPONENT = {"ins_gnss_filter": "filter", "attitude_filter": "filter",
-             "imu_sensor": "trajectory", "gnss_receiver": "gnss"}
+             "imu_sensor": "trajectory", "gnss_receiver": "gnss", "vehicle": "vehicle"}
 #: length of the input table the FMI probes step through [s]
 PROBE_DURATION_S = 20.0
 #: prefix of a ``--set`` name that gives a datasheet value instead of an FMU parameter
@@ -92,9 +95,10 @@ def _check_fits(facts: FmuFacts, role: str, path: Path) -> None:
     if name not in [c.name for c in model.components]:
         raise NavfmuError(f"--scenario {path.parent.name}: does not fit a {role} (it has no "
                           f"component '{name}' for the FMU to stand in for)")
+    inputs = ({c.end_connector for c in model.connections if c.end_component == name}
+              if role != "vehicle" else set())
     needed = sorted(
-        {c.end_connector for c in model.connections if c.end_component == name}
-        | {c.start_connector for c in model.connections if c.start_component == name})
+        inputs | {c.start_connector for c in model.connections if c.start_component == name})
     missing = [n for n in needed if n not in facts.variables]
     if missing:
         raise NavfmuError(f"--scenario {path.parent.name}: does not fit this {role}: its "
@@ -153,7 +157,7 @@ def input_table(setting: Setting, duration: float = PROBE_DURATION_S):
     every = max(1, int(round(h / model.base_step)))
     table = {}
     for c in model.connections:
-        if c.end_component == setting.component:
+        if c.end_component == setting.component and c.end_connector in setting.facts.variables:
             column = results.column(c.start_component, c.start_connector)
             table[c.end_connector] = np.asarray(column[every::every], dtype=float)
     if not table:      # a source without inputs (an IMU of its own trajectory)

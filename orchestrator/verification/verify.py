@@ -20,9 +20,10 @@ from ..building import build as fmu_build
 from ..cosim import fmu_builds
 from ..results import outputs
 from ..running import scenarios
+from ..running.prechecks import check_initializes
 from ..errors import NavfmuError
 from ..campaigns.executor import Executor, Task
-from . import attitude_checks, filter_checks, sensor_checks
+from . import attitude_checks, filter_checks, sensor_checks, vehicle_checks
 from .fmi_checks import run_fmi_checks
 from .report_writing import counts, failing, write_report
 from .roles import detect_role, read_fmu
@@ -35,14 +36,41 @@ REFERENCE_FMUS = ("Kf", "InsOnly", "UkfAhrs", "TrajectoryImu", "GnssReceiver")
 
 
 def _role_checks(setting, runs, executor, progress, workdir, quick=False):
-    """The checks of the role: plan the runs, run them on ``executor``, judge them."""
+    """The checks of the role: plan the runs, run them on ``executor`` (then the runs that
+    depend on their results, for a role that has them), judge them."""
     module = {"ins_gnss_filter": filter_checks, "attitude_filter": attitude_checks,
-              "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks}[setting.role]
+              "imu_sensor": sensor_checks, "gnss_receiver": sensor_checks,
+              "vehicle": vehicle_checks}[setting.role]
     plan = module.plan(setting, runs, quick=quick)
-    tasks = [Task(key=key, func=run_job, args=(job, isolated))
-             for key, job, isolated in plan.jobs]
-    results = dict(executor.run(tasks, progress=progress))
+
+    def run(jobs):
+        return executor.run([Task(key=key, func=run_job, args=(job, isolated))
+                             for key, job, isolated in jobs], progress=progress)
+
+    results = dict(run(plan.jobs))
+    if hasattr(module, "next_jobs"):
+        results.update(run(module.next_jobs(setting, plan, results)))
     return module.judge_plan(setting, plan, results, workdir)
+
+
+def _check_given_values(setting) -> None:
+    """Parameter values given with --set/--ssv that the FMU refuses (``init_lat=nan``) are
+    the user's error, said before the checks run: the scenario is initialized and stepped
+    once with them; when it fails, and succeeds without them, the values are refused with
+    the FMU's own message.  (An FMU that fails either way is the checks' to judge.)"""
+    if not setting.user_sets:
+        return
+    model = setting.swapped()
+    try:
+        check_initializes(model, setting.component_parameters())
+    except NavfmuError as exc:
+        try:
+            check_initializes(model)
+        except NavfmuError:
+            return
+        given = ", ".join(f"{k}={v}" for k, v in setting.user_sets.items())
+        raise NavfmuError(f"{setting.facts.path.name} refuses the parameter values given "
+                          f"({given}): {exc}") from None
 
 
 def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
@@ -69,6 +97,7 @@ def verify(fmu, role: Optional[str] = None, scenario_names: Sequence[str] = (),
                     log=log)
     for path in setting.scenario_paths:
         scenarios.ensure_fmus(scenarios.load_scenario(path), log=log)
+    _check_given_values(setting)
     log(f"verifying {facts.path.name} as {found_role}")
     checks = run_fmi_checks(setting)
     with executor, tempfile.TemporaryDirectory(prefix="navfmu_verify_figures_") as tmp:

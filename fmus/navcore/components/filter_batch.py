@@ -64,7 +64,9 @@ class InsGnssFilterBatch(ComponentBatch):
         alive = [b for b in range(runs) if b not in self._failures]
         first = self.members[alive[0]] if alive else None
         # an engine that propagates otherwise (a subclass's own law) runs its own code
-        self._native = first is not None and self._propagates_like_kf(first)
+        # the land aids update inside the run's own integration: each run steps by itself
+        self._native = (first is not None and self._propagates_like_kf(first)
+                        and not any(self.members[b].engine.aids is not None for b in alive))
         self._together = self._native and (self._updates_like_kf(first)
                                            or self._updates_in_rows(first))
         self._taus = len({(m.engine.config.gyro_bias_tau, m.engine.config.accel_bias_tau)

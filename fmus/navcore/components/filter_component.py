@@ -21,17 +21,21 @@ from ..sensors.gnss_errors import POS_SIGMA_LIMITS, VEL_SIGMA_LIMITS
 from ..ins.constants import DPH, DPSH, UG
 from ..sensors.imu_errors import (ACCEL_BIAS_LIMITS, ACCEL_VRW_LIMITS, GYRO_ARW_LIMITS,
     GYRO_BIAS_LIMITS)
-from ..filters.initial_state import (INIT_CHECK_SIGMAS, INIT_MODES, INIT_PARAMETERS,
-                                     Initializer, disagreement)
+from ..filters.initial_state import (FROM_FIX, INIT_CHECK_SIGMAS, INIT_MODES,
+                                     INIT_PARAMETERS, Initializer, disagreement)
+from ..filters.static_alignment import STATIC_PARAMETERS, RestDetector
 from ..filters.initial_biases import (INITIAL_BIAS_PARAMETERS, StaticBiasEstimator, bias_sigmas,
                                       check_static_mode, given_biases)
 from ..filters.ins_gnss_kf import MEASUREMENTS, KfConfig, KfEngine
+from ..filters.land_aids import LAND_AID_PARAMETERS, LandAids
 from ..filters.latency import SolutionHistory
 from .filter_batch import InsGnssFilterBatch
 from ..filters.correlated_gnss import CORRELATION_PARAMETERS, CorrelatedFixes
 from ..filters.nis_monitor import NIS_WARNING_PARAMETERS, NisMonitor
+from ..filters.process_noise_factor import IMU_NOISE_PARAMETERS
 from ..filters.recovery import RECOVERY_PARAMETERS
 from ..ins.lever_arm import LEVER_ARM_PARAMETERS, antenna_fix, lever_arm_of
+from ..ins import earth
 from ..ins.rotations import euler_to_dcm
 from ..ins.strapdown import Strapdown
 from ..core.timing import same_time, time_tolerance
@@ -96,12 +100,15 @@ _FILTER_PARAMETERS = (
          "filter's nav_time is not applied (counted in n_stale_fixes); a later one is applied "
          "at its gnss_time by re-propagation", DEFAULT_MAX_FIX_AGE, Limits(0.0, 3600.0)),
     *INIT_PARAMETERS,
+    *STATIC_PARAMETERS,
     *INITIAL_BIAS_PARAMETERS,
     *LEVER_ARM_PARAMETERS,
     boolean("r_from_receiver", "take the receiver's own per-fix position sigmas (inputs "
             "gnss_std_n/e/d, a replayed log's std_n/e/d) as the position part of R instead "
             "of r_pos_*", False),
     *CORRELATION_PARAMETERS,
+    *IMU_NOISE_PARAMETERS,
+    *LAND_AID_PARAMETERS,
 )
 
 _IMU_INPUT_NAMES = tuple(p.name for p in signals.IMU[:8])
@@ -139,7 +146,7 @@ class InsGnssFilter(Component):
     default_experiment = (0.0, 500.0, 0.01)
     state_fields = ("engine", "nav_time", "last_epoch", "out", "imu_dt", "history", "pending",
                     "n_stale", "late_fixes", "nis_monitor", "initializer", "static_bias",
-                    "correlated")
+                    "correlated", "rest")
     derived_fields = ("max_fix_age",)
 
     def __init_subclass__(cls, **kwargs):
@@ -159,11 +166,13 @@ class InsGnssFilter(Component):
             bias_sigmas(p, p["p0_gyro_bias_dph"] * DPH, p["p0_accel_bias_ug"] * UG)])
         r = [p["r_pos_n"], p["r_pos_e"], p["r_pos_d"], p["r_vel_n"], p["r_vel_e"], p["r_vel_d"]]
         gyro_bias0, accel_bias0 = given_biases(p)
+        k = p["imu_noise_factor"]       # navcore.filters.process_noise_factor
         return KfConfig(
-            p0=p0, gyro_arw=p["q_gyro_arw_dpsh"] * DPSH, accel_vrw=p["q_accel_vrw_ugpsHz"] * UG,
-            gyro_bias_sigma=p["q_gyro_bias_instability_dph"] * DPH,
+            p0=p0, gyro_arw=k * p["q_gyro_arw_dpsh"] * DPSH,
+            accel_vrw=k * p["q_accel_vrw_ugpsHz"] * UG,
+            gyro_bias_sigma=k * p["q_gyro_bias_instability_dph"] * DPH,
             gyro_bias_tau=p["q_gyro_bias_tau_s"],
-            accel_bias_sigma=p["q_accel_bias_instability_ug"] * UG,
+            accel_bias_sigma=k * p["q_accel_bias_instability_ug"] * UG,
             accel_bias_tau=p["q_accel_bias_tau_s"],
             r_sigma=np.array(r[:MEASUREMENTS[p["measurement"]]]),
             measurement=p["measurement"], lever_arm=lever_arm_of(p),
@@ -174,7 +183,11 @@ class InsGnssFilter(Component):
         return {}
 
     def make_engine(self, config, nav):
-        return self.engine_class(config, nav, **self.engine_options())
+        """The engine, with the land aids (:mod:`navcore.filters.land_aids`) when any is on."""
+        engine = self.engine_class(config, nav, **self.engine_options())
+        if LandAids.wanted(self.params):
+            engine.aids = LandAids(self.params)
+        return engine
 
     def fresh_engine(self):
         """The engine as it starts, built from the parameters (validated first)."""
@@ -197,7 +210,7 @@ class InsGnssFilter(Component):
         self.pending = []            # fixes from the future: (gnss_time, lat, lon, h, v)
         self.n_stale = 0
         self.late_fixes = False      # a fix was applied in the past: dense checkpoints
-        self.nis_monitor = NisMonitor(p["nis_warning_s"])
+        self.nis_monitor = NisMonitor(p["nis_warning_s"], p["imu_noise_factor"])
         self.correlated = CorrelatedFixes(p["gnss_corr_time"])
         self.out = {q.name: q.default() for q in self.outputs}
         self.require("init_mode", p["init_mode"] in INIT_MODES, f"is not one of {INIT_MODES}")
@@ -206,6 +219,8 @@ class InsGnssFilter(Component):
         why = check_static_mode(p["init_mode"], p["init_static_time"])
         self.require("init_static_time", why is None, why or "")
         self.static_bias = StaticBiasEstimator(p["init_static_time"])
+        self.rest = (RestDetector(p["static_window"], p["static_accel_std"],
+                                  p["static_rate_std"]) if p["init_mode"] == "static" else None)
         self.out["aligned"] = self.initializer.done
         self._write_solution()
         self.write_diagnostics(None)  # extra outputs start from the engine's initial state
@@ -282,6 +297,8 @@ class InsGnssFilter(Component):
             nav = self.engine.nav
             init.add_interval(dtheta, dvel, imu_dt, nav.lat, nav.h)
             self.static_bias.add_interval(dtheta, dvel, imu_dt)
+            if init.mode == "static":
+                self.rest.add_interval(dtheta, dvel, imu_dt)
             self.nav_time = self.out["nav_time"] = imu_time
         state = None
         epoch = inputs["gnss_epoch"]
@@ -290,7 +307,7 @@ class InsGnssFilter(Component):
             if inputs["gnss_valid"]:
                 self.check_inputs(inputs, _GNSS_VALUE_NAMES)
                 fix = _fix_of(inputs)
-                if init.mode == "gnss":
+                if init.mode in FROM_FIX:
                     state = init.state_from_fix(fix, self.nav_time)
                     warning = None if state is not None else init.waiting_warning(fix[0])
                     if warning:
@@ -310,6 +327,9 @@ class InsGnssFilter(Component):
         p = self.params
         config = self.make_config()
         r = np.array([p[f"r_{q}_{a}"] for q in ("pos", "vel") for a in "ned"])
+        std = self.initializer.start_std
+        if p["r_from_receiver"] and std is not None and np.all(std > 0):
+            r[:3] = std                 # the receiver's own sigmas of the fix started from
         config.p0 = self.initializer.start_sigmas(
             config.p0, r if self.initializer.use_fix_velocity else r[:3],
             max(math.hypot(v[0], v[1]), p["init_speed_min"]))
@@ -319,6 +339,9 @@ class InsGnssFilter(Component):
                 self.notify(f"{self.model_name}: {warning}")
             else:
                 config.gyro_bias0, config.p0[9:12] = bias, sigma
+        if p["init_mode"] == "static":
+            state = self._static_alignment(state, config)
+            lat, lon, h, v, roll, pitch, yaw = state
         if config.lever_arm is not None:   # the fix is the antenna's: back to the IMU
             lat, lon, h, _ = antenna_fix(lat, lon, h, v, euler_to_dcm(roll, pitch, yaw),
                                          -config.lever_arm, np.zeros(3))
@@ -329,6 +352,20 @@ class InsGnssFilter(Component):
         self.out["aligned"] = True
         self._write_solution()
         self.write_diagnostics(None)
+
+    def _static_alignment(self, state, config):
+        """``init_mode = 'static'``: ``state`` levelled on the rest period, ``config`` with
+        the gyro biases and the level's sigmas of the rest (or as it was, with a warning,
+        when the IMU was not static; :mod:`navcore.filters.static_alignment`)."""
+        lat, lon, h, v, roll, pitch, yaw = state
+        roll_r, pitch_r, level_sigma, bias, bias_sigma, warning = self.rest.estimate(
+            lat, config.p0[12:14], earth.gravity(lat, h))
+        if warning:
+            self.notify(f"{self.model_name}: {warning}")
+            return state
+        config.gyro_bias0, config.p0[9:12] = bias, bias_sigma
+        config.p0[6:8] = level_sigma
+        return lat, lon, h, v, roll_r, pitch_r, yaw
 
     def _check_given_state(self, inputs):
         """At the first valid fix of a given initial state: warn when the state is more than
@@ -352,7 +389,10 @@ class InsGnssFilter(Component):
 
     def _integrate(self, increment):
         imu_time, dtheta, dvel, imu_dt = increment
-        self.engine.propagate(dtheta, dvel, imu_dt)
+        engine = self.engine
+        engine.propagate(dtheta, dvel, imu_dt)
+        if engine.aids is not None:
+            engine.aids.after_interval(engine, dtheta, dvel, imu_dt, imu_time)
         self.nav_time = imu_time
         if self.applies_fixes:
             self.history.record(increment, self.engine, self.max_fix_age + imu_dt,
@@ -428,6 +468,8 @@ class InsGnssFilter(Component):
         half an interval); the history restarts here."""
         z = self._measure(fix)
         self._applied(z, self.engine.update(z))
+        if self.engine.aids is not None:
+            self.engine.aids.note_fix(fix[0], fix[4])
 
     def _measure(self, fix):
         """The measurement ``z`` of ``fix`` (:meth:`_apply` before the engine's update)."""

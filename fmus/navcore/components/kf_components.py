@@ -61,7 +61,8 @@ class SageHusaFading(InsGnssFilter):
         self.require("max_fading_factor", not 0.0 < cap < 1.0, "must be 0 (no cap) or >= 1")
         return dict(forgetting_factor=p["forgetting_factor"], reserve_gamma=p["reserve_gamma"],
                     r_floor_fraction=p["r_floor_fraction"], max_fading_factor=cap or None,
-                    r_max_scale=p["r_max_scale"], **recovery_options(p))
+                    r_max_scale=p["r_max_scale"], **recovery_options(p),
+                    r_floor_nominal=bool(p["recovery"]) and p["gnss_corr_time"] > 0.0)
 
     def write_diagnostics(self, result):
         super().write_diagnostics(result)

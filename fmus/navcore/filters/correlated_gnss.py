@@ -44,6 +44,11 @@ CORRELATION_PARAMETERS = (
 )
 
 
+#: [s] the correlation time measured on a real RTK drive (docs/guide/your_real_log.md: the
+#: value its recipe reproduces): a starting value for a receiver of one's own, written by
+#: ``navfmu convert kf-gins --config``
+MEASURED_CORR_TIME = 4.5
+
 #: [s] the shortest time between two fixes the inflation takes (a fix repeated at one
 #: instant, or out of order, would otherwise be infinitely correlated with the last)
 MIN_GAP = 1e-3
@@ -75,4 +80,4 @@ class CorrelatedFixes:
         return inflation(gap, self.tau)
 
 
-__all__ = ["CORRELATION_PARAMETERS", "CorrelatedFixes", "inflation"]
+__all__ = ["CORRELATION_PARAMETERS", "MEASURED_CORR_TIME", "CorrelatedFixes", "inflation"]

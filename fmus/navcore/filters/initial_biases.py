@@ -125,12 +125,20 @@ class StaticBiasEstimator:
                 f"{f_spread.max():.3g} m/s^2, limit {STATIC_ACCEL_SPREAD:g}; of the angular "
                 f"rate up to {w_spread.max():.3g} rad/s, limit {STATIC_RATE_SPREAD:g}): the "
                 "gyro bias is not estimated; shorten init_static_time to the part at rest")
-        roll, pitch = level(f)
-        c_nb = euler_to_dcm(roll, pitch, 0.0).T     # n -> b of the levelled frame
-        earth_down = np.array([0.0, 0.0, -WGS84_OMEGA_IE * math.sin(lat)])
-        bias = w - c_nb @ earth_down
-        sigma = np.hypot(w_spread / math.sqrt(self.n), WGS84_OMEGA_IE * math.cos(lat))
+        bias, sigma = gyro_bias_at_rest(w, w_spread, f, self.n, lat)
         return bias, sigma, None
+
+
+def gyro_bias_at_rest(w, w_spread, f, n, lat):
+    """(gyro bias (3,), its 1-sigma (3,)) [rad/s] from the mean angular rate ``w``, its
+    per-axis standard deviation ``w_spread`` and the mean specific force ``f`` of ``n`` IMU
+    intervals at rest at latitude ``lat`` (module docstring): the rate less the vertical
+    Earth rate seen in the body levelled on ``f``."""
+    roll, pitch = level(f)
+    c_nb = euler_to_dcm(roll, pitch, 0.0).T     # n -> b of the levelled frame
+    earth_down = np.array([0.0, 0.0, -WGS84_OMEGA_IE * math.sin(lat)])
+    return (np.asarray(w, dtype=float) - c_nb @ earth_down,
+            np.hypot(np.asarray(w_spread) / math.sqrt(n), WGS84_OMEGA_IE * math.cos(lat)))
 
 
 def check_static_mode(init_mode: str, static_time: float) -> Optional[str]:
@@ -143,4 +151,4 @@ def check_static_mode(init_mode: str, static_time: float) -> Optional[str]:
 
 __all__ = ["INITIAL_BIAS_PARAMETERS", "MIN_STATIC_TIME", "STATIC_ACCEL_SPREAD",
            "STATIC_RATE_SPREAD", "StaticBiasEstimator", "bias_sigmas", "check_static_mode",
-           "given_biases"]
+           "given_biases", "gyro_bias_at_rest"]

@@ -18,6 +18,9 @@
     ``atan2(-v_d, v_h)``.  Groves (2013), *Principles of GNSS, Inertial, and Multisensor
     Integrated Navigation Systems*, 2nd ed., sec. 5.6.1 (position and velocity from GNSS) and
     sec. 5.6.2 (attitude from the trajectory and leveling).
+``static``
+    As ``gnss``, and before it the rest period the IMU shows is detected, levels the IMU and
+    gives the gyro biases (:mod:`navcore.filters.static_alignment`).
 ``align``
     Static coarse alignment over the first ``align_time`` seconds of IMU intervals (the
     vehicle at rest): leveling from the mean specific force and gyrocompassing from the mean
@@ -44,7 +47,10 @@ from ..ins import earth
 from ..core.component import Limits, real, string
 from ..ins.rotations import euler_to_dcm, wrap_angle
 
-INIT_MODES = ("given", "gnss", "align")
+INIT_MODES = ("given", "gnss", "align", "static")
+#: the modes that start at a fix once moving (``static``: with the static alignment of
+#: :mod:`navcore.filters.static_alignment` before it)
+FROM_FIX = ("gnss", "static")
 #: a given state farther from the first fix than this many sigmas (sqrt(P + R)) is warned of
 INIT_CHECK_SIGMAS = 5.0
 #: default horizontal speed from which the course over ground is the heading [m/s]: a slow
@@ -71,8 +77,9 @@ NO_REST_LEVEL_SIGMA = math.radians(5.0)
 INIT_PARAMETERS = (
     string("init_mode", "initial state: 'given' (the init_* parameters), 'gnss' (first fix "
            "once moving: position, velocity, yaw from the course, level from the "
-           "accelerometers at rest) or 'align' (static coarse alignment: leveling and "
-           "gyrocompassing over align_time)", "given"),
+           "accelerometers at rest), 'align' (static coarse alignment: leveling and "
+           "gyrocompassing over align_time) or 'static' (as 'gnss', levelled and the gyro "
+           "biases estimated over the rest period the IMU shows before the start)", "given"),
     real("init_speed_min", "m/s", "init_mode 'gnss': horizontal speed from which the course "
          "over ground gives the heading (a slow walk)", DEFAULT_INIT_SPEED,
          Limits(0.0, 1e3, low_open=True)),
@@ -120,7 +127,7 @@ class Initializer:
 
     state_fields = ("done", "elapsed", "rest_dvel", "rest_dtheta", "rest_time", "all_dvel",
                     "all_dtheta", "previous_fix", "first_position", "checked", "warned",
-                    "first_fix_time", "fastest", "wait_warned")
+                    "first_fix_time", "fastest", "wait_warned", "velocity_gap", "start_std")
     derived_fields = ("mode", "speed_min", "align_time", "use_fix_velocity")
 
     def __init__(self, mode, speed_min=DEFAULT_INIT_SPEED, align_time=DEFAULT_ALIGN_TIME,
@@ -138,6 +145,8 @@ class Initializer:
         self.first_fix_time = None    # gnss: time of the first valid fix [s]
         self.fastest = 0.0            # ... and the largest horizontal speed since [m/s]
         self.wait_warned = False      # ... and the wait was warned of
+        self.velocity_gap = MAX_DIFFERENCED_FIX_GAP   # [s] between the fixes differenced
+        self.start_std = None         # the receiver's sigmas N/E/D of the fix started from
 
     # -- intervals -------------------------------------------------------------------------
     def add_interval(self, dtheta, dvel, dt, lat, h):
@@ -149,7 +158,7 @@ class Initializer:
             self.rest_dtheta += dtheta
             self.rest_dvel += dvel
             self.rest_time += dt
-        elif self.mode == "gnss":      # the latest stretch at rest is the one levelled on
+        elif self.mode in FROM_FIX:    # the latest stretch at rest is the one levelled on
             self.rest_dtheta, self.rest_dvel, self.rest_time = np.zeros(3), np.zeros(3), 0.0
 
     def alignment_ready(self) -> bool:
@@ -165,6 +174,7 @@ class Initializer:
         if previous is None or not 0.0 < t - previous[0] <= MAX_DIFFERENCED_FIX_GAP:
             return None
         t0, lat0, lon0, h0 = previous
+        self.velocity_gap = t - t0
         rn, re = earth.radii(lat)
         return np.array([(lat - lat0) * (rn + h), wrap_angle(lon - lon0) * (re + h)
                          * math.cos(lat), -(h - h0)]) / (t - t0)
@@ -190,6 +200,8 @@ class Initializer:
         else:
             roll, pitch = 0.0, math.atan2(-v[2], math.hypot(v[0], v[1]))
         yaw = math.atan2(v[1], v[0])
+        if len(fix) > 5:
+            self.start_std = np.array(fix[5], dtype=float)
         return lat_now, lon_now, h - v[2] * age, v, roll, pitch, yaw
 
     def waiting_warning(self, t):
@@ -232,10 +244,10 @@ class Initializer:
         updates to turn the heading on a 100 deg uncertainty (outages ended 79 m off on a
         real car against Kf's 9 m)."""
         p0 = np.array(p0, dtype=float)
-        if self.mode == "gnss":
+        if self.mode in FROM_FIX:
             p0[0:3] = np.maximum(p0[0:3], r_sigma[0:3])
             v_sigma = (r_sigma[3:6] if len(r_sigma) == 6 else
-                       math.sqrt(2.0) * r_sigma[0:3] / MAX_DIFFERENCED_FIX_GAP)
+                       math.sqrt(2.0) * r_sigma[0:3] / self.velocity_gap)
             p0[3:6] = np.maximum(p0[3:6], v_sigma)
             p0[8] = max(MIN_COURSE_SIGMA, math.atan2(float(max(v_sigma[:2])), speed))
             if self.rest_time == 0.0:

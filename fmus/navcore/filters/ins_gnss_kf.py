@@ -30,6 +30,7 @@ from ..ins import earth
 from ..ins.error_model import (ATT, BA, BG, N_STATES, POS, VEL, process_noise_density,
     transition_rows, transition_template)
 from .innovation_stats import nis
+from .land_aids import linear_update
 from ..ins.lever_arm import antenna_position_offset, antenna_velocity_offset
 from ..ins.strapdown import Strapdown, update_rows
 
@@ -163,7 +164,7 @@ class KfEngine:
     """The baseline 15-state Kalman filter (``Kf``); see the module docstring."""
 
     state_fields = ("nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates",
-                    "last", "rate_ib")
+                    "last", "rate_ib", "aids")
     derived_fields = ("config", "q_density", "R0", "m", "H")
 
     def __init__(self, config: KfConfig, nav: Strapdown):
@@ -184,6 +185,7 @@ class KfEngine:
         self.n_updates = 0
         self.last = None  # UpdateResult of the latest update
         self.rate_ib = np.zeros(3)  # body rate of the latest interval (lever-arm velocity)
+        self.aids = None  # the land aids (navcore.filters.land_aids), set by the component
 
     @property
     def p0_var(self):
@@ -282,6 +284,17 @@ class KfEngine:
         of the innovation ``v`` with covariance ``S``): the feedback, and the result."""
         self.apply(dx, P)
         return UpdateResult(v, S, nis(v, S))
+
+    def aid_update(self, H, z, R):
+        """A land aid's pseudo-measurement ``z = H x`` (:mod:`navcore.filters.land_aids`): the
+        plain Kalman update and feedback, whatever the engine's own law for the fixes."""
+        dx, P = linear_update(np.zeros(N_STATES), self.covariance(), z, H, R)
+        self.apply(dx, P)
+        self.aid_applied(dx)
+
+    def aid_applied(self, dx):
+        """After :meth:`aid_update` fed back ``dx``: what a law keeps of past innovations
+        follows the corrected INS (a subclass's bookkeeping; nothing here)."""
 
     def apply(self, dx, P):
         """Closed-loop feedback of the estimated errors and reset of the accumulators."""

@@ -223,6 +223,10 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
         if self.replacement_variance == "propagated":
             outcome["R"][b] = np.diag(variance_used)
 
+    def aid_applied(self, dx):
+        """A land aid's feedback shifts the stored observations as a fix's does (step 4)."""
+        self.history.apply_correction(self.H @ dx)
+
     def _take_update(self, outcome, b):
         """Run b's guard, history, feedback and diagnostics from ``outcome``, and its
         result."""

@@ -38,6 +38,7 @@ from ..ins.error_model import ATT, BA, BG, N_STATES, POS, VEL
 from ..ins.strapdown import Strapdown
 from .imm import ImmBank, imm_combine, update_banks
 from .innovation_stats import nis
+from .land_aids import linear_update
 from .ins_gnss_kf import KfEngine, UpdateResult
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
 from .ukf_time_update import (N_SUMS, advance_interval_rows, discrete_process_noise,
@@ -198,6 +199,25 @@ class UkfEngine(KfEngine):
         guard.close_epoch(True)
         return lam
 
+    def aid_update(self, H, z, R):
+        """A land aid's pseudo-measurement ``z = H x`` (:mod:`navcore.filters.land_aids`),
+        linear in the error state, so the unscented update is the Kalman update: the
+        prediction due, then every filter's plain update (no adaptive law, no model
+        probabilities moved) and the closed-loop feedback of the estimate."""
+        self._predict()
+        for flt in self.aided_filters():
+            flt.x, flt.P = linear_update(flt.x, flt.P, z, H, R)
+        self._feedback_aided()
+
+    def aided_filters(self):
+        """The filters a land aid updates."""
+        return [self.ukf]
+
+    def _feedback_aided(self):
+        """:meth:`aid_update`'s feedback of the filters' estimate."""
+        self._feedback(self.ukf.x)
+        self.ukf.x = np.zeros(N_STATES)
+
     def _feedback(self, dx):
         self.nav.correct(dx[POS], dx[VEL], dx[ATT])
         self.gyro_bias = self.gyro_bias + dx[BG]
@@ -304,6 +324,17 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
 
     def prediction_covariance(self):
         return self.bank.P
+
+    def aided_filters(self):
+        return self.bank.filters
+
+    def _feedback_aided(self):
+        bank = self.bank
+        bank.x, bank.P = imm_combine(bank.mu, [f.x for f in bank.filters],
+                                     [f.P for f in bank.filters])
+        dx = bank.x.copy()
+        self._feedback(dx)
+        bank.subtract_from_states(dx)
 
     def covariance(self):
         return self.bank.P.copy()

@@ -134,22 +134,31 @@ def header_title(name: str, unit: str) -> str:
     return f"{name} [{unit}]" if unit else name
 
 
+def visible(text: str) -> str:
+    """``text`` with every character that prints as nothing or as a blank other than the
+    space (a byte-order mark, a zero-width or non-breaking space, a control character)
+    written as its ``\\uXXXX`` escape, so an error message shows why a title does not match."""
+    return "".join(c if c.isprintable() and (c == " " or not c.isspace())
+                   else f"\\u{ord(c):04x}" for c in text)
+
+
 def _parse_title(path, title: str, columns) -> Tuple[str, str]:
     title = title.strip()
     name, unit = title, ""
     if title.endswith("]") and " [" in title:
         name, unit = title[:-1].split(" [", 1)
     if name not in columns:
-        raise LogError(f"{path}, line 1: unknown column '{title}' (columns of this file: "
-                       + ", ".join(header_title(n, u) for n, u in columns.items()) + ")")
+        raise LogError(f"{path}, line 1: unknown column '{visible(title)}' (columns of this "
+                       "file: " + ", ".join(header_title(n, u) for n, u in columns.items()) + ")")
     if unit != columns[name]:
         raise LogError(f"{path}, line 1: column '{name}' has the unit header "
-                       f"'{title}', expected '{header_title(name, columns[name])}'")
+                       f"'{visible(title)}', expected '{header_title(name, columns[name])}'")
     return name, unit
 
 
 def read_lines(path) -> list:
-    """The lines of a text file, refusing files over :data:`MAX_FILE_BYTES`."""
+    """The lines of a text file, refusing files over :data:`MAX_FILE_BYTES`; a UTF-8
+    byte-order mark at its start (as spreadsheet programs write) is dropped."""
     path = Path(path)
     if not path.is_file():
         raise LogError(f"{path}: file not found")
@@ -157,7 +166,7 @@ def read_lines(path) -> list:
     if size > MAX_FILE_BYTES:
         raise LogError(f"{path}: {size} bytes, more than the limit of {MAX_FILE_BYTES}")
     try:
-        with open(path, encoding="utf-8", newline="") as f:
+        with open(path, encoding="utf-8-sig", newline="") as f:
             return f.read().splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise LogError(f"{path}: cannot be read: {exc}") from None
@@ -408,11 +417,13 @@ def _write_table(path: Path, data, origin=0.0) -> None:
             f.write(",".join(fields) + "\n")
 
 
-def write_log(folder, log: SensorLog) -> Path:
+def write_log(folder, log: SensorLog, before_commit=None) -> Path:
     """Check ``log`` (:func:`check_log`), then write it to ``folder`` without ever leaving a
     half-written log: the files are written into a fresh folder next to ``folder`` and moved
     in place only when all are complete (a ``truth.csv`` left from an earlier log in
-    ``folder`` is removed when ``log`` has no truth).  Returns ``folder``."""
+    ``folder`` is removed when ``log`` has no truth).  ``before_commit()``, when given, is
+    called just before the files are moved in place (an exception from it leaves nothing
+    written: a host's Ctrl-C).  Returns ``folder``."""
     folder = Path(folder)
     check_log(log, where=str(folder))
     parent = folder.parent if str(folder.parent) else Path(".")
@@ -431,6 +442,8 @@ def write_log(folder, log: SensorLog) -> Path:
         for name, data in tables.items():
             if data is not None:
                 _write_table(tmp / name, data, log.time_origin)
+        if before_commit is not None:
+            before_commit()
         if not folder.exists():
             os.chmod(tmp, 0o777 & ~_umask())
             os.replace(tmp, folder)
@@ -447,13 +460,15 @@ def write_log(folder, log: SensorLog) -> Path:
     return folder
 
 
-def write_log_file(folder, name: str, data, origin: float = 0.0, source=None) -> Path:
+def write_log_file(folder, name: str, data, origin: float = 0.0, source=None,
+                   before_commit=None) -> Path:
     """Write one file ``name`` of a log (``imu.csv`` or ``gnss.csv``, times relative to
     ``origin``) into ``folder``, keeping the log's other files: a log converted part by part
     (the IMU from one tool, the fixes from another).  ``data`` is checked first (errors name
     ``source``, the file it came from); when ``folder`` already holds the other files, the
     whole log is read as a replay would (:func:`read_log`: the time spans must overlap)
-    before the file is moved in place, so nothing is half-written.  Returns the file."""
+    before the file is moved in place, so nothing is half-written (``before_commit()`` as
+    in :func:`write_log`).  Returns the file."""
     folder = Path(folder)
     check_table(name, data, source or folder / name, str(folder))
     try:
@@ -472,6 +487,8 @@ def write_log_file(folder, name: str, data, origin: float = 0.0, source=None) ->
             except LogError as exc:
                 raise LogError(str(exc).replace(str(tmp), str(folder))) from None
         os.chmod(tmp / name, 0o666 & ~_umask())
+        if before_commit is not None:
+            before_commit()
         os.replace(tmp / name, folder / name)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -1,0 +1,113 @@
+"""The smoother's facade: a filter component that records its forward pass, and the smoothed
+solution of that recording (:mod:`navcore.filters.rts_smoother`).
+
+The real-time filter components stay causal: a run to be smoothed swaps in the recording
+class of :class:`SmoothingSession` (same parameters, inputs, outputs and numbers as the
+filter; it only keeps what the backward pass needs) under the direct backend, and asks the
+session for the smoothed solution afterwards.  The master knows nothing of the recording:
+it runs a component class from a registry, as always.
+
+Supported: :data:`SMOOTHABLE` (the filters whose forward covariances are the model's own:
+``Kf``).  The adaptive and robust filters rescale P, Q or R inside their updates (fading
+memory, Sage-Husa, robust weights), so the transitions and noise the smoother rebuilds
+would not be theirs; the UKF family carries no transition matrix.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import NavcoreError
+from ..filters.ins_gnss_kf import KfEngine
+from ..ins.error_model import N_STATES
+from ..filters.rts_smoother import KfRecording, smooth
+from .kf_components import Kf
+
+#: filter model name -> its component class, the filters the smoother supports
+SMOOTHABLE = {"Kf": Kf}
+
+
+class _RecordingKfEngine(KfEngine):
+    """KfEngine that keeps the correction of its latest update (``last_dx``)."""
+
+    state_fields = KfEngine.state_fields + ("last_dx",)
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.last_dx = np.zeros(N_STATES)
+
+    def apply(self, dx, P):
+        self.last_dx = np.array(dx, dtype=float)
+        super().apply(dx, P)
+
+
+def _recording_class(base, session):
+    """``base`` (a Kf-family component class) recording into ``session.recordings``."""
+
+    class Recording(base):
+        engine_class = _RecordingKfEngine
+
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            session.recordings.append(self)
+
+        def _begin_recording(self):
+            cfg = self.engine.config
+            self.recording = KfRecording(self.engine.q_density, cfg.gyro_bias_tau,
+                                         cfg.accel_bias_tau)
+            self.recording.start(self.nav_time, self.engine)
+
+        def initialize(self, start_time):
+            out = super().initialize(start_time)
+            self.recording = None
+            if self.initializer.done:
+                self._begin_recording()
+            return out
+
+        def _start_from(self, state):
+            super()._start_from(state)
+            self._begin_recording()
+
+        def _integrate(self, increment):
+            _, dtheta, dvel, dt = increment
+            engine = self.engine
+            self.recording.truncate_after(self.nav_time)
+            f_ned = engine.nav.rows[0, 6:15].reshape(3, 3) @ (dvel / dt - engine.accel_bias)
+            super()._integrate(increment)
+            self.recording.add_epoch(self.nav_time, dt, engine.nav.rows[0], f_ned)
+
+        def _applied(self, z, result):
+            self.recording.truncate_after(self.nav_time)      # a fix applied in the past
+            self.recording.add_update(self.engine.last_dx, self.engine)
+            super()._applied(z, result)
+
+    Recording.__name__ = Recording.__qualname__ = base.__name__
+    Recording.model_name = base.model_name
+    return Recording
+
+
+class SmoothingSession:
+    """One smoothed run of filter ``model_name``: :attr:`component_class` to run (direct
+    backend), then :meth:`solution`."""
+
+    def __init__(self, model_name: str):
+        if model_name not in SMOOTHABLE:
+            raise NavcoreError(f"the smoother supports the filters {', '.join(SMOOTHABLE)}, "
+                               f"not {model_name} (its updates rescale P, Q or R, or it has "
+                               "no transition matrix): run it without smoothing")
+        self.recordings = []
+        self.component_class = _recording_class(SMOOTHABLE[model_name], self)
+
+    def solution(self):
+        """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`),
+        with ``recording_bytes``: the memory the recording held."""
+        started = [c for c in self.recordings if getattr(c, "recording", None) is not None]
+        if not started:
+            raise NavcoreError("the filter never started (init_mode: no initial state from the "
+                               "data): nothing to smooth")
+        rec = started[-1].recording
+        out = smooth(rec)
+        out["recording_bytes"] = rec.nbytes
+        return out
+
+
+__all__ = ["SMOOTHABLE", "SmoothingSession"]

@@ -1,0 +1,86 @@
+"""A smoothed solution beside the real-time one (``navfmu run ... --smooth``).
+
+The smoothing itself lives in navcore (:mod:`navcore.components.smoothing`): the scenario is
+run once more under the direct backend with the filter's recording class from the navcore
+facade, which then gives the smoothed solution at every IMU epoch.  Here that solution is
+laid on the run's rows (the row whose filter ``nav_time`` is the epoch) as the outputs of a
+filter component of the same name, so the metrics, files and plots treat it as one more
+filter, labelled ``<filter>-smoothed``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from navcore.core import signals
+
+from ..results.run_results import Results
+from . import scenarios
+
+#: the suffix of a smoothed run's label
+SMOOTHED_SUFFIX = "-smoothed"
+_STD_NAMES = [p.name for p in signals.FILTER_OUTPUTS if p.name.startswith("std_")]
+
+
+def check_smoothable(model, filter=None) -> None:
+    """Refuse (one error naming the filter and the supported ones) a filter the smoother
+    does not support, before anything runs."""
+    from navcore.components.smoothing import SmoothingSession
+
+    SmoothingSession(scenarios.filter_label(model, filter))
+
+
+def smoothed_run(model, filter=None, **simulate) -> scenarios.Run:
+    """The smoothed run of ``model`` with ``filter`` (None: the model's own): the keyword
+    arguments of :func:`orchestrator.running.scenarios.simulate_scenario` but the backend,
+    which is the direct one.  Refused, before running, for a filter the smoother does not
+    support; the run's own warnings are raised as they are for the real-time run."""
+    from navcore.components.smoothing import SmoothingSession
+
+    label = scenarios.filter_label(model, filter)
+    session = SmoothingSession(label)
+    window = simulate.pop("window", None)
+    run = scenarios.simulate_scenario(model, filter=filter, backend="direct",
+                                      components={label: session.component_class}, **simulate)
+    solution = session.solution()
+    results = smoothed_results(run.results, solution)
+    smoothed = scenarios.measured_run(label + SMOOTHED_SUFFIX, run.model, results, window,
+                                      time_origin=run.time_origin)
+    smoothed.results.metadata["smoother"] = {
+        "method": "Rauch-Tung-Striebel (error state, closed-loop corrections)",
+        "epochs": int(len(solution["time"])),
+        "recording_mb": round(solution["recording_bytes"] / 1e6, 2)}
+    return scenarios.report_inconsistency(smoothed)
+
+
+def smoothed_results(results: Results, solution) -> Results:
+    """``results`` with the filter component's columns replaced by the smoothed solution at
+    the rows whose ``nav_time`` is one of its epochs (``aligned`` false on the others)."""
+    f = scenarios.FILTER_COMPONENT
+    nav_time = results.column(f, "nav_time")
+    t = solution["time"]
+    k = np.clip(np.searchsorted(t, nav_time), 0, len(t) - 1)
+    km = np.clip(k - 1, 0, len(t) - 1)
+    k = np.where(np.abs(t[km] - nav_time) < np.abs(t[k] - nav_time), km, k)
+    found = np.abs(t[k] - nav_time) <= 1e-6 * np.maximum(1.0, np.abs(nav_time))
+    found &= results.column(f, "aligned") > 0.5
+    columns = {"nav_time": nav_time, "aligned": found.astype(float)}
+    for name, key in zip(signals.NAV_SOLUTION_NAMES, ("lat", "lon", "h", "vn", "ve", "vd",
+                                                      "roll", "pitch", "yaw")):
+        columns[name] = solution[key][k]
+    for i, name in enumerate(signals.NAV_BG_NAMES):
+        columns[name] = solution["gyro_bias"][k, i]
+    for i, name in enumerate(signals.NAV_BA_NAMES):
+        columns[name] = solution["accel_bias"][k, i]
+    for i, name in enumerate(_STD_NAMES):
+        columns[name] = solution["std"][k, i]
+    units = dict(zip(results.columns[f], results.units[f]))
+    data = {c: results.data[c] for c in results.components if c != f}
+    cols = {c: results.columns[c] for c in data}
+    unit_map = {c: results.units[c] for c in data}
+    data[f] = np.column_stack(list(columns.values()))
+    cols[f] = list(columns)
+    unit_map[f] = [units.get(name, "") for name in columns]
+    return Results(results.time, data, cols, unit_map, metadata=dict(results.metadata))
+
+
+__all__ = ["SMOOTHED_SUFFIX", "check_smoothable", "smoothed_results", "smoothed_run"]
