@@ -6,6 +6,7 @@ their own truth with navcore's earth model, flown through ImuSensor -> GnssRecei
 start at 100 s; the refusal of a source FMU on a machine without a compiler."""
 from __future__ import annotations
 
+import json
 import math
 import os
 import shutil
@@ -277,6 +278,23 @@ def test_the_fmi3_vehicle_navigates_as_the_fmi2_vehicle_of_the_same_model(model,
                                       runs["fmi2"].data[component], err_msg=component)
     rms = nav_metrics.filter_metrics(runs["fmi3"], "filter")["position_rms_m"]
     assert max(rms.values()) < 3.0, rms
+
+
+def test_verify_compiles_a_source_vehicle_and_checks_it(tmp_path):
+    """`navfmu verify --role vehicle` on the source FMU: its probes in child processes get the
+    compiled binary too; the vehicle's velocity, body rates and specific force pass its own
+    checks (an independent account of the same outputs)."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "fmus")]))
+    subprocess.run([sys.executable, "-m", "orchestrator.cli", "verify",
+                    str(FMUS / "fmi2" / "GroundVehicle.fmu"), "--role", "vehicle",
+                    "--out", str(tmp_path / "verify")], env=env, capture_output=True,
+                   text=True, timeout=300)
+    checks = json.loads((tmp_path / "verify" / "verify.json").read_text())["checks"]
+    verdicts = {c["id"]: c["verdict"] for c in checks}
+    for check in ("fmi.hostile", "vehicle.initial_outputs", "vehicle.velocity",
+                  "vehicle.body_rates", "vehicle.specific_force", "vehicle.step_size",
+                  "vehicle.flight"):
+        assert verdicts[check] == "pass", (check, verdicts)
 
 
 # -- no compiler ----------------------------------------------------------------------------
