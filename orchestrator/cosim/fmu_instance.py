@@ -12,7 +12,7 @@ from typing import Any, Dict, Mapping, Optional, Tuple
 
 import numpy as np
 
-from . import fmu_builds
+from . import fmu_builds, source_fmus
 from .backends import Instance, coerce
 from .fmi3_variables import variables_of
 from ..errors import NavfmuError, SimulationError
@@ -118,6 +118,7 @@ class FmuInstance(Instance):
         self.can_get_set_state = bool(md.coSimulation.canGetAndSetFMUstate)
         self._unzipdir = str(extract(str(self.path), unzipdir))
         self._finalizer = weakref.finalize(self, _cleanup_files, self._unzipdir)
+        source_fmus.ensure_binary(self.path, md, Path(self._unzipdir), name)
         self.build_info = fmu_builds.build_info(self.path, md, Path(self._unzipdir))
         self._env_id = next(_ENV_IDS)
         _LOG_SINKS[self._env_id] = self.log

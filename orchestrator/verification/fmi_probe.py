@@ -23,10 +23,12 @@ from __future__ import annotations
 import json
 import shutil
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from ..cosim.fmi3_variables import FMI3_TYPES
+from ..cosim.source_fmus import ensure_binary
 
 INCREMENTS = ("imu_dtheta_x", "imu_dtheta_y", "imu_dtheta_z", "imu_dvel_x", "imu_dvel_y",
               "imu_dvel_z")
@@ -267,6 +269,7 @@ def main(job_file):
              "hostile": probe_hostile}[job["probe"]]
     extra = {"k": job["k"]} if job["probe"] == "variable_step" else {}
     try:
+        ensure_binary(Path(job["fmu"]), md, Path(unzip), job["probe"])
         result = probe(job["fmu"], md, unzip, job["parameters"], table, job["h"], **extra)
     except Exception as exc:   # an FMI error status on a legal call, or a broken FMU
         result = {"error": str(exc) if isinstance(exc, SecondInstanceError)

@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import math
 import shutil
+from pathlib import Path
 from typing import Any, Dict
 
 import numpy as np
 
 from .fmi_probe import Instance
+from ..cosim.source_fmus import ensure_binary
 
 
 def _feeds(instance: Instance):
@@ -64,6 +66,7 @@ def record(job: Dict[str, Any]) -> Dict[str, Any]:
     h, refine = float(job["h"]), int(job["refine"])
     steps = int(round(job["duration"] / h))
     try:
+        ensure_binary(Path(job["fmu"]), md, Path(unzip), "vehicle")
         names, in_mode, coarse = _fly(job["fmu"], md, unzip, job["parameters"], h, steps,
                                       "coarse")
         _, _, fine = _fly(job["fmu"], md, unzip, job["parameters"], h / refine, steps * refine,
