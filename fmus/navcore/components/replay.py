@@ -30,7 +30,8 @@ Any communication step works: a step reaching several IMU lines outputs the last
 :func:`navcore.core.timing.time_tolerance` on the log's IMU period, as in the other components.  At
 initialization the outputs are the log's state at the start time (no IMU interval yet, ``imu_dt`` =
 0).  Everything the component needs comes from its ``log`` parameter (a folder in the format of
-:mod:`navcore.sensors.sensorlog`), read once at initialization.
+:mod:`navcore.sensors.sensorlog`), read at initialization, once per process and content of
+the log (:mod:`navcore.sensors.log_cache`).
 """
 from __future__ import annotations
 
@@ -43,7 +44,7 @@ from ..core import signals
 from ..core.component import Component, InputError, Limits, ParameterError, real, string
 from ..core.timing import time_tolerance
 from ..sensors.log_time import DEFAULT_MAX_DT_JITTER, MAX_DT_JITTER_LIMIT
-from ..sensors.sensorlog import read_log
+from ..sensors.log_cache import shared_log
 
 _TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
@@ -86,7 +87,7 @@ class ImuGnssReplay(Component):
             raise ParameterError(f"{self.model_name}: parameter 'log' is empty (give the folder "
                                  "of a sensor log)")
         self.log_folder = str(Path(folder).resolve())
-        log = read_log(self.log_folder, self.params["max_dt_jitter"])
+        log = shared_log(self.log_folder, self.params["max_dt_jitter"])
         self.imu = np.column_stack([log.imu[k] for k in
                                     ("time", "dt", "dtheta_x", "dtheta_y", "dtheta_z",
                                      "dvel_x", "dvel_y", "dvel_z")])

@@ -1,0 +1,105 @@
+"""Sensor logs read once per process: every run and every component replaying one log share
+its parsed arrays.
+
+Parsing a log's CSV text is the costly part of replaying it (about a second per 10 minutes of
+200 Hz IMU lines); a campaign, a tuning run or a filter comparison replays the same log in
+every run, and within a run both the master (to fit the run's span to the log) and the
+replay component read it.  :func:`shared_log` keeps the parsed and checked
+:class:`~navcore.sensors.sensorlog.SensorLog` per process, keyed on the folder, the
+``max_dt_jitter`` bound it was checked with and the content of its files: on every call the
+files' bytes are hashed (BLAKE2b; about 2 % of parsing them), so a file changed in any way,
+even rewritten within one timestamp tick at the same size, is read and checked again, and a
+log whose files were only touched is not.
+
+Place and lifetime: in the memory of the process only (nothing is written next to the log or
+anywhere else), at most :data:`MAX_LOGS` logs (the least recently used one is dropped first),
+until the process ends.  The arrays are read-only: a caller that wants to change a log reads
+its own copy with :func:`~navcore.sensors.sensorlog.read_log`.  ``NAVFMU_SHARED_LOGS=0`` turns
+the cache off (every call parses), for measuring what a single run costs.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import threading
+from collections import OrderedDict
+from pathlib import Path
+from typing import Optional, Tuple
+
+from .log_time import DEFAULT_MAX_DT_JITTER
+from .sensorlog import LOG_FILES, MAX_FILE_BYTES, SensorLog, read_log
+
+#: the most logs a process keeps parsed
+MAX_LOGS = 4
+_CHUNK = 1 << 22
+
+_lock = threading.Lock()
+_logs: "OrderedDict[Tuple[str, float], Tuple[Tuple[Optional[str], ...], SensorLog]]" = \
+    OrderedDict()
+#: how many times a log was parsed by :func:`shared_log` in this process (tests read it)
+parses = 0
+
+
+def _file_hash(path: Path) -> Optional[str]:
+    """The BLAKE2b digest of the file's bytes; None when there is no such file (or it is too
+    large to be a log: :func:`read_log` then says so)."""
+    try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            return None
+        digest = hashlib.blake2b(digest_size=20)
+        with open(path, "rb") as f:
+            for chunk in iter(lambda: f.read(_CHUNK), b""):
+                digest.update(chunk)
+        return digest.hexdigest()
+    except OSError:
+        return None
+
+
+def _content(folder: Path) -> Tuple[Optional[str], ...]:
+    return tuple(_file_hash(folder / name) for name in LOG_FILES)
+
+
+def _frozen(log: SensorLog) -> SensorLog:
+    for table in (log.imu, log.gnss, log.truth):
+        for values in (table or {}).values():
+            values.setflags(write=False)
+    return log
+
+
+def enabled() -> bool:
+    return os.environ.get("NAVFMU_SHARED_LOGS", "1") != "0"
+
+
+def shared_log(folder, max_dt_jitter: float = DEFAULT_MAX_DT_JITTER) -> SensorLog:
+    """The log in ``folder`` as :func:`~navcore.sensors.sensorlog.read_log` reads it (the same
+    checks, the same errors), parsed once per process and content (module docstring)."""
+    global parses
+    folder = Path(folder).resolve()
+    if not enabled():
+        parses += 1
+        return read_log(folder, max_dt_jitter)
+    key = (str(folder), float(max_dt_jitter))
+    with _lock:
+        content = _content(folder) if folder.is_dir() else None
+        held = _logs.get(key)
+        if held is not None and content is not None and held[0] == content:
+            _logs.move_to_end(key)
+            return held[1]
+        parses += 1
+        log = _frozen(read_log(folder, max_dt_jitter))
+        # kept only when the files did not change while they were parsed
+        if content is not None and None not in content[:2] and _content(folder) == content:
+            _logs[key] = (content, log)
+            _logs.move_to_end(key)
+            while len(_logs) > MAX_LOGS:
+                _logs.popitem(last=False)
+        return log
+
+
+def clear() -> None:
+    """Forget every log kept (the next call of each parses again)."""
+    with _lock:
+        _logs.clear()
+
+
+__all__ = ["MAX_LOGS", "shared_log", "clear", "enabled"]
