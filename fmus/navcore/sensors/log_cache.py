@@ -96,10 +96,24 @@ def shared_log(folder, max_dt_jitter: float = DEFAULT_MAX_DT_JITTER) -> SensorLo
         return log
 
 
+def derived(log: SensorLog, name: str, make):
+    """``make(log)``, computed once per log object and kept with it: what every user of a
+    shared log builds from it the same way (a replay's tables), held once per process;
+    treat the result as read-only too."""
+    held = log.__dict__.setdefault("_derived", {})
+    value = held.get(name)
+    if value is None:
+        with _lock:
+            value = held.get(name)
+            if value is None:
+                value = held[name] = make(log)
+    return value
+
+
 def clear() -> None:
     """Forget every log kept (the next call of each parses again)."""
     with _lock:
         _logs.clear()
 
 
-__all__ = ["MAX_LOGS", "shared_log", "clear", "enabled"]
+__all__ = ["MAX_LOGS", "shared_log", "derived", "clear", "enabled"]
