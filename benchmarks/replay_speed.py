@@ -50,21 +50,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from checkouts import alternating, argument_parser, build_fmus, checkout_env
+from real_drive import DRIVE_PARAMETERS, OUTAGES, build_log, parse_outages
+from checkouts import alternating, argument_parser, build_fmus, checkout_env, other_checkout
 
 HERE = Path(__file__).resolve().parents[1]
 SCENARIO = "models/replay_gnss_ins_sim"
-#: the filter's parameters of every replay run (the drive's, position-only, fixed R)
-PARAMETERS = {
-    "filter.init_mode": "gnss", "filter.measurement": "position",
-    "filter.r_from_receiver": False, "filter.lever_arm_y": -0.05,
-    "filter.p0_att_level": 0.1745, "filter.p0_att_yaw": 1.745,
-    "filter.p0_gyro_bias_dph": 720.0, "filter.p0_accel_bias_ug": 20000.0,
-    "filter.q_gyro_arw_dpsh": 0.228, "filter.q_accel_vrw_ugpsHz": 140.0,
-    "filter.q_gyro_bias_instability_dph": 10.0, "filter.q_gyro_bias_tau_s": 100.0,
-    "filter.q_accel_bias_instability_ug": 200.0, "filter.q_accel_bias_tau_s": 100.0,
-    "filter.r_pos_n": 0.1, "filter.r_pos_e": 0.1, "filter.r_pos_d": 0.2,
-}
+#: the filter's parameters of every replay run: the drive's (real_drive.py), position-only
+#: fixes with a fixed R (the scenario does not wire the receiver's sigmas)
+PARAMETERS = {**{k: v for k, v in DRIVE_PARAMETERS.items() if not k.startswith("filter.r_vel")},
+              "filter.r_from_receiver": False, "filter.r_pos_n": 0.1, "filter.r_pos_e": 0.1,
+              "filter.r_pos_d": 0.2}
 #: task -> (kind, batch size); runs: the batch size (4 for B = 1)
 TASKS = {"run": ("run", 1), "run-direct": ("run", 1), "mc-B1": ("replay", 1),
          "mc-B8": ("replay", 8), "mc-B20": ("replay", 20), "mc-B64": ("replay", 64),
@@ -118,15 +113,11 @@ def task_args(task: str, log: Path, stop: float, out: Path, origin: float = 0.0)
 # -- the log ------------------------------------------------------------------------------
 def prepare_log(args, work: Path) -> Path:
     """The log of the benchmark, cut to begin at a whole second of its time (untimed)."""
-    sys.path[:0] = [str(HERE), str(HERE / "fmus")]
     import numpy as np
     from navcore.sensors.sensorlog import SensorLog, read_log, write_log
 
     source = args.log
     if source is None:
-        sys.path.insert(0, str(HERE / "benchmarks"))
-        from real_drive import OUTAGES, build_log, parse_outages
-
         build_log(args.drive, work / "drive", parse_outages(OUTAGES), [180.0, -6.79, 185.35],
                   -0.125, 100.0)
         source = work / "drive" / "log"
@@ -251,9 +242,7 @@ def summary(cost, peak, kf) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argument_parser(__doc__, pairs=3)
-    parser.add_argument("--other", type=Path, required=True,
-                        help="the other checkout (its root folder)")
+    parser = argument_parser(__doc__, pairs=3, other=True)
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--log", type=Path, help="a navfmu sensor log folder")
     source.add_argument("--drive", type=Path, help="a folder of RTKLIB drive files "
@@ -265,9 +254,7 @@ def main(argv=None) -> None:
                         help=f"comma-separated, of {', '.join(TASKS)}")
     parser.add_argument("--json", type=Path, help="also write every number to this file")
     args = parser.parse_args(argv)
-    args.other = args.other.resolve()
-    if not (args.other / "orchestrator").is_dir():
-        parser.error("--other: give the root folder of another navfmu checkout")
+    args.other = other_checkout(parser, args)
     args.tasks = [t for t in args.tasks.split(",") if t]
     unknown = [t for t in args.tasks if t not in TASKS]
     if unknown:
