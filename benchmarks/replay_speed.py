@@ -202,10 +202,13 @@ def measure(args, log: Path, work: Path, binary, config, stop: float, origin: fl
     cost = {t: {"this": [], "other": []} for t in tasks}
     peak = {t: {"this": [], "other": []} for t in tasks}
     kf = []
-    for label, checkout in checkouts.items():        # untimed: kernels compiled, FMUs built
+    for label, checkout in checkouts.items():
+        # untimed: FMUs built, and the compiled kernels of every task kind in the disk cache
+        # (a first run after a change to navcore compiles them, several seconds)
         build_fmus(checkout, "replay_speed")
-        args_, _, _ = task_args("mc-B8", log, WARM_UP_STOP, work / f"warm-{label}")
-        measured(args_, checkout, checkout_env(checkout), "the warm-up")
+        for task in ("run", "mc-B8", "sim-B20"):
+            argv, _, _ = task_args(task, log, WARM_UP_STOP, work / f"warm-{label}-{task}")
+            measured(argv, checkout, checkout_env(checkout), "the warm-up")
     for i, order in alternating(args.pairs, ("this", "other")):
         if binary is not None:
             cpu, _ = measured([str(binary), str(config)], work, None, "KF-GINS")
