@@ -6,10 +6,12 @@ Parsing a log's CSV text is the costly part of replaying it (about a second per 
 every run, and within a run both the master (to fit the run's span to the log) and the
 replay component read it.  :func:`shared_log` keeps the parsed and checked
 :class:`~navcore.sensors.sensorlog.SensorLog` per process, keyed on the folder, the
-``max_dt_jitter`` bound it was checked with and the content of its files: on every call the
-files' bytes are hashed (BLAKE2b; about 2 % of parsing them), so a file changed in any way,
-even rewritten within one timestamp tick at the same size, is read and checked again, and a
-log whose files were only touched is not.
+``max_dt_jitter`` bound it was checked with and the content of its files.  A use whose files
+carry the stamps they had when they were read (device, inode, size, modification time and
+status-change time, which the system sets on every write and on every change of the
+modification time) takes the kept log; otherwise the files' bytes are hashed (BLAKE2b): a log
+only touched is kept, a changed one is read and checked again.  So a file rewritten in any
+way, even at the same size with its modification time set back, is parsed again.
 
 Place and lifetime: in the memory of the process only (nothing is written next to the log or
 anywhere else), at most :data:`MAX_LOGS` logs (the least recently used one is dropped first),
@@ -34,8 +36,8 @@ MAX_LOGS = 4
 _CHUNK = 1 << 22
 
 _lock = threading.Lock()
-_logs: "OrderedDict[Tuple[str, float], Tuple[Tuple[Optional[str], ...], SensorLog]]" = \
-    OrderedDict()
+#: (folder, max_dt_jitter) -> (the files' stamps, their contents' hashes, the log)
+_logs: "OrderedDict[Tuple[str, float], tuple]" = OrderedDict()
 #: how many times a log was parsed by :func:`shared_log` in this process (tests read it)
 parses = 0
 
@@ -59,6 +61,21 @@ def _content(folder: Path) -> Tuple[Optional[str], ...]:
     return tuple(_file_hash(folder / name) for name in LOG_FILES)
 
 
+def _stamps(folder: Path) -> Tuple[Optional[tuple], ...]:
+    """Per file: (device, inode, size, modification and status-change time [ns]), None
+    when absent.  The system sets the status-change time on every write (and on setting
+    the modification time back), so equal stamps mean files not written since."""
+    stamps = []
+    for name in LOG_FILES:
+        try:
+            st = os.stat(folder / name)
+        except OSError:
+            stamps.append(None)
+            continue
+        stamps.append((st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns))
+    return tuple(stamps)
+
+
 def _frozen(log: SensorLog) -> SensorLog:
     for table in (log.imu, log.gnss, log.truth):
         for values in (table or {}).values():
@@ -80,16 +97,24 @@ def shared_log(folder, max_dt_jitter: float = DEFAULT_MAX_DT_JITTER) -> SensorLo
         return read_log(folder, max_dt_jitter)
     key = (str(folder), float(max_dt_jitter))
     with _lock:
-        content = _content(folder) if folder.is_dir() else None
+        if not folder.is_dir():
+            parses += 1
+            return read_log(folder, max_dt_jitter)      # its error
+        stamps = _stamps(folder)
         held = _logs.get(key)
-        if held is not None and content is not None and held[0] == content:
+        if held is not None and held[0] == stamps:       # not written since it was read
             _logs.move_to_end(key)
-            return held[1]
+            return held[2]
+        content = _content(folder)
+        if held is not None and held[1] == content:      # touched, not changed
+            _logs[key] = (stamps, content, held[2])
+            _logs.move_to_end(key)
+            return held[2]
         parses += 1
         log = _frozen(read_log(folder, max_dt_jitter))
         # kept only when the files did not change while they were parsed
-        if content is not None and None not in content[:2] and _content(folder) == content:
-            _logs[key] = (content, log)
+        if None not in content[:2] and _stamps(folder) == stamps:
+            _logs[key] = (stamps, content, log)
             _logs.move_to_end(key)
             while len(_logs) > MAX_LOGS:
                 _logs.popitem(last=False)
