@@ -206,7 +206,7 @@ def measure(args, log: Path, work: Path, binary, config, stop: float, origin: fl
         # untimed: FMUs built, and the compiled kernels of every task kind in the disk cache
         # (a first run after a change to navcore compiles them, several seconds)
         build_fmus(checkout, "replay_speed")
-        for task in ("run", "mc-B8", "sim-B20"):
+        for task in ("run", "run-direct", "mc-B8", "sim-B20"):
             argv, _, _ = task_args(task, log, WARM_UP_STOP, work / f"warm-{label}-{task}",
                                    origin)
             measured(argv, checkout, checkout_env(checkout), "the warm-up")
