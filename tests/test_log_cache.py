@@ -99,3 +99,15 @@ def test_off_switch_parses_every_time(log_copy, monkeypatch):
     b = log_cache.shared_log(log_copy)
     assert log_cache.parses - before == 2 and a is not b
     assert np.array_equal(a.imu["time"], b.imu["time"])
+
+
+def test_a_comparison_on_a_log_parses_it_once(log_copy):
+    """``compare --replay``'s runs (one per filter, direct backend) share one parse: the
+    master's and every filter's replay component."""
+    model = scenarios.load_scenario(GIS_MODEL)
+    before = log_cache.parses
+    for name in ("Kf", "Iakf"):
+        run = scenarios.simulate_scenario(model, filter=name, backend="direct", replay=log_copy,
+                                          stop_time=5.0, log=None)
+        assert "replay" in run.results.components
+    assert log_cache.parses - before == 1
