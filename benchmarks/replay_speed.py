@@ -20,9 +20,8 @@ Tasks (the table of docs/speed.md "Campaigns on a recorded log"):
 * ``sim-B20``, ``sim-B64``: ``navfmu montecarlo models/aircraft_500s --filters Kf`` with B
   runs in one batch (simulated sensors).
 
-The log: ``--log`` (a navfmu sensor log folder), else ``--drive`` (a folder of RTKLIB files as
-``/work/shared/data/rtklib-drive``, converted by ``benchmarks/real_drive.py``'s
-``build_log``; 549 s of a car at 100 Hz, 4 Hz RTK fixes with outages cut in).  The log is
+The log: ``--log`` (a navfmu sensor log folder), else ``--drive`` (a folder of RTKLIB files laid out as the public drive_0708 of
+rtklibexplorer/GNSS_IMU, converted by ``benchmarks/real_drive.py``'s ``build_log``; 549 s of a car at 100 Hz, 4 Hz RTK fixes with outages cut in).  The log is
 cut to start at a whole second of its time (the replay scenario starts at 0) and written
 once, untimed, before the pairs.  Every run of the filter uses position-only fixes with a
 fixed R (:data:`PARAMETERS`), and KF-GINS the same sigmas, the same noise figures and the
@@ -34,7 +33,7 @@ or CI: get the source from https://github.com/i2Nav-WHU/KF-GINS and build it you
 README says (CMake, Release).  The script writes KF-GINS's input files (IMU increments and
 GNSS fixes as its text formats, a YAML configuration) from the log.
 
-    python benchmarks/replay_speed.py --other ../ref --drive /work/shared/data/rtklib-drive \\
+    python benchmarks/replay_speed.py --other ../ref --drive path/to/drive_0708 \\
         --kf-gins ~/KF-GINS/bin/KF-GINS --pairs 3
     python benchmarks/replay_speed.py --other ../ref --log LOG --tasks mc-B20 --stop 200
 """
