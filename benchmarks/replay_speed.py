@@ -23,10 +23,10 @@ Tasks (the table of docs/speed.md "Campaigns on a recorded log"):
 The log: ``--log`` (a navfmu sensor log folder), else ``--drive`` (a folder of RTKLIB files
 laid out as the public drive_0708 of rtklibexplorer/GNSS_IMU, converted by
 ``benchmarks/real_drive.py``'s ``build_log``; 549 s of a car at 100 Hz, 4 Hz RTK fixes with
-outages cut in).  The log is cut to start at a whole second of its time (the replay
-scenario starts at 0) and written once, untimed, before the pairs.  Every run of the filter uses position-only fixes with a
-fixed R (:data:`PARAMETERS`), and KF-GINS the same sigmas, the same noise figures and the
-same lever arm (its own 21-state filter, scale factors included).
+outages cut in). The log is cut to start at a whole second of its time (the replay scenario
+starts at 0) and written once, untimed, before the pairs. Every run of the filter uses
+position-only fixes with a fixed R (:data:`PARAMETERS`), and KF-GINS the same sigmas, the
+same noise figures and the same lever arm (its own 21-state filter, scale factors included).
 
 KF-GINS: ``--kf-gins PATH`` or the environment variable ``NAVFMU_KF_GINS`` names its binary;
 without it the KF-GINS column is skipped with a message.  It cannot be part of the repository
