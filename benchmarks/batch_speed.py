@@ -28,7 +28,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from checkouts import alternating, argument_parser, run_python
+from checkouts import alternating, argument_parser, other_checkout, run_python
 
 HERE = Path(__file__).resolve().parents[1]
 #: (scenario, filter) of the acceptance list
@@ -100,9 +100,7 @@ def summary(costs, runs: int) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argument_parser(__doc__, pairs=3)
-    parser.add_argument("--other", type=Path, required=True,
-                        help="the other checkout (its root folder)")
+    parser = argument_parser(__doc__, pairs=3, other=True)
     parser.add_argument("--runs", type=int, default=20, help="seeds per campaign")
     parser.add_argument("--stop", type=float, help="stop time of every run [s] (default: "
                         "each scenario's own)")
@@ -110,12 +108,11 @@ def main(argv=None) -> None:
     parser.add_argument("--cases", help="comma-separated SCENARIO:FILTER (default: CASES)")
     parser.add_argument("--json", type=Path, help="also write the costs to this file")
     args = parser.parse_args(argv)
-    if not (args.other / "orchestrator").is_dir():
-        parser.error("--other: give the root folder of another navfmu checkout")
+    other = other_checkout(parser, args)
     cases = CASES if not args.cases else tuple(
         tuple(c.split(":", 1)) for c in args.cases.split(",") if c.strip())
     t0 = time.perf_counter()
-    costs = measure(args.other.resolve(), cases, args.pairs, args.runs, args.stop, args.batch)
+    costs = measure(other, cases, args.pairs, args.runs, args.stop, args.batch)
     print(summary(costs, args.runs))
     print(f"({time.perf_counter() - t0:.0f} s in all)")
     if args.json:

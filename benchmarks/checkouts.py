@@ -49,15 +49,26 @@ def alternating(pairs: int, items):
         yield i, (items if i % 2 == 0 else items[::-1])
 
 
-def argument_parser(doc: str, pairs: int):
+def argument_parser(doc: str, pairs: int, other: bool = False):
     """The command line of a benchmark script: its docstring's first paragraph as the
-    description and the number of alternating pairs (``--pairs``, default ``pairs``)."""
+    description and the number of alternating pairs (``--pairs``, default ``pairs``);
+    ``other``: also the required ``--other`` checkout (:func:`other_checkout` checks it)."""
     import argparse
 
     parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--pairs", type=int, default=pairs,
                         help=f"alternating pairs (default {pairs})")
+    if other:
+        parser.add_argument("--other", type=Path, required=True,
+                            help="the other checkout (its root folder)")
     return parser
+
+
+def other_checkout(parser, args) -> Path:
+    """``--other`` resolved, or the parser's error when it is no navfmu checkout."""
+    if not (args.other / "orchestrator").is_dir():
+        parser.error("--other: give the root folder of another navfmu checkout")
+    return args.other.resolve()
 
 
 #: modules renamed when the packages were grouped into wings (new last name -> old name)

@@ -128,3 +128,32 @@ def test_the_tuned_values_are_never_worse_than_the_current_ones(monkeypatch):
                          batch=1)          # one candidate per task: through evaluate
     assert res["best_cost"] == 1.0
     np.testing.assert_allclose([res["best_values"][n] for n in PARAMS], current, rtol=1e-12)
+
+
+def test_tune_on_a_recorded_log_batches_the_replay(monkeypatch):
+    """``--replay``: every candidate's runs replay the log (the tuned filter sees the log's
+    sensors, not the scenario's), one replay component steps for a whole batch, and the
+    costs are those of the candidates run one by one."""
+    from navcore.components.replay_batch import ImuGnssReplayBatch
+
+    log = MODEL.parent / "replay_gnss_ins_sim" / "log"
+    batches = []
+    started = ImuGnssReplayBatch._started
+    monkeypatch.setattr(ImuGnssReplayBatch, "_started",
+                        lambda self, t: batches.append(self.runs) or started(self, t))
+
+    def tune(batch):
+        return tuner.run_tune(MODEL.parent / "aircraft_500s", "filter", ["r_pos_n"],
+                              generations=1, population=3, workers=1, seed=3, stop_time=15.0,
+                              backend="direct", log=lambda m: None, batch=batch, replay=log)
+    batched = tune(None)
+    assert batches == [3]                        # one replay for the 3 candidates' runs
+    one_by_one = tune(1)
+    assert batches == [3]                        # single runs, no batch
+    for key in ("best_values", "best_so_far", "generation_best", "generation_mean"):
+        assert one_by_one[key] == batched[key]
+    assert batched["replay"] == str(log.resolve())
+    plain = tuner.run_tune(MODEL.parent / "aircraft_500s", "filter", ["r_pos_n"],
+                           generations=1, population=3, workers=1, seed=3, stop_time=15.0,
+                           backend="direct", log=lambda m: None)
+    assert plain["generation_best"][0] != batched["generation_best"][0]

@@ -31,6 +31,7 @@ generation best/mean cost, the best values) and ``fitness.png`` (paper 003's Fig
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import shutil
@@ -68,6 +69,22 @@ class TuneSpec:
     seed_parameters: Tuple[str, ...]
     #: fixed overrides of every run (``--ssv``), under the candidate's values and the seeds
     parameters: Tuple[Tuple[str, Any], ...] = ()
+    #: the sensor log every run replays (``--replay``; ``stop_time`` then in the log's time)
+    replay: Optional[str] = None
+
+
+def spec_model(spec: TuneSpec) -> Tuple[SystemModel, Dict[str, Any], Optional[float]]:
+    """The model one evaluation runs, the overrides its log adds to every run and the stop
+    time of :meth:`Simulation.run`: the scenario, or with ``spec.replay`` the scenario
+    replaying that log (:func:`~orchestrator.running.replay.replay_model`; the log is parsed
+    once per process, :mod:`navcore.sensors.log_cache`)."""
+    model = load_scenario(spec.ssd)
+    if spec.replay is None:
+        return model, {}, spec.stop_time
+    from ..running import replay as log_replay
+
+    model, notes = log_replay.replay_model(model, spec.replay, stop_time=spec.stop_time)
+    return model, log_replay.parameter_overrides(model, notes), None
 
 
 def parse_ranges(items: Sequence[str]) -> Dict[str, Tuple[float, float]]:
@@ -150,8 +167,9 @@ def _values(spec: TuneSpec, types, x) -> Dict[str, Any]:
             for n, t, v in zip(spec.names, types, x)}
 
 
-def _run_parameters(spec: TuneSpec, values: Dict[str, Any], seed) -> Dict[str, Any]:
-    parameters = dict(spec.parameters)
+def _run_parameters(spec: TuneSpec, values: Dict[str, Any], seed,
+                    log_overrides=None) -> Dict[str, Any]:
+    parameters = {**(log_overrides or {}), **dict(spec.parameters)}
     parameters.update({f"{spec.component}.{k}": v for k, v in values.items()})
     if seed is not None:
         parameters.update({p: seed for p in spec.seed_parameters})
@@ -170,13 +188,13 @@ def _fitness(spec: TuneSpec, results) -> float:
 
 def evaluate(spec: TuneSpec, values: Dict[str, Any]) -> float:
     """Cost of one candidate: mean attitude fitness over the training seeds (a task)."""
-    model = load_scenario(spec.ssd)
+    model, log_overrides, stop = spec_model(spec)
     costs = []
     for seed in spec.train_seeds:
         sim = Simulation(model, backend=spec.backend,
                          registry=registry() if spec.backend == "direct" else None,
-                         parameters=_run_parameters(spec, values, seed))
-        costs.append(_fitness(spec, sim.run(stop_time=spec.stop_time)))
+                         parameters=_run_parameters(spec, values, seed, log_overrides))
+        costs.append(_fitness(spec, sim.run(stop_time=stop)))
     return float(np.mean(costs))
 
 
@@ -186,10 +204,10 @@ def evaluate_batch(spec: TuneSpec, candidates: List[Dict[str, Any]]) -> List[flo
     single runs); a run that fails raises its own error after the batch."""
     from ..cosim.batch import BatchSimulation
 
-    model = load_scenario(spec.ssd)
-    sets = [_run_parameters(spec, values, seed) for values in candidates
+    model, log_overrides, stop = spec_model(spec)
+    sets = [_run_parameters(spec, values, seed, log_overrides) for values in candidates
             for seed in spec.train_seeds]
-    outcomes = BatchSimulation(model, registry(), sets).run(stop_time=spec.stop_time)
+    outcomes = BatchSimulation(model, registry(), sets).run(stop_time=stop)
     for outcome in outcomes:
         if isinstance(outcome, NavfmuError):
             raise outcome
@@ -231,11 +249,15 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
              stop_time: Optional[float] = None, window=None, scheduler=None,
              crossover_probability: float = 0.8, mutation_probability: float = 0.2,
              progress=None, log=print, batch: Optional[int] = None,
-             parameters: Optional[Dict[str, Any]] = None) -> Dict[str, Any]:
+             parameters: Optional[Dict[str, Any]] = None,
+             replay: Optional[str] = None) -> Dict[str, Any]:
     """Run the GA (see the module docstring); returns the JSON-ready summary.  ``batch``:
     candidates per batch on the direct backend (None: chosen, :mod:`.batching`).
     ``parameters``: overrides of every run (``{"component.parameter": value}``, ``--ssv``);
-    the tuned component's are its current values and go into the tuned set."""
+    the tuned component's are its current values and go into the tuned set.  ``replay``:
+    a sensor log every run replays in place of the scenario's sensors (``stop_time`` in the
+    log's time), the runs of a batch sharing one replay (:mod:`navcore.components.
+    replay_batch`)."""
     batching.check_batch(batch, backend)
     batch_size = batch
     model = load_scenario(scenario)
@@ -249,7 +271,14 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
     spec = TuneSpec(str(model.path), component, tuple(names),
                     tuple(int(s) for s in train_seeds) or (None,), backend, stop_time,
                     window, _seed_parameters(model, backend) if train_seeds else (),
-                    tuple((parameters or {}).items()))
+                    tuple((parameters or {}).items()),
+                    None if replay is None else str(Path(replay).expanduser().resolve()))
+    if replay is not None:      # a bad log or span: its error now, before any evaluation
+        replayed = spec_model(spec)[0]
+        if backend == "fmu":
+            ensure_fmus(replayed, log=log)
+        spec = dataclasses.replace(spec, seed_parameters=(
+            _seed_parameters(replayed, backend) if train_seeds else ()))
     ga = GeneticAlgorithm(len(names), population, generations, crossover_probability,
                           mutation_probability, seed)
     # progress in individuals of the generations (an individual met before is not re-run)
@@ -272,6 +301,7 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
                                                   for n, a, b in zip(names, lo, hi)},
             "population": population, "generations": generations, "seed": seed,
             "workers": workers, "backend": backend, "train_seeds": list(train_seeds),
+            "replay": spec.replay,
             "window": list(window) if window else None,
             "cost": "attitude RMS over the window and roll/pitch/yaw [deg] (paper 003 eq. 20)",
             "best_values": best, "best_cost": result.best_cost,

@@ -372,8 +372,11 @@ def report(out, scenario_names, runs, workers, scheduler, local_cluster, stop, o
 @click.option("--ssv", "ssv", multiple=True, metavar="[COMPONENT=]FILE", help=SSV_HELP)
 @click.option("--batch", type=int, default=None, help=BATCH_HELP.replace(
     "Runs of one filter", "Candidates of a generation (all their training runs)"))
+@click.option("--replay", "replay", type=click.Path(), callback=nonempty_path,
+              help="Every run replays this sensor-log folder in place of the scenario's "
+              "sensor components (--stop is then in the log's time).")
 def tune(scenario, component, params, ranges, generations, population, workers, scheduler,
-         seed, train_seeds, backend, stop, window, out, ssv, batch):
+         seed, train_seeds, backend, stop, window, out, ssv, batch, replay):
     """Tune numeric parameters of a component of SCENARIO with paper 003's genetic
     algorithm; each cost evaluation is a co-simulation (attitude RMS, eq. 20).  Writes
     only into --out and prints the --ssv option that applies the result."""
@@ -398,6 +401,7 @@ def tune(scenario, component, params, ranges, generations, population, workers, 
                                  ranges=tuner.parse_ranges(ranges), train_seeds=seeds,
                                  backend=backend, stop_time=stop, window=parse_window(window),
                                  scheduler=scheduler, batch=batch, parameters=fixed,
+                                 replay=replay,
                                  progress=progress_bar("tune", unit="individual"),
                                  log=lambda m: click.echo(m, err=True))
     click.echo(f"best cost {summary['best_cost']:.5f} deg after {summary['evaluations']} "

@@ -22,9 +22,10 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from navcore.sensors.log_cache import shared_log
 from navcore.sensors.log_time import (DEFAULT_MAX_DT_JITTER, absolute_text,
                                      check_max_dt_jitter, steps_to_reach)
-from navcore.sensors.sensorlog import LogError, SensorLog, read_log, write_log
+from navcore.sensors.sensorlog import LogError, SensorLog, write_log
 
 from ..building import build as fmu_build
 from ..errors import NavfmuError
@@ -174,7 +175,7 @@ def replay_model(model: SystemModel, log_dir, source: Optional[Path] = None,
     jitter = DEFAULT_MAX_DT_JITTER if max_dt_jitter is None else max_dt_jitter
     try:
         jitter = check_max_dt_jitter(jitter, "--max-dt-jitter")
-        log = read_log(folder, jitter)
+        log = shared_log(folder, jitter)
     except LogError as exc:
         raise NavfmuError(f"--replay: {exc}") from None
     names = replaceable_components(model)

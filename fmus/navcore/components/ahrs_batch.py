@@ -297,8 +297,9 @@ class AhrsFilterBatch(ComponentBatch):
                        self.nav_time, self.out, self.columns["updated"], step)
         rows = (step == _NATIVE).nonzero()[0]
         self._step_rows(rows, values[rows])
-        for b in (step == _OWN).nonzero()[0].tolist():
-            self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
+        own = (step == _OWN).nonzero()[0].tolist()
+        for b, values in zip(own, self._inputs_of_runs(own, inputs)):
+            self._by_itself(b, lambda m, values=values: m.step(t, h, values))
         return self.out
 
     def _step_rows(self, rows: np.ndarray, v: np.ndarray) -> None:

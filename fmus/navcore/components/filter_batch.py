@@ -250,10 +250,10 @@ class InsGnssFilterBatch(ComponentBatch):
         imu = inputs.real_columns(_IMU)
         interval = self._common_interval(imu)
         if interval is None:
-            for b in range(self.runs):
-                if b not in self._failures:
-                    self._lend_solution(b)
-                    self._by_itself(b, lambda m, b=b: m.step(t, h, self._inputs_of(b, inputs)))
+            runs = [b for b in range(self.runs) if b not in self._failures]
+            for b, values in zip(runs, self._inputs_of_runs(runs, inputs)):
+                self._lend_solution(b)
+                self._by_itself(b, lambda m, values=values: m.step(t, h, values))
             self.nav_time = self.members[0].nav_time
             return self.out
         imu_time, dt = interval

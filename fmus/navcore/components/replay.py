@@ -30,7 +30,8 @@ Any communication step works: a step reaching several IMU lines outputs the last
 :func:`navcore.core.timing.time_tolerance` on the log's IMU period, as in the other components.  At
 initialization the outputs are the log's state at the start time (no IMU interval yet, ``imu_dt`` =
 0).  Everything the component needs comes from its ``log`` parameter (a folder in the format of
-:mod:`navcore.sensors.sensorlog`), read once at initialization.
+:mod:`navcore.sensors.sensorlog`), read at initialization, once per process and content of
+the log (:mod:`navcore.sensors.log_cache`).
 """
 from __future__ import annotations
 
@@ -43,7 +44,8 @@ from ..core import signals
 from ..core.component import Component, InputError, Limits, ParameterError, real, string
 from ..core.timing import time_tolerance
 from ..sensors.log_time import DEFAULT_MAX_DT_JITTER, MAX_DT_JITTER_LIMIT
-from ..sensors.sensorlog import read_log
+from ..sensors.log_cache import derived, shared_log
+from .replay_batch import ImuGnssReplayBatch
 
 _TRUTH_NAMES = ("lat", "lon", "h", "vn", "ve", "vd", "roll", "pitch", "yaw")
 _GNSS_VALUES = ("lat", "lon", "h", "vn", "ve", "vd")
@@ -55,6 +57,24 @@ _GNSS_NAMES = tuple("gnss_" + name for name in _GNSS_VALUES)
 #: per body axis: the (dtheta, dvel, gyro, accel) output names
 _IMU_NAMES = tuple(zip(signals.IMU_DTHETA_NAMES, signals.IMU_DVEL_NAMES, signals.IMU_GYRO_NAMES,
                        signals.IMU_ACCEL_NAMES))
+
+
+def _tables(log):
+    """The replay's IMU, GNSS and truth tables (one row per line, the columns the step
+    reads); read-only, as they are shared by every replay of the log."""
+    imu = np.column_stack([log.imu[k] for k in ("time", "dt", "dtheta_x", "dtheta_y",
+                                                "dtheta_z", "dvel_x", "dvel_y", "dvel_z")])
+    g = log.gnss
+    zeros = np.zeros_like(g["time"])
+    gnss = np.column_stack([g["time"]] + [g.get(k, zeros) for k in _GNSS_VALUES]
+                           + [g["valid"], g.get("outlier", zeros)]
+                           + [g.get(k, zeros) for k in _GNSS_STD])
+    truth = (None if log.truth is None else
+             np.column_stack([log.truth["time"]] + [log.truth[k] for k in _TRUTH_NAMES]))
+    for table in (imu, gnss, truth):
+        if table is not None:
+            table.setflags(write=False)
+    return imu, gnss, truth
 
 
 class ImuGnssReplay(Component):
@@ -71,6 +91,8 @@ class ImuGnssReplay(Component):
              "or an overlap", DEFAULT_MAX_DT_JITTER, Limits(0.0, MAX_DT_JITTER_LIMIT)),
     )
     inputs = ()
+    #: the runs of a batch replaying one log step once (navcore.core.batch)
+    batch_class = ImuGnssReplayBatch
     outputs = (signals.TRUTH + signals.IMU + signals.GNSS + signals.GNSS_INJECTED
                + signals.GNSS_STD)
     default_experiment = (0.0, 10.0, 0.01)
@@ -86,17 +108,8 @@ class ImuGnssReplay(Component):
             raise ParameterError(f"{self.model_name}: parameter 'log' is empty (give the folder "
                                  "of a sensor log)")
         self.log_folder = str(Path(folder).resolve())
-        log = read_log(self.log_folder, self.params["max_dt_jitter"])
-        self.imu = np.column_stack([log.imu[k] for k in
-                                    ("time", "dt", "dtheta_x", "dtheta_y", "dtheta_z",
-                                     "dvel_x", "dvel_y", "dvel_z")])
-        g = log.gnss
-        zeros = np.zeros_like(g["time"])
-        self.gnss = np.column_stack([g["time"]] + [g.get(k, zeros) for k in _GNSS_VALUES]
-                                    + [g["valid"], g.get("outlier", zeros)]
-                                    + [g.get(k, zeros) for k in _GNSS_STD])
-        self.truth = (None if log.truth is None else
-                      np.column_stack([log.truth["time"]] + [log.truth[k] for k in _TRUTH_NAMES]))
+        log = shared_log(self.log_folder, self.params["max_dt_jitter"])
+        self.imu, self.gnss, self.truth = derived(log, "replay_tables", _tables)
         self.start_time = float(start_time)
         self.period = log.replay_step
         self.truth_end = None if self.truth is None else float(self.truth[-1, 0])

@@ -145,14 +145,9 @@ class ComponentBatch(ABC):
         return getter(member.out)
 
     @staticmethod
-    def _inputs_of(b: int, inputs) -> Dict[str, float]:
-        """Run b's inputs of a batch step, as its own component takes them."""
-        return {name: values[b].item() for name, values in inputs.items()}
-
-    @staticmethod
     def _inputs_of_runs(runs: Sequence[int], inputs) -> List[Dict[str, float]]:
-        """:meth:`_inputs_of` of each of the runs ``runs`` (every input's column converted
-        once)."""
+        """The inputs of each of the runs ``runs`` of a batch step, as its own component
+        takes them (Python numbers; every input's column converted once)."""
         columns = [(name, values.tolist()) for name, values in inputs.items()]
         return [{name: column[b] for name, column in columns} for b in runs]
 
