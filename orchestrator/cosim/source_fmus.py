@@ -12,8 +12,8 @@ The compiled library is cached, keyed on the FMU file's SHA-256 and the platform
 ``$NAVFMU_SOURCE_FMU_CACHE`` if set, else ``$XDG_CACHE_HOME/navfmu/source-fmus`` (by default
 ``~/.cache/navfmu/source-fmus``): an FMU is compiled once, a changed FMU again; deleting the
 folder clears the cache.  A library is built in a ``.build-*`` folder there and moved into
-place whole (a rename), so parallel runs compiling the same FMU leave one complete library.  Without CMake, a C compiler or
-``make`` the FMU is refused in one line naming what is missing.
+place whole (a rename), so parallel runs compiling the same FMU leave one complete library.
+Without CMake, a C compiler or ``make`` the FMU is refused in one line naming what is missing.
 """
 from __future__ import annotations
 
