@@ -49,7 +49,7 @@ class _RecordingKfEngine(KfEngine):
     def apply(self, dx, P):
         super().apply(dx, P)
         if self.recorder is not None:
-            self.recorder.recording.add_update(np.array(dx, dtype=float), self)
+            self.recorder.recorded_update(np.array(dx, dtype=float))
 
 
 def _recording_class(base, session):
@@ -83,7 +83,7 @@ def _recording_class(base, session):
             return out
 
         def _start_from(self, state):
-            self.recording = None
+            self.recording = None            # the engine built here records from its start
             super()._start_from(state)
             self._begin_recording()
 
@@ -95,6 +95,10 @@ def _recording_class(base, session):
         def recorded_interval(self, dt, f_ned):
             """The engine integrated the interval ending at ``interval_end``."""
             self.recording.add_epoch(self.interval_end, dt, self.engine.nav.rows[0], f_ned)
+
+        def recorded_update(self, dx):
+            """The engine fed back ``dx`` (a fix or a land aid) at the latest epoch."""
+            self.recording.add_update(dx, self.engine)
 
         def _apply(self, fix):
             self.recording.truncate_after(self.nav_time)     # a fix applied in the past
