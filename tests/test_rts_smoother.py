@@ -1,7 +1,8 @@
 """The Rauch-Tung-Striebel smoother (navcore.filters.rts_smoother, navfmu run --smooth).
 
 The backward pass against filterpy's independent ``rts_smoother`` on a linear model (the
-closed-loop form with the corrections against the textbook form on the states), and the
+closed-loop form with the corrections against the textbook form on the states; with a
+velocity pseudo-measurement after some fixes, at their epoch, as a land aid's), and the
 smoother over a simulated MEMS INS/GNSS run with a 10 s GNSS outage: the smoothed position
 error inside the outage far below the forward filter's, the last epoch unchanged; the
 recording through a rollback for late fixes; a filter the smoother does not support refused
@@ -16,6 +17,7 @@ import pytest
 from filterpy.kalman import rts_smoother
 
 from navcore.components.smoothing import SmoothingSession
+from navcore.filters.land_aids import linear_update
 from navcore.filters.rts_smoother import backward
 from orchestrator.cli.commands import main
 from orchestrator.results import metrics as nav_metrics
@@ -24,9 +26,11 @@ from orchestrator.running import scenarios, smoothing
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _linear_run(seed, n=60, gap=(20, 35)):
+def _linear_run(seed, n=60, gap=(20, 35), aid_sigma=None):
     """A forward Kalman filter on a 1-D constant-velocity model with a varying step and no
-    position measurement inside ``gap``: (F, Q, x_prior, P_prior, x_post, P_post)."""
+    position measurement inside ``gap``: (F, Q, x_prior, P_prior, x_post, P_post).  With
+    ``aid_sigma``, a velocity pseudo-measurement every third epoch besides, after the
+    position at the same epoch (a land aid beside a fix: two updates merged into one)."""
     rng = np.random.default_rng(seed)
     dts = rng.uniform(0.5, 1.5, n)
     F = np.array([[[1.0, dt], [0.0, 1.0]] for dt in dts])
@@ -46,14 +50,17 @@ def _linear_run(seed, n=60, gap=(20, 35)):
             K = P @ H.T @ np.linalg.inv(S)
             x = x + K @ (z - H @ x)
             P = (np.eye(2) - K @ H) @ P
+        if aid_sigma is not None and k % 3 == 0:
+            x, P = linear_update(x, P, truth[1:] + rng.normal(0.0, aid_sigma, 1),
+                                 np.array([[0.0, 1.0]]), np.array([[aid_sigma ** 2]]))
         xs_po.append(x)
         Ps_po.append(P)
     return F, Q, *(np.array(a) for a in (xs_pr, Ps_pr, xs_po, Ps_po))
 
 
-@pytest.mark.parametrize("seed", [1, 2])
-def test_backward_pass_matches_filterpy_rts_smoother(seed):
-    F, Q, x_pr, P_pr, x_po, P_po = _linear_run(seed)
+@pytest.mark.parametrize("seed, aid_sigma", [(1, None), (2, None), (3, 0.2)])
+def test_backward_pass_matches_filterpy_rts_smoother(seed, aid_sigma):
+    F, Q, x_pr, P_pr, x_po, P_po = _linear_run(seed, aid_sigma=aid_sigma)
     # filterpy's Fs[k], Qs[k] take epoch k to k+1 (the last pair unused)
     ref_x, ref_P, _, _ = rts_smoother(x_po.copy(), P_po.copy(), np.roll(F, -1, axis=0),
                                       np.roll(Q, -1, axis=0))

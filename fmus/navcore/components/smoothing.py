@@ -18,7 +18,6 @@ import numpy as np
 
 from ..errors import NavcoreError
 from ..filters.ins_gnss_kf import KfEngine
-from ..ins.error_model import N_STATES
 from ..filters.rts_smoother import KfRecording, smooth
 from .kf_components import Kf
 
@@ -27,17 +26,30 @@ SMOOTHABLE = {"Kf": Kf}
 
 
 class _RecordingKfEngine(KfEngine):
-    """KfEngine that keeps the correction of its latest update (``last_dx``)."""
+    """KfEngine that reports to ``recorder`` (the recording component, None before it
+    records) each IMU interval it integrates and each correction it feeds back: a fix's
+    update and a land aid's pseudo-measurement (:meth:`KfEngine.aid_update`, which ZUPT,
+    ZARU and the NHC call between two intervals) alike, as they happen.  A recording that
+    saw only the fixes would smooth as if the aids had never corrected the state, while the
+    nominal states it stores carry their corrections."""
 
-    state_fields = KfEngine.state_fields + ("last_dx",)
+    derived_fields = ("recorder",)
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self.last_dx = np.zeros(N_STATES)
+        self.recorder = None
+
+    def propagate(self, dtheta, dvel, dt):
+        # the specific force in NED the transition is built with (attitude at the start)
+        f_ned = self.nav.rows[0, 6:15].reshape(3, 3) @ (dvel / dt - self.accel_bias)
+        super().propagate(dtheta, dvel, dt)
+        if self.recorder is not None:
+            self.recorder.recorded_interval(dt, f_ned)
 
     def apply(self, dx, P):
-        self.last_dx = np.array(dx, dtype=float)
         super().apply(dx, P)
+        if self.recorder is not None:
+            self.recorder.recorded_update(np.array(dx, dtype=float))
 
 
 def _recording_class(base, session):
@@ -55,30 +67,42 @@ def _recording_class(base, session):
             self.recording = KfRecording(self.engine.q_density, cfg.gyro_bias_tau,
                                          cfg.accel_bias_tau)
             self.recording.start(self.nav_time, self.engine)
+            self.engine.recorder = self
+
+        def make_engine(self, config, nav):
+            engine = super().make_engine(config, nav)
+            if getattr(self, "recording", None) is not None:   # a rollback's fresh engine
+                engine.recorder = self
+            return engine
 
         def initialize(self, start_time):
-            out = super().initialize(start_time)
             self.recording = None
+            out = super().initialize(start_time)
             if self.initializer.done:
                 self._begin_recording()
             return out
 
         def _start_from(self, state):
+            self.recording = None            # the engine built here records from its start
             super()._start_from(state)
             self._begin_recording()
 
         def _integrate(self, increment):
-            _, dtheta, dvel, dt = increment
-            engine = self.engine
-            self.recording.truncate_after(self.nav_time)
-            f_ned = engine.nav.rows[0, 6:15].reshape(3, 3) @ (dvel / dt - engine.accel_bias)
+            self.recording.truncate_after(self.nav_time)     # a rollback's replay
+            self.interval_end = increment[0]
             super()._integrate(increment)
-            self.recording.add_epoch(self.nav_time, dt, engine.nav.rows[0], f_ned)
 
-        def _applied(self, z, result):
-            self.recording.truncate_after(self.nav_time)      # a fix applied in the past
-            self.recording.add_update(self.engine.last_dx, self.engine)
-            super()._applied(z, result)
+        def recorded_interval(self, dt, f_ned):
+            """The engine integrated the interval ending at ``interval_end``."""
+            self.recording.add_epoch(self.interval_end, dt, self.engine.nav.rows[0], f_ned)
+
+        def recorded_update(self, dx):
+            """The engine fed back ``dx`` (a fix or a land aid) at the latest epoch."""
+            self.recording.add_update(dx, self.engine)
+
+        def _apply(self, fix):
+            self.recording.truncate_after(self.nav_time)     # a fix applied in the past
+            super()._apply(fix)
 
     Recording.__name__ = Recording.__qualname__ = base.__name__
     Recording.model_name = base.model_name

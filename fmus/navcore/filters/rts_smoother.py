@@ -12,9 +12,11 @@ Navigation Systems*, 2nd ed., sec. 3.4.2)::
     Ps_j    = P+_j + A_j (Ps_{j+1} - P-_{j+1}) A_j'                       (its covariance)
     x_s,j   = x+_j corrected by ds_j          (the feedback the filter applies: Strapdown.correct)
 
-``j`` is an IMU epoch, ``P+_j`` the covariance after the update at ``j`` (``P-_j`` without
-one), ``Phi_{j+1}`` the transition of the interval ``j -> j+1``, ``dx_{j+1}`` the correction
-the filter applied at ``j+1`` (0 without an update) and ``ds_j`` the smoothed estimate of the
+``j`` is an IMU epoch, ``P+_j`` the covariance after the updates at ``j`` (``P-_j`` without
+one; an update is any correction the filter feeds back: a fix's, or a land aid's
+pseudo-measurement, ZUPT, ZARU or NHC, :mod:`navcore.filters.land_aids`), ``Phi_{j+1}``
+the transition of the interval ``j -> j+1``, ``dx_{j+1}`` the correction the filter
+applied at ``j+1`` (0 without an update) and ``ds_j`` the smoothed estimate of the
 error of the forward nominal state ``x+_j``, the last epoch's ``ds`` being 0 (there the
 smoothed and filtered solutions agree).  The textbook form ``x_s,j = x+_j + A_j (x_s,j+1 -
 x-_{j+1})`` becomes the line above because the forward state ``x-_{j+1}`` predicted by the
@@ -88,7 +90,8 @@ class KfRecording:
     """What the forward pass of a Kf leaves for the smoother (module docstring).
 
     Epoch 0 is the start (the engine as built, its covariance ``P0``); each integrated IMU
-    interval adds an epoch; an update at the current epoch records its correction, the
+    interval adds an epoch (the nominal state as propagated, before any update); each
+    update at the current epoch -- a fix or a land aid -- records its correction, the
     covariance after it and the corrected nominal state (two updates at one epoch merge:
     the corrections add, the last covariance stays).  A filter that rolls back to a
     checkpoint and integrates again (a late fix) cuts the epochs after the checkpoint first
