@@ -126,8 +126,8 @@ MODULES.update({
 # FMUs of test_master.py (the master runs in the test process).  test_master.py's CSV test is
 # left out: polars, which writes the CSV, keeps a thread pool that does not survive mutmut's
 # fork, so in a mutant's process it hangs and every mutant it reaches times out
-MODULES.update({
-    "orchestrator.cosim.master": ["tests/test_master.py", "tests/test_jacobi.py",
-                                  "tests/test_exchange_by_hand.py",
-                                  "tests/test_master_by_hand.py", "-k", "not csv_header"],
-})
+_MASTER_TESTS = ["tests/test_master.py", "tests/test_jacobi.py", "tests/test_exchange_by_hand.py",
+                 "tests/test_master_by_hand.py", "-k", "not csv_header"]
+MODULES.update({module: _MASTER_TESTS for module in (
+    "orchestrator.cosim.master", "orchestrator.cosim.model_checks",
+    "orchestrator.cosim.macro_loop", "orchestrator.cosim.result_assembly")})
