@@ -314,7 +314,7 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
 def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
     """``<component>_tuned.ssv``, ``tune.json`` and ``fitness.png``, all in ``out`` (never in
     the model's folder); none of them if one cannot be written."""
-    from ..results import plots  # not imported by the executor's workers
+    from ..results import filter_plots  # not imported by the executor's workers
 
     out = Path(out)
     made = not out.exists()
@@ -329,7 +329,7 @@ def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
     writers = [lambda: atomic_write(ssv, lambda f: f.write(text)),
                lambda: atomic_write(out / "tune.json",
                                     lambda f: f.write(json.dumps(summary, indent=2))),
-               lambda: plots.plot_fitness(summary, out / "fitness.png")]
+               lambda: filter_plots.plot_fitness(summary, out / "fitness.png")]
     written: List[Path] = []
     try:
         for write in writers:

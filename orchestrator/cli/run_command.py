@@ -118,7 +118,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
     ``navfmu-results/<model>``), each run with its progress bar; the figures are titled from
-    the runs (:func:`orchestrator.results.plots.figure_title`).  ``replay_options``: the
+    the runs (:func:`orchestrator.results.plot_style.figure_title`).  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
     ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
     process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones).

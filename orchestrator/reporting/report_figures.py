@@ -11,7 +11,7 @@ from typing import Dict
 from ..campaigns import campaign as camp
 from ..errors import NavfmuError
 from ..results import metrics as nav_metrics
-from ..results import plots
+from ..results import filter_plots, plots
 from ..results import recorder
 
 
@@ -54,7 +54,7 @@ def scenario_figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
         plan["errors_caption"] = plots.ATTITUDE_ERRORS_CAPTION
         figures["errors"] = plots.plot_attitude_errors(
             entries, out / "figures" / f"{name}_errors.png", title)
-    figures["nis"] = plots.plot_nis(entries, out / "figures" / f"{name}_nis.png", title)
+    figures["nis"] = filter_plots.plot_nis(entries, out / "figures" / f"{name}_nis.png", title)
     return figures
 
 
