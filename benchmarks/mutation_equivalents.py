@@ -290,6 +290,8 @@ _RANGE_DTYPE = ("lo and hi only meet float arithmetic (decode, the current value
                 "and float() in the summary: an integer array of a range gives the same values")
 _JSON_LAYOUT = "only the layout of tune.json's text changes; its readers parse the JSON"
 _CAMPAIGN = "orchestrator.campaigns.campaign.x"
+_CAMPAIGN_RUNS = "orchestrator.campaigns.campaign_runs.x"
+_SEEDS = "orchestrator.campaigns.seeds.x"
 _GIT_TIMEOUT = "the timeout only bounds a git that hangs; git answers in milliseconds here"
 _STATUS_CHECK = ("git status cannot fail in a folder where git rev-parse HEAD (checked) has "
                  "just succeeded")
@@ -483,21 +485,21 @@ EQUIVALENT.update({
     _CAMPAIGN + "_code_commit__mutmut_48": (
         "\"--untracked-files=no\", \"XX--XX\", \"fmus\", \"orchestrator\", \"models\"],",
         _PATHSPEC),
-    _CAMPAIGN + "_random_components__mutmut_11": (
+    _SEEDS + "_random_components__mutmut_11": (
         "sim = Simulation(model, backend=backend, registry=registry() if (backend == "
         "\"direct\") or True else None,", _FMU_REGISTRY),
-    _CAMPAIGN + "_run_one__mutmut_36": (
+    _CAMPAIGN_RUNS + "_run_one__mutmut_36": (
         "registry=registry() if (job[\"backend\"] == \"direct\") or True else None,",
         _FMU_REGISTRY),
-    _CAMPAIGN + "_parse_seed_offsets__mutmut_8": (
+    _SEEDS + "_parse_seed_offsets__mutmut_8": (
         "sep = None", _FALSY_SEP),
-    _CAMPAIGN + "_write_run__mutmut_25": (
+    _CAMPAIGN_RUNS + "_write_run__mutmut_25": (
         "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), ind"
         "ent=None)))", _CAMPAIGN_JSON_LAYOUT),
-    _CAMPAIGN + "_write_run__mutmut_27": (
+    _CAMPAIGN_RUNS + "_write_run__mutmut_27": (
         "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), )))",
         _CAMPAIGN_JSON_LAYOUT),
-    _CAMPAIGN + "_write_run__mutmut_29": (
+    _CAMPAIGN_RUNS + "_write_run__mutmut_29": (
         "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), ind"
         "ent=2)))", _CAMPAIGN_JSON_LAYOUT),
     _CAMPAIGN + "_run_campaign__mutmut_48": (
@@ -512,9 +514,9 @@ EQUIVALENT.update({
         ")))", _CAMPAIGN_JSON_LAYOUT),
     _CAMPAIGN + "ǁCampaignǁwrite_manifest__mutmut_25": (
         "indent=3)))", _CAMPAIGN_JSON_LAYOUT),
-    _CAMPAIGN + "_read_run__mutmut_10": (
+    _CAMPAIGN_RUNS + "_read_run__mutmut_10": (
         "record = json.loads(path.read_text(encoding=None))", _ASCII_JSON),
-    _CAMPAIGN + "_read_run__mutmut_12": (
+    _CAMPAIGN_RUNS + "_read_run__mutmut_12": (
         "record = json.loads(path.read_text(encoding=\"UTF-8\"))", _ASCII_JSON),
     _CAMPAIGN + "ǁCampaignǁ_check_manifest__mutmut_8": (
         "old = json.loads(path.read_text(encoding=None))", _ASCII_JSON),

@@ -40,11 +40,12 @@ MODULES.update({
     # check the executor, the FMUs and the CLI, at many seconds a mutant)
     # (and the CSV series test: polars' thread pool hangs in mutmut's fork, block
     # "Co-simulation master")
-    "orchestrator.campaigns.campaign": ["tests/test_campaign.py",
-                                        "tests/test_campaign_folder_seeds_and_hashes.py",
-                                        "tests/test_campaign_run_one_sinks.py", "-k",
-                                        "not pool_and_dask and not fmu_and_direct and not "
-                                        "killed_driver and not csv_when_asked"],
+    **{module: ["tests/test_campaign.py", "tests/test_campaign_folder_seeds_and_hashes.py",
+                "tests/test_campaign_run_one_sinks.py", "-k",
+                "not pool_and_dask and not fmu_and_direct and not killed_driver and not "
+                "csv_when_asked"]
+       for module in ("orchestrator.campaigns.campaign", "orchestrator.campaigns.campaign_runs",
+                      "orchestrator.campaigns.seeds")},
     # test_master.py's CSV test is left out: polars' thread pool hangs in mutmut's fork
     # (block "Co-simulation master")
     "orchestrator.cosim.exchange": ["tests/test_jacobi.py", "tests/test_master.py",

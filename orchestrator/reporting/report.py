@@ -26,6 +26,8 @@ from typing import Any, Dict, List, Optional, Sequence
 
 from ..building import build as fmu_build
 from ..campaigns import campaign as camp
+from ..campaigns import campaign_runs as camp_runs
+from ..campaigns import seeds as camp_seeds
 from ..campaigns.batching import check_batch
 from ..campaigns.executor import Executor
 from ..model.suggestions import did_you_mean
@@ -98,7 +100,7 @@ def discover(models: Path = MODELS, names: Sequence[str] = ()) -> List[Dict[str,
         paper = [r.get("filter") for r in (reference or {}).get("table", ())]
         ordered = [f for f in paper if f in fitting] + [f for f in fitting if f not in paper]
         if ordered:
-            random = camp.random_components(swap_filter(model, ordered[0]), "direct")
+            random = camp_seeds.random_components(swap_filter(model, ordered[0]), "direct")
             plans.append({"path": folder, "model": model, "reference": reference,
                           "filters": ordered, "random": random})
     if not plans:
@@ -180,7 +182,7 @@ def _build_report(out, runs, workers, scheduler, local_cluster, stop_time, plans
 def _finished(spec, folder: Path):
     """``spec`` with ``runs`` = the number of leading runs every filter has, or None."""
     n = 0
-    while n < spec.runs and all(camp.read_run(folder, f, n) for f in spec.filters):
+    while n < spec.runs and all(camp_runs.read_run(folder, f, n) for f in spec.filters):
         n += 1
     return dataclasses.replace(spec, runs=n) if n else None
 

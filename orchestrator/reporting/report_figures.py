@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Dict
 
-from ..campaigns import campaign as camp
+from ..campaigns.seeds import run_seeds
 from ..errors import NavfmuError
 from ..results import metrics as nav_metrics
 from ..results import filter_plots, plots
@@ -28,7 +28,7 @@ def scenario_figures(plan, out: Path, log, run: bool = True) -> Dict[str, Path]:
         "(x: paper)")}
     paper = [r.get("filter") for r in (plan["reference"] or {}).get("table", ())]
     shown = [f for f in plan["filters"] if f in paper] or plan["filters"][:3]
-    seeds = camp.run_seeds(plan["spec"], plan["offsets"], 0)
+    seeds = run_seeds(plan["spec"], plan["offsets"], 0)
     entries = []
     (out / "series").mkdir(parents=True, exist_ok=True)
     for f in shown:
