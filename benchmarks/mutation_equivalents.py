@@ -433,8 +433,8 @@ EQUIVALENT.update({
         "declared = _declared_ranges(model, component, None)", _UNUSED_BACKEND),
     _TUNE + "__seed_parameters__mutmut_5": (
         "declared = _declared_ranges(model, c.name, None)", _UNUSED_BACKEND),
-    _TUNE + "_run_tune__mutmut_24": ("None)", _UNUSED_BACKEND),
-    _TUNE + "_run_tune__mutmut_57": (
+    _TUNE + "__tuning_spec__mutmut_24": ("None)", _UNUSED_BACKEND),
+    _TUNE + "__tuning_spec__mutmut_57": (
         "window, _seed_parameters(model, None) if train_seeds else ())", _UNUSED_BACKEND),
     _TUNE + "_resolve_parameters__mutmut_37": (
         "return np.array(lo, None), np.array(hi, float), tuple(types), np.array(current)",
