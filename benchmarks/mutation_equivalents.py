@@ -290,6 +290,8 @@ _RANGE_DTYPE = ("lo and hi only meet float arithmetic (decode, the current value
                 "and float() in the summary: an integer array of a range gives the same values")
 _JSON_LAYOUT = "only the layout of tune.json's text changes; its readers parse the JSON"
 _CAMPAIGN = "orchestrator.campaigns.campaign.x"
+_CAMPAIGN_RUNS = "orchestrator.campaigns.campaign_runs.x"
+_SEEDS = "orchestrator.campaigns.seeds.x"
 _GIT_TIMEOUT = "the timeout only bounds a git that hangs; git answers in milliseconds here"
 _STATUS_CHECK = ("git status cannot fail in a folder where git rev-parse HEAD (checked) has "
                  "just succeeded")
@@ -431,8 +433,8 @@ EQUIVALENT.update({
         "declared = _declared_ranges(model, component, None)", _UNUSED_BACKEND),
     _TUNE + "__seed_parameters__mutmut_5": (
         "declared = _declared_ranges(model, c.name, None)", _UNUSED_BACKEND),
-    _TUNE + "_run_tune__mutmut_24": ("None)", _UNUSED_BACKEND),
-    _TUNE + "_run_tune__mutmut_57": (
+    _TUNE + "__tuning_spec__mutmut_24": ("None)", _UNUSED_BACKEND),
+    _TUNE + "__tuning_spec__mutmut_57": (
         "window, _seed_parameters(model, None) if train_seeds else ())", _UNUSED_BACKEND),
     _TUNE + "_resolve_parameters__mutmut_37": (
         "return np.array(lo, None), np.array(hi, float), tuple(types), np.array(current)",
@@ -483,21 +485,21 @@ EQUIVALENT.update({
     _CAMPAIGN + "_code_commit__mutmut_48": (
         "\"--untracked-files=no\", \"XX--XX\", \"fmus\", \"orchestrator\", \"models\"],",
         _PATHSPEC),
-    _CAMPAIGN + "_random_components__mutmut_11": (
+    _SEEDS + "_random_components__mutmut_11": (
         "sim = Simulation(model, backend=backend, registry=registry() if (backend == "
         "\"direct\") or True else None,", _FMU_REGISTRY),
-    _CAMPAIGN + "_run_one__mutmut_36": (
+    _CAMPAIGN_RUNS + "_run_one__mutmut_36": (
         "registry=registry() if (job[\"backend\"] == \"direct\") or True else None,",
         _FMU_REGISTRY),
-    _CAMPAIGN + "_parse_seed_offsets__mutmut_8": (
+    _SEEDS + "_parse_seed_offsets__mutmut_8": (
         "sep = None", _FALSY_SEP),
-    _CAMPAIGN + "_write_run__mutmut_25": (
+    _CAMPAIGN_RUNS + "_write_run__mutmut_25": (
         "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), ind"
         "ent=None)))", _CAMPAIGN_JSON_LAYOUT),
-    _CAMPAIGN + "_write_run__mutmut_27": (
+    _CAMPAIGN_RUNS + "_write_run__mutmut_27": (
         "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), )))",
         _CAMPAIGN_JSON_LAYOUT),
-    _CAMPAIGN + "_write_run__mutmut_29": (
+    _CAMPAIGN_RUNS + "_write_run__mutmut_29": (
         "return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), ind"
         "ent=2)))", _CAMPAIGN_JSON_LAYOUT),
     _CAMPAIGN + "_run_campaign__mutmut_48": (
@@ -512,9 +514,9 @@ EQUIVALENT.update({
         ")))", _CAMPAIGN_JSON_LAYOUT),
     _CAMPAIGN + "ǁCampaignǁwrite_manifest__mutmut_25": (
         "indent=3)))", _CAMPAIGN_JSON_LAYOUT),
-    _CAMPAIGN + "_read_run__mutmut_10": (
+    _CAMPAIGN_RUNS + "_read_run__mutmut_10": (
         "record = json.loads(path.read_text(encoding=None))", _ASCII_JSON),
-    _CAMPAIGN + "_read_run__mutmut_12": (
+    _CAMPAIGN_RUNS + "_read_run__mutmut_12": (
         "record = json.loads(path.read_text(encoding=\"UTF-8\"))", _ASCII_JSON),
     _CAMPAIGN + "ǁCampaignǁ_check_manifest__mutmut_8": (
         "old = json.loads(path.read_text(encoding=None))", _ASCII_JSON),
@@ -850,6 +852,10 @@ EQUIVALENT.update({
 # Co-simulation master
 _MASTER = "orchestrator.cosim.master.x"
 _SIM = _MASTER + "ǁSimulationǁ"
+_CHECKS = "orchestrator.cosim.model_checks.xǁModelChecksǁ"
+_LOOP = "orchestrator.cosim.macro_loop.xǁMacroLoopǁ"
+_ASSEMBLY = "orchestrator.cosim.result_assembly.x"
+_ASSEMBLE = _ASSEMBLY + "ǁResultAssemblyǁ"
 _WHOLE_ROW = ("the whole-row copy is a shortcut: a type it no longer takes, or takes as well, "
               "is copied by take with the indices 0 .. n-1, the same values")
 _INDEX_IN_RANGE = ("every index taken is a position of the vector (from _layout): take's mode, "
@@ -869,35 +875,35 @@ _ROW_NUMBERS = ("the row numbers are integers below 2**53: as int64 or float64 t
 _EMPTY_FLOAT = "np.empty's default dtype is float64"
 _NAN_TEXT = "float() reads 'NAN' as 'nan' (case-insensitive)"
 EQUIVALENT.update({
-    _MASTER + "__row_recorder__mutmut_2": (
+    _ASSEMBLY + "_row_recorder__mutmut_2": (
         "if np.array_equal(None, np.arange(len(vectors[t])))]", _WHOLE_ROW),
-    _MASTER + "__row_recorder__mutmut_3": ("if np.array_equal(rec_index[t], None)]", _WHOLE_ROW),
-    _MASTER + "__row_recorder__mutmut_8": (
+    _ASSEMBLY + "_row_recorder__mutmut_3": ("if np.array_equal(rec_index[t], None)]", _WHOLE_ROW),
+    _ASSEMBLY + "_row_recorder__mutmut_8": (
         "picked = [t for t in NUMERIC_TYPES if t not in whole or len(rec_index[t])]", _WHOLE_ROW),
-    _MASTER + "__row_recorder__mutmut_13": (
+    _ASSEMBLY + "_row_recorder__mutmut_13": (
         "vectors[t].take(rec_index[t], out=recordings[t][row], mode=None)", _INDEX_IN_RANGE),
-    _MASTER + "__row_recorder__mutmut_16": (
+    _ASSEMBLY + "_row_recorder__mutmut_16": (
         "vectors[t].take(rec_index[t], out=recordings[t][row], )", _INDEX_IN_RANGE),
-    _SIM + "_split__mutmut_7": ('return comp, var if (dot) or True else ""', _NO_DOT),
+    _CHECKS + "_split__mutmut_7": ('return comp, var if (dot) or True else ""', _NO_DOT),
     _SIM + "_layout__mutmut_12": ("sizes = {t: 1 for t in NUMERIC_TYPES}", _OFFSET_BY_ONE),
     _SIM + "run__mutmut_15": ("dtype=None) for t in NUMERIC_TYPES}", _POSITIONS_INT),
     _SIM + "run__mutmut_17": (") for t in NUMERIC_TYPES}", _POSITIONS_INT),
     _SIM + "run__mutmut_33": ("recording = Recording(n_steps / self.record_every + 1,",
                               _ROW_COUNT),
-    _SIM + "_loop__mutmut_15": (
+    _LOOP + "_loop__mutmut_15": (
         "next_progress = progress_every if progress is not None else n_steps + 2", _NO_PROGRESS),
-    _SIM + "_chunk__mutmut_6": (
+    _ASSEMBLE + "_chunk__mutmut_6": (
         "time_column = (self.model.start_time + (first_row + np.arange(n_rows, dtype=None))",
         _ROW_NUMBERS),
-    _SIM + "_chunk__mutmut_8": (
+    _ASSEMBLE + "_chunk__mutmut_8": (
         "time_column = (self.model.start_time + (first_row + np.arange(n_rows, ))",
         _ROW_NUMBERS),
-    _SIM + "_chunk__mutmut_18": ("arr = np.empty((n_rows, len(names)), dtype=None)",
+    _ASSEMBLE + "_chunk__mutmut_18": ("arr = np.empty((n_rows, len(names)), dtype=None)",
                                  _EMPTY_FLOAT),
-    _SIM + "_chunk__mutmut_20": ("arr = np.empty((n_rows, len(names)), )", _EMPTY_FLOAT),
-    _SIM + "_results__mutmut_27": (
+    _ASSEMBLE + "_chunk__mutmut_20": ("arr = np.empty((n_rows, len(names)), )", _EMPTY_FLOAT),
+    _ASSEMBLE + "_results__mutmut_27": (
         'step_time[n] = do_ns[i] / calls[i] * 1e-9 if calls[i] else float("NAN")', _NAN_TEXT),
-    _SIM + "_results__mutmut_36": (
+    _ASSEMBLE + "_results__mutmut_36": (
         'exchange_time[n] = all_ns[i] / calls[i] * 1e-9 if calls[i] else float("NAN")',
         _NAN_TEXT),
 })

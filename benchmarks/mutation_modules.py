@@ -40,11 +40,12 @@ MODULES.update({
     # check the executor, the FMUs and the CLI, at many seconds a mutant)
     # (and the CSV series test: polars' thread pool hangs in mutmut's fork, block
     # "Co-simulation master")
-    "orchestrator.campaigns.campaign": ["tests/test_campaign.py",
-                                        "tests/test_campaign_folder_seeds_and_hashes.py",
-                                        "tests/test_campaign_run_one_sinks.py", "-k",
-                                        "not pool_and_dask and not fmu_and_direct and not "
-                                        "killed_driver and not csv_when_asked"],
+    **{module: ["tests/test_campaign.py", "tests/test_campaign_folder_seeds_and_hashes.py",
+                "tests/test_campaign_run_one_sinks.py", "-k",
+                "not pool_and_dask and not fmu_and_direct and not killed_driver and not "
+                "csv_when_asked"]
+       for module in ("orchestrator.campaigns.campaign", "orchestrator.campaigns.campaign_runs",
+                      "orchestrator.campaigns.seeds")},
     # test_master.py's CSV test is left out: polars' thread pool hangs in mutmut's fork
     # (block "Co-simulation master")
     "orchestrator.cosim.exchange": ["tests/test_jacobi.py", "tests/test_master.py",
@@ -126,8 +127,8 @@ MODULES.update({
 # FMUs of test_master.py (the master runs in the test process).  test_master.py's CSV test is
 # left out: polars, which writes the CSV, keeps a thread pool that does not survive mutmut's
 # fork, so in a mutant's process it hangs and every mutant it reaches times out
-MODULES.update({
-    "orchestrator.cosim.master": ["tests/test_master.py", "tests/test_jacobi.py",
-                                  "tests/test_exchange_by_hand.py",
-                                  "tests/test_master_by_hand.py", "-k", "not csv_header"],
-})
+_MASTER_TESTS = ["tests/test_master.py", "tests/test_jacobi.py", "tests/test_exchange_by_hand.py",
+                 "tests/test_master_by_hand.py", "-k", "not csv_header"]
+MODULES.update({module: _MASTER_TESTS for module in (
+    "orchestrator.cosim.master", "orchestrator.cosim.model_checks",
+    "orchestrator.cosim.macro_loop", "orchestrator.cosim.result_assembly")})

@@ -16,7 +16,7 @@ import pytest
 from navcore.components import sensor_components
 from navcore.components.kf_components import Kf
 from navcore.errors import DivergenceError
-from orchestrator.campaigns import batching, campaign
+from orchestrator.campaigns import batching, campaign, campaign_runs
 from orchestrator.campaigns.executor import Executor
 from orchestrator.cosim.batch import BatchSimulation
 from orchestrator.cosim.master import Simulation
@@ -201,8 +201,8 @@ def test_a_campaign_in_batches_writes_the_run_files_of_single_runs(tmp_path):
     assert [t.key for t in tasks] == [("Kf", 0, 2), ("Kf", 3, 4)]
     for f in ("Kf", "SageHusaFading"):
         for i in range(5):
-            a = json.loads(campaign.run_path(single.out, f, i).read_text())
-            b = json.loads(campaign.run_path(batched.out, f, i).read_text())
+            a = json.loads(campaign_runs.run_path(single.out, f, i).read_text())
+            b = json.loads(campaign_runs.run_path(batched.out, f, i).read_text())
             for record in (a, b):
                 for key in ("wall_time_s", "pid"):
                     record.pop(key)

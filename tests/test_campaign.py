@@ -16,7 +16,8 @@ import psutil
 import pytest
 
 from navcore.components import registry as components
-from orchestrator.campaigns.campaign import CampaignSpec, read_run, run_campaign, run_one
+from orchestrator.campaigns.campaign import CampaignSpec, run_campaign
+from orchestrator.campaigns.campaign_runs import read_run, run_one
 from orchestrator.errors import NavfmuError
 from direct_replay import MODELS, rms_table, run_filter, simulate_sensors
 

@@ -15,6 +15,8 @@ import pytest
 
 from orchestrator.building import build as fmu_build
 from orchestrator.campaigns import campaign as cp
+from orchestrator.campaigns import campaign_runs
+from orchestrator.campaigns import seeds
 from orchestrator.campaigns.campaign import Campaign, CampaignSpec
 from orchestrator.errors import NavfmuError
 
@@ -46,33 +48,33 @@ def test_good_options_are_accepted():
 def test_seed_rule_of_the_docstring():
     """seed = s + i + offset, offset 1000 j for the j-th random component unless given."""
     spec = _spec(seed=7, seed_offsets=(("gnss", 5),))
-    offsets = cp.seed_offsets(spec, ["trajectory", "imu", "gnss"])
+    offsets = seeds.seed_offsets(spec, ["trajectory", "imu", "gnss"])
     assert offsets == {"trajectory": 0, "imu": 1000, "gnss": 5}
-    assert cp.run_seeds(spec, offsets, 3) == {"trajectory": 10, "imu": 1010, "gnss": 15}
+    assert seeds.run_seeds(spec, offsets, 3) == {"trajectory": 10, "imu": 1010, "gnss": 15}
     with pytest.raises(NavfmuError, match="no random component baro"):
-        cp.seed_offsets(_spec(seed_offsets=(("baro", 1),)), ["gnss"])
+        seeds.seed_offsets(_spec(seed_offsets=(("baro", 1),)), ["gnss"])
 
 
 def test_seed_offset_syntax():
-    assert cp.parse_seed_offsets(["gnss=100", "trajectory=-3"]) == (
+    assert seeds.parse_seed_offsets(["gnss=100", "trajectory=-3"]) == (
         ("gnss", 100), ("trajectory", -3))
     for bad in ["gnss", "gnss=", "gnss=1.5", "=4", "gnss=x", "gnss==1"]:
         with pytest.raises(NavfmuError, match="--seed-offset"):
-            cp.parse_seed_offsets([bad])
+            seeds.parse_seed_offsets([bad])
 
 
 def test_seeds_must_fit_an_fmi_integer_from_the_first_run_to_the_last():
     """FMI 2.0 Integers are 32-bit: the last run may reach 2**31 - 1, not 2**31; the first
     may reach -2**31."""
     top = 2 ** 31 - 1
-    cp._check_seed_range(_spec(seed=top - 2), {"gnss": 1}, 2)      # last: top
+    seeds.check_seed_range(_spec(seed=top - 2), {"gnss": 1}, 2)      # last: top
     with pytest.raises(NavfmuError, match="run 1 would give gnss.seed = 2147483648"):
-        cp._check_seed_range(_spec(seed=top - 1), {"gnss": 1}, 2)
-    cp._check_seed_range(_spec(seed=-2 ** 31), {"gnss": 0}, 1)
+        seeds.check_seed_range(_spec(seed=top - 1), {"gnss": 1}, 2)
+    seeds.check_seed_range(_spec(seed=-2 ** 31), {"gnss": 0}, 1)
     with pytest.raises(NavfmuError, match="run 0 would give gnss.seed = -2147483649"):
-        cp._check_seed_range(_spec(seed=-2 ** 31), {"gnss": -1}, 2)    # run 1 would fit
+        seeds.check_seed_range(_spec(seed=-2 ** 31), {"gnss": -1}, 2)    # run 1 would fit
     with pytest.raises(NavfmuError, match="run 0 would give gnss.seed"):
-        cp._check_seed_range(_spec(seed=-2 ** 31), {"gnss": -1}, 1)
+        seeds.check_seed_range(_spec(seed=-2 ** 31), {"gnss": -1}, 1)
 
 
 # ----------------------------------------------------------------------------------------
@@ -149,24 +151,24 @@ def test_a_checkout_without_a_commit_has_an_unknown_commit(tmp_path, monkeypatch
 # run files
 # ----------------------------------------------------------------------------------------
 def test_run_files_are_named_by_filter_and_four_digit_index(tmp_path):
-    assert cp.run_path(tmp_path, "Kf", 7) == tmp_path / "runs" / "Kf" / "run-0007.json"
-    assert cp.series_path(tmp_path, "Kf", 12, "csv") == (
+    assert campaign_runs.run_path(tmp_path, "Kf", 7) == tmp_path / "runs" / "Kf" / "run-0007.json"
+    assert campaign_runs.series_path(tmp_path, "Kf", 12, "csv") == (
         tmp_path / "series" / "Kf" / "run-0012.csv")
 
 
 def test_a_run_file_is_read_back_and_a_bad_one_counts_as_missing(tmp_path):
     record = {"filter": "Kf", "index": 3, "metrics": {"x": float("nan"), "y": 1.5}}
-    path = cp.write_run(tmp_path, record)
-    assert path == cp.run_path(tmp_path, "Kf", 3)
-    assert cp.read_run(tmp_path, "Kf", 3) == {"filter": "Kf", "index": 3,
+    path = campaign_runs.write_run(tmp_path, record)
+    assert path == campaign_runs.run_path(tmp_path, "Kf", 3)
+    assert campaign_runs.read_run(tmp_path, "Kf", 3) == {"filter": "Kf", "index": 3,
                                               "metrics": {"x": None, "y": 1.5}}
-    assert cp.read_run(tmp_path, "Kf", 4) is None
+    assert campaign_runs.read_run(tmp_path, "Kf", 4) is None
     path.write_text("{not json")
-    assert cp.read_run(tmp_path, "Kf", 3) is None
+    assert campaign_runs.read_run(tmp_path, "Kf", 3) is None
     path.write_text(json.dumps({"filter": "Kf", "index": 4}))    # another run's content
-    assert cp.read_run(tmp_path, "Kf", 3) is None
+    assert campaign_runs.read_run(tmp_path, "Kf", 3) is None
     path.write_text(json.dumps({"filter": "Iakf", "index": 3}))
-    assert cp.read_run(tmp_path, "Kf", 3) is None
+    assert campaign_runs.read_run(tmp_path, "Kf", 3) is None
 
 
 def test_stale_temporaries_go_and_results_stay(tmp_path):
@@ -200,7 +202,7 @@ def test_the_manifest_is_checked_against_the_folder(tmp_path):
     more.check()
     assert more.runs == 5
     assert more.missing() == [("Kf", i) for i in range(5)]
-    cp.write_run(out, {"filter": "Kf", "index": 1})
+    campaign_runs.write_run(out, {"filter": "Kf", "index": 1})
     assert ("Kf", 1) not in more.missing() and len(more.missing()) == 4
     with pytest.raises(NavfmuError, match=r"runs \[0, 2, 3, 4\] of Kf are missing"):
         more.records()
@@ -251,10 +253,10 @@ def test_a_failing_resume_or_a_campaign_with_a_run_keeps_its_files(tmp_path):
     with pytest.raises(RuntimeError):
         with cp._undone_if_nothing_ran(campaign):
             campaign.write_manifest()
-            cp.write_run(out, {"filter": "Kf", "index": 0})
+            campaign_runs.write_run(out, {"filter": "Kf", "index": 0})
             raise RuntimeError("stopped")
-    assert (out / cp.MANIFEST).is_file() and cp.read_run(out, "Kf", 0) is not None
-    cp.run_path(out, "Kf", 0).unlink()
+    assert (out / cp.MANIFEST).is_file() and campaign_runs.read_run(out, "Kf", 0) is not None
+    campaign_runs.run_path(out, "Kf", 0).unlink()
     with pytest.raises(RuntimeError):
         with cp._undone_if_nothing_ran(campaign):   # the manifest was there before
             raise RuntimeError("stopped")
@@ -305,7 +307,7 @@ def test_overrides_and_the_stop_time_are_checked_before_any_run(tmp_path):
     with pytest.raises(NavfmuError, match="nope"):
         Campaign(_spec(parameters=(("nope.x", 1.0),)), tmp_path, log=print).check()
     with pytest.raises(NavfmuError, match="nope"):
-        cp.random_components(cp_model(), "direct", {"nope.x": 1.0})
+        seeds.random_components(cp_model(), "direct", {"nope.x": 1.0})
     with pytest.raises(NavfmuError, match="--stop"):
         Campaign(_spec(stop_time=0.0), tmp_path, log=print).check()
 
@@ -375,18 +377,19 @@ def test_one_run_s_record_and_its_window_and_series(tmp_path, monkeypatch):
 
     (tmp_path / "runs").mkdir()
     t0 = clock.perf_counter()
-    record = cp.run_one(_job(tmp_path, window=(2.0, 4.0), series="parquet", commit="abc"))
+    record = campaign_runs.run_one(_job(tmp_path, window=(2.0, 4.0), series="parquet",
+                                        commit="abc"))
     elapsed = clock.perf_counter() - t0
     assert set(record) == {"filter", "index", "seeds", "metrics", "stop_time", "wall_time_s",
                            "pid", "commit"}
     assert (record["stop_time"], record["commit"]) == (4.0, "abc")
     assert record["pid"] == __import__("os").getpid() and 0 < record["wall_time_s"] <= elapsed
-    assert cp.read_run(tmp_path, "Kf", 0)["seeds"] == {"trajectory": 1, "gnss": 1001}
-    series = cp.series_path(tmp_path, "Kf", 0, "parquet")
+    assert campaign_runs.read_run(tmp_path, "Kf", 0)["seeds"] == {"trajectory": 1, "gnss": 1001}
+    series = campaign_runs.series_path(tmp_path, "Kf", 0, "parquet")
     whole = filter_metrics(read_parquet(series), "filter", window=(2.0, 4.0))
     assert record["metrics"]["position_rms_m"] == pytest.approx(whole["position_rms_m"],
                                                                 rel=1e-12)
-    unwindowed = cp.run_one(_job(tmp_path / "elsewhere", index=1))
+    unwindowed = campaign_runs.run_one(_job(tmp_path / "elsewhere", index=1))
     assert unwindowed["commit"] == ""
     assert points == ["campaign-run-Kf-0", "campaign-run-Kf-1"]
     assert unwindowed["metrics"]["position_rms_m"] != record["metrics"]["position_rms_m"]
@@ -395,11 +398,11 @@ def test_one_run_s_record_and_its_window_and_series(tmp_path, monkeypatch):
 def test_no_series_is_written_unless_asked_and_csv_when_asked(tmp_path):
     import pandas as pd
 
-    cp.run_one(_job(tmp_path, index=3))
-    assert cp.read_run(tmp_path, "Kf", 3) is not None
+    campaign_runs.run_one(_job(tmp_path, index=3))
+    assert campaign_runs.read_run(tmp_path, "Kf", 3) is not None
     assert not (tmp_path / "series").exists()
-    cp.run_one(_job(tmp_path, index=4, series="csv", stop_time=1.0))
-    frame = pd.read_csv(cp.series_path(tmp_path, "Kf", 4, "csv"))
+    campaign_runs.run_one(_job(tmp_path, index=4, series="csv", stop_time=1.0))
+    frame = pd.read_csv(campaign_runs.series_path(tmp_path, "Kf", 4, "csv"))
     assert len(frame) == 101 and "filter.nav_lat [rad]" in frame.columns
 
 
@@ -443,7 +446,7 @@ def test_the_driver_writes_the_records_it_gets_and_counts_them(tmp_path, monkeyp
     monkeypatch.setattr(cp.interrupts, "safe_point", points.append)
     campaign = Campaign(_spec(runs=2, filters=("Kf", "Iakf")), tmp_path, log=print)
     campaign.prepare()
-    cp.write_run(tmp_path, {"filter": "Iakf", "index": 1, "commit": "old"})
+    campaign_runs.write_run(tmp_path, {"filter": "Iakf", "index": 1, "commit": "old"})
     ex = StandInExecutor()
     steps = []
     counts = campaign.run(ex, progress=lambda done, total: steps.append((done, total)))
@@ -451,8 +454,8 @@ def test_the_driver_writes_the_records_it_gets_and_counts_them(tmp_path, monkeyp
     assert steps[0] == (0, 3) and steps[-1] == (3, 3)     # in runs, not tasks
     assert [d for d, _ in steps] == sorted(d for d, _ in steps)
     assert points == ["campaign-started", "campaign-ran-1", "campaign-ran-2", "campaign-ran-3"]
-    assert cp.read_run(tmp_path, "Iakf", 1)["commit"] == "old"       # not run again
-    assert [cp.read_run(tmp_path, f, i)["commit"] for f, i in
+    assert campaign_runs.read_run(tmp_path, "Iakf", 1)["commit"] == "old"       # not run again
+    assert [campaign_runs.read_run(tmp_path, f, i)["commit"] for f, i in
             [("Kf", 0), ("Iakf", 0), ("Kf", 1)]] == [campaign.commit] * 3
 
 

@@ -1,4 +1,4 @@
-"""What ``campaign.run_one`` hands the master, with stand-ins for the simulation and the
+"""What ``campaign_runs.run_one`` hands the master, with stand-ins for the simulation and the
 sinks (no run, no file library): the metrics sink's overlap of one slowest period plus one
 step, the series sink only when a series is asked for and the folder is visible (Parquet or
 CSV at the run's series path), the mission sink's window, and the record's metrics with and
@@ -11,7 +11,7 @@ import pytest
 
 from orchestrator.cosim.isolation import Isolation
 
-from orchestrator.campaigns import campaign as cp
+from orchestrator.campaigns import campaign_runs
 from orchestrator.cosim import master
 from orchestrator.results import mission_metrics, recorder
 from orchestrator.running import scenarios
@@ -84,7 +84,7 @@ def _made(kind):
 
 
 def test_the_sinks_of_a_run_without_a_series(tmp_path, stand_ins):
-    record = cp.run_one(_job(tmp_path))
+    record = campaign_runs.run_one(_job(tmp_path))
     (metrics,), (mission,) = _made(_Metrics), _made(_Mission)
     # the slowest component steps every 4 base steps: an overlap of 4 + 1 rows
     assert metrics.kwargs == {"window": (1.0, 3.0), "samples": "all", "overlap": 5}
@@ -99,7 +99,7 @@ def test_the_sinks_of_a_run_without_a_series(tmp_path, stand_ins):
 @pytest.mark.parametrize("fmt, kind", [("parquet", _Parquet), ("csv", _Csv)])
 def test_a_series_is_written_in_the_format_asked_at_the_runs_path(tmp_path, stand_ins, fmt,
                                                                   kind):
-    cp.run_one(_job(tmp_path, series=fmt))
+    campaign_runs.run_one(_job(tmp_path, series=fmt))
     (sink,) = _made(kind)
     assert sink.args == (tmp_path / "series" / "Kf" / f"run-0003.{fmt}",)
     assert sink.args[0].parent.is_dir()
@@ -108,7 +108,7 @@ def test_a_series_is_written_in_the_format_asked_at_the_runs_path(tmp_path, stan
 
 
 def test_no_series_where_the_folder_is_not_visible(tmp_path, stand_ins):
-    cp.run_one(_job(tmp_path / "elsewhere", series="csv"))
+    campaign_runs.run_one(_job(tmp_path / "elsewhere", series="csv"))
     assert _made(_Parquet) == [] and _made(_Csv) == []
 
 
@@ -126,5 +126,5 @@ def test_the_record_takes_the_filters_metrics_and_its_mission(tmp_path, stand_in
 
     monkeypatch.setattr(recorder, "MetricsSink", Metrics)
     monkeypatch.setattr(mission_metrics, "MissionSink", Mission)
-    record = cp.run_one(_job(tmp_path))
+    record = campaign_runs.run_one(_job(tmp_path))
     assert record["metrics"] == {"rms": 1.5, "mission": {"xtrack_rms": 4.2}}

@@ -440,7 +440,8 @@ def test_export_refuses_an_int64_it_cannot_pass(dahlquist, tmp_path):
 def test_a_campaign_runs_a_mixed_fmi2_fmi3_model(aircraft_models, tmp_path):
     """montecarlo on the FMU backend: two seeds of the mixed model give the all-FMI-2
     model's metrics (the seeds change the numbers, so the comparison can fail)."""
-    from orchestrator.campaigns.campaign import CampaignSpec, read_run, run_campaign
+    from orchestrator.campaigns.campaign import CampaignSpec, run_campaign
+    from orchestrator.campaigns.campaign_runs import read_run
 
     metrics = {}
     for kind, folder in aircraft_models.items():

@@ -88,11 +88,11 @@ def test_the_warning_starts_above_half_and_needs_sigmas():
 
 def test_the_report_names_the_inconsistent_filter_and_its_runs():
     from types import SimpleNamespace
-    from orchestrator.reporting.report import _inconsistent
+    from orchestrator.reporting.report_markdown import inconsistent_lines
     rows = [{"metrics": {"position_outside_3sigma_pct": pct}} for pct in (91.2, 12.0, 60.0)]
     plan = {"model": SimpleNamespace(name="drive"),
             "records": {"Iakf": rows, "Kf": [{"metrics": {"position_outside_3sigma_pct": 1.0}}]}}
-    assert _inconsistent([plan]) == [
+    assert inconsistent_lines([plan]) == [
         "- drive: warning: filter 'Iakf' is inconsistent: 91 % of its position errors are "
         "outside +/-3 sigma (its reported sigmas understate its error; real GNSS errors are "
         "biased and time-correlated: gnss_corr_time; a real IMU does worse than its datasheet: "

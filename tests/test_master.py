@@ -370,13 +370,13 @@ def test_master_overhead_is_the_loop_time_outside_the_components(write_ssd, monk
     is a benchmark figure (`navfmu bench` prints it), not a pass/fail bound here."""
     from types import SimpleNamespace
 
-    from orchestrator.cosim import exchange, master
+    from orchestrator.cosim import exchange, macro_loop
     from orchestrator.cosim.direct_instance import DirectInstance
 
     clock = {"ns": 0}
     fake_time = SimpleNamespace(perf_counter_ns=lambda: clock["ns"])
     monkeypatch.setattr(exchange, "_time", fake_time)
-    monkeypatch.setattr(master, "_time", fake_time)
+    monkeypatch.setattr(macro_loop, "_time", fake_time)
     cost_ns = {Ramp: 3000, Gain: 5000, Accumulator: 7000}
     for cls, ns in cost_ns.items():
         def step(self, t, h, inputs, _step=cls.step, _ns=ns):

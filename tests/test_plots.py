@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from orchestrator.results import plots
+from orchestrator.results import filter_plots, plots
 from orchestrator.results.run_results import Results
 
 N = 2001
@@ -40,7 +40,8 @@ def figures(monkeypatch):
         kept.append(fig)
         return path
 
-    monkeypatch.setattr(plots, "_save", save)
+    for module in (plots, filter_plots):
+        monkeypatch.setattr(module, "save_png", save)
     yield kept
     for fig in kept:
         plt.close(fig)
@@ -121,7 +122,7 @@ def test_several_filters_legend_off_the_panels_and_equal_sigmas_drawn_once(figur
 def test_fitness_ticks_are_whole_generations_and_nis_bands_labelled(figures, tmp_path):
     summary = {"best_so_far": [3.0, 2.0, 1.5], "generation_mean": [4.0, 3.0, 2.0],
                "model": "m", "parameters": ["a"], "component": "filter", "population": 4}
-    plots.plot_fitness(summary, tmp_path / "f.png")
+    filter_plots.plot_fitness(summary, tmp_path / "f.png")
     ax = figures[0].axes[0]
     ticks = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
     assert ticks and all(float(t).is_integer() for t in ticks)
@@ -129,7 +130,7 @@ def test_fitness_ticks_are_whole_generations_and_nis_bands_labelled(figures, tmp
     entry = _entry("Kf", np.zeros(N), 1.0, extra={"nis": nis, "updated": np.ones(N),
                                                    "nis_dof": np.full(N, 3.0),
                                                    "nav_time": T})
-    plots.plot_nis([entry], tmp_path / "n.png")
+    filter_plots.plot_nis([entry], tmp_path / "n.png")
     labels = figures[1].axes[0].get_legend_handles_labels()[1]
     assert labels == ["Kf", "chi2(3) 97.5 %", "chi2(3) 2.5 %"]
 
@@ -137,11 +138,11 @@ def test_fitness_ticks_are_whole_generations_and_nis_bands_labelled(figures, tmp
 def test_adaptive_plot_only_when_something_adapts(figures, tmp_path):
     flat = _entry("Kf", np.zeros(N), 1.0, extra={"q_scale": np.ones(N), "r_scale": np.ones(N),
                                                  "fading_factor": np.ones(N)})
-    assert plots.plot_series([flat], ("q_scale", "r_scale", "fading_factor"),
+    assert filter_plots.plot_series([flat], ("q_scale", "r_scale", "fading_factor"),
                              tmp_path / "a.png") is None
     moving = _entry("Iakf", np.zeros(N), 1.0, extra={"q_scale": np.ones(N),
                                                      "r_scale": 1.0 + T / 100.0})
-    plots.plot_series([flat, moving], ("q_scale", "r_scale", "fading_factor"),
+    filter_plots.plot_series([flat, moving], ("q_scale", "r_scale", "fading_factor"),
                       tmp_path / "a.png")
     fig = figures[-1]
     assert [ax.get_ylabel() for ax in fig.axes] == ["r_scale"]
@@ -187,8 +188,8 @@ def test_chi2_and_nis_legends_sit_outside_the_data(figures, tmp_path):
     extra = {"updated": np.ones(N), "nis": nis, "nis_dof": np.full(N, 6.0), "nav_time": T,
              "chi2": nis}
     entry = _entry("CtfaUkf", np.sin(T), 1.0, extra=extra)
-    plots.plot_chi2([entry], tmp_path / "c.png", title="aircraft_outliers")
-    plots.plot_nis([entry], tmp_path / "n.png")
+    filter_plots.plot_chi2([entry], tmp_path / "c.png", title="aircraft_outliers")
+    filter_plots.plot_nis([entry], tmp_path / "n.png")
     for fig in figures:
         ax = fig.axes[0]
         assert _outside_axes(fig, ax)
@@ -260,7 +261,7 @@ def test_mission_frame_is_around_the_route_at_equal_aspect(monkeypatch, tmp_path
     from orchestrator.results import mission_plots
 
     kept = []
-    monkeypatch.setattr(mission_plots, "_save", lambda fig, path: kept.append(fig) or path)
+    monkeypatch.setattr(mission_plots, "save_png", lambda fig, path: kept.append(fig) or path)
     lat0, lon0 = 0.7, 2.0
     rn, re = earth.radii(lat0)
     north, east = 2000.0 * T / 200.0, 1000.0 * np.sin(T / 50.0)

@@ -82,7 +82,7 @@ def test_non_finite_runs_left_out_and_counted_the_same_by_report_and_summary():
     """A diverged run (NaN RMS) or a missing number is left out of the interval by
     t_interval itself, so the campaign summary and the report give the same interval."""
     from orchestrator.campaigns import campaign_summary
-    from orchestrator.reporting import report
+    from orchestrator.reporting import report_sections
 
     values = [1.0, float("nan"), 2.0, 3.0, None, 4.0, float("inf"), 5.0]
     s = st.t_interval(values)
@@ -94,7 +94,8 @@ def test_non_finite_runs_left_out_and_counted_the_same_by_report_and_summary():
     records = {"Kf": [{"metrics": {"position_rms_m": {"e": v, "n": v, "d": v}}} for v in rows]}
     east = campaign_summary.summarize(records)["axes"]["pos_e"]["filters"]["Kf"]
     plan = {"records": records}
-    from_report = report._per_run(plan, "Kf", lambda m: m["position_rms_m"]["e"])
+    from_report = report_sections.per_run_interval(plan, "Kf",
+                                                   lambda m: m["position_rms_m"]["e"])
     positive = st.positive_interval(values)
     assert from_report == {k: east[k] for k in from_report} == {**positive, "dropped": 2}
     assert positive["mean"] == s["mean"] and positive["n"] == s["n"]

@@ -15,7 +15,7 @@ import pytest
 
 from orchestrator.campaigns import sweep
 from orchestrator.errors import NavfmuError
-from orchestrator.results import plots
+from orchestrator.results import plot_style
 from orchestrator.running import scenarios
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -218,7 +218,8 @@ def test_a_filter_without_runs_at_a_level_has_nan_means():
 
 def test_the_figure_has_a_panel_of_ratios_per_group(monkeypatch, tmp_path):
     saved = {}
-    monkeypatch.setattr(plots, "_save", lambda fig, path: saved.update(fig=fig) or Path(path))
+    monkeypatch.setattr(plot_style, "save_png",
+                        lambda fig, path: saved.update(fig=fig) or Path(path))
     results = {(2.0, "A", 0): _point(2.0, 0.5, 0.25), (2.0, "B", 0): _point(1.0, 1.0, 1.0),
                (0.5, "A", 0): _point(4.0, 1.0, 2.0), (0.5, "A", 1): _point(2.0, 1.0, 2.0),
                (0.5, "B", 0): _point(6.0, 0.5, 1.0)}
@@ -254,14 +255,15 @@ def test_the_figure_has_a_panel_of_ratios_per_group(monkeypatch, tmp_path):
     assert [t.get_text() for t in legend.get_texts()] == ["A", "B"]
     assert legend.get_texts()[0].get_fontsize() == 8
     assert axes[1].get_legend() is None
-    plots.plt.close(fig)
+    plot_style.plt.close(fig)
 
 
 def test_the_figure_without_a_title_and_axis_label(monkeypatch, tmp_path):
     saved = {}
-    monkeypatch.setattr(plots, "_save", lambda fig, path: saved.update(fig=fig) or Path(path))
+    monkeypatch.setattr(plot_style, "save_png",
+                        lambda fig, path: saved.update(fig=fig) or Path(path))
     sweep.plot_sweep({(1.0, "A", 0): _point(1.0, 1.0, 1.0)}, ["A"], tmp_path / "s.png")
     fig = saved["fig"]
     assert fig._suptitle.get_text() == ""
     assert [ax.get_xlabel() for ax in fig.axes] == ["level"] * 3
-    plots.plt.close(fig)
+    plot_style.plt.close(fig)

@@ -27,16 +27,18 @@ Files in the campaign folder (every file written atomically):
   missing files.
 * ``series/<filter>/run-<iiii>.parquet`` (or ``.csv``) -- the time series, only when asked.
 * ``summary.json`` -- the statistics of :func:`summarize` over runs ``0 .. N-1``.
+
+This module is the campaign's identity and its driver; the seeds are
+:mod:`orchestrator.campaigns.seeds`, one run and its files
+:mod:`orchestrator.campaigns.campaign_runs`.
 """
 from __future__ import annotations
 
 import contextlib
 import hashlib
 import json
-import os
 import shutil
 import subprocess
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
@@ -45,11 +47,12 @@ from ..building import build as fmu_build
 from ..cosim import interrupts
 from ..cosim.isolation import Isolation
 from ..results import metrics as nav_metrics
-from ..results import mission_metrics
-from ..results import recorder
 from ..errors import NavfmuError
 from . import batching
+from .campaign_runs import read_run, run_batch, run_one, write_run
 from .executor import Executor, Task
+from .seeds import (check_no_seed_override, check_seed_range, random_components, run_seeds,
+                    seed_offsets)
 from ..results.jsonsafe import jsonable
 from ..results.run_results import atomic_write
 from .defaults import DEFAULT_SEED, DEFAULT_WORKERS
@@ -57,8 +60,6 @@ from .defaults import DEFAULT_SEED, DEFAULT_WORKERS
 MANIFEST = "campaign.json"
 FORMAT = "navfmu-campaign-1"
 SERIES_FORMATS = ("parquet", "csv")
-#: default distance between the seeds of two random components of one run
-SEED_STRIDE = 1000
 
 
 @dataclass(frozen=True)
@@ -119,11 +120,14 @@ def scenario_hash(model) -> str:
 NUMERIC_CODE = ("fmus/*.py", "fmus/navcore/**/*.py", "orchestrator/cosim/backends.py",
                 "orchestrator/cosim/fmu_instance.py", "orchestrator/cosim/direct_instance.py",
                 "orchestrator/cosim/component_description.py", "orchestrator/cosim/exchange.py",
-                "orchestrator/cosim/master.py", "orchestrator/cosim/batch.py",
+                "orchestrator/cosim/master.py", "orchestrator/cosim/model_checks.py",
+                "orchestrator/cosim/macro_loop.py", "orchestrator/cosim/result_assembly.py",
+                "orchestrator/cosim/batch.py",
                 "orchestrator/cosim/batch_instance.py", "orchestrator/results/batch_recording.py",
                 "orchestrator/results/metrics.py",
                 "orchestrator/results/recorder.py", "orchestrator/model/ssp.py",
                 "orchestrator/model/ssp_xml.py", "orchestrator/campaigns/campaign.py",
+                "orchestrator/campaigns/campaign_runs.py", "orchestrator/campaigns/seeds.py",
                 "orchestrator/results/run_results.py")
 
 
@@ -150,192 +154,6 @@ def code_commit() -> str:
     except (OSError, subprocess.SubprocessError):
         return "unknown"
     return head + ("+dirty" if dirty.strip() else "")
-
-
-def random_components(model, backend: str, parameters=None) -> List[str]:
-    """Components with an Integer parameter ``seed``, in declaration order (``parameters``:
-    the overrides, checked against the components here)."""
-    from ..cosim.master import Simulation
-    from ..running.scenarios import registry
-
-    sim = Simulation(model, backend=backend, registry=registry() if backend == "direct" else None,
-                     parameters=dict(parameters or {}))
-    return [d.spec.name for d in sim.components
-            if (v := d.variables.get("seed")) is not None and v.type == "Integer"
-            and v.causality == "parameter"]
-
-
-def _check_no_seed_override(spec: CampaignSpec, components: List[str]) -> None:
-    """A campaign gives every random component its seed (module docstring): a ``seed``
-    parameter set by ``--set`` or ``--ssv`` would be replaced in every run, so it is
-    refused, with the options that choose the seeds."""
-    for key, value in spec.parameters:
-        comp, _, name = key.partition(".")
-        if name == "seed" and comp in components:
-            raise NavfmuError(
-                f"--set {key}={value}: a campaign gives each random component its seed (run "
-                f"i: --seed + i + the component's offset); choose them with --seed and "
-                f"--seed-offset {comp}=K instead")
-
-
-def seed_offsets(spec: CampaignSpec, components: List[str]) -> Dict[str, int]:
-    """Offset of every random component (see the module docstring)."""
-    given = dict(spec.seed_offsets)
-    unknown = sorted(set(given) - set(components))
-    if unknown:
-        raise NavfmuError(f"--seed-offset: no random component {', '.join(unknown)} (random "
-                          f"components: {', '.join(components) or 'none'})")
-    return {c: int(given.get(c, SEED_STRIDE * j)) for j, c in enumerate(components)}
-
-
-def parse_seed_offsets(items) -> Tuple[Tuple[str, int], ...]:
-    """``["gnss=100", ...]`` (``--seed-offset``) as ``(("gnss", 100), ...)``."""
-    offsets = []
-    for item in items:
-        comp, sep, value = item.partition("=")
-        try:
-            offsets.append((comp, int(value)))
-        except ValueError:
-            sep = ""
-        if not sep or not comp:
-            raise NavfmuError(f"--seed-offset: expected COMP=integer, got {item!r}")
-    return tuple(offsets)
-
-
-def _check_seed_range(spec: CampaignSpec, offsets: Dict[str, int], runs: int) -> None:
-    """Every run's seeds must fit an FMI Integer (checked before the campaign starts)."""
-    from ..cosim.backends import FMI_INTEGER_MAX, FMI_INTEGER_MIN
-
-    for index in (0, runs - 1):
-        for comp, value in run_seeds(spec, offsets, index).items():
-            if not FMI_INTEGER_MIN <= value <= FMI_INTEGER_MAX:
-                raise NavfmuError(
-                    f"--seed {spec.seed}: run {index} would give {comp}.seed = {value}, which "
-                    f"does not fit an FMI Integer ({FMI_INTEGER_MIN} .. {FMI_INTEGER_MAX})")
-
-
-def run_seeds(spec: CampaignSpec, offsets: Dict[str, int], index: int) -> Dict[str, int]:
-    return {c: spec.seed + index + off for c, off in offsets.items()}
-
-
-# ----------------------------------------------------------------------------------------
-# one run (executed by a worker)
-# ----------------------------------------------------------------------------------------
-def run_path(out: Path, filter_name: str, index: int) -> Path:
-    return Path(out) / "runs" / filter_name / f"run-{index:04d}.json"
-
-
-def series_path(out: Path, filter_name: str, index: int, fmt: str) -> Path:
-    return Path(out) / "series" / filter_name / f"run-{index:04d}.{fmt}"
-
-
-def _job_parameters(job: Dict[str, Any]) -> Dict[str, Any]:
-    parameters = dict(job["parameters"])
-    parameters.update({f"{c}.seed": s for c, s in job["seeds"].items()})
-    return parameters
-
-
-class _RunSinks:
-    """Where one run's rows go: its metrics, its mission metrics and (when asked and the
-    folder is visible here) its series file."""
-
-    def __init__(self, job: Dict[str, Any], overlap: int):
-        self.job = job
-        self.metrics = recorder.MetricsSink(window=job["window"], samples=job["samples"],
-                                            overlap=overlap)
-        out = Path(job["out"])
-        self.visible = out.is_dir()
-        series = None
-        if job["series"] and self.visible:
-            path = series_path(out, job["filter"], job["index"], job["series"])
-            path.parent.mkdir(parents=True, exist_ok=True)
-            series = (recorder.ParquetSink(path) if job["series"] == "parquet"
-                      else recorder.CsvSink(path))
-        self.mission = mission_metrics.MissionSink(window=job["window"])
-        self.tee = recorder.Tee([self.metrics, series, self.mission])
-
-    def record(self, header, wall_time_s: float) -> Dict[str, Any]:
-        """The run's record (written to its run file when the folder is visible here)."""
-        from ..running.scenarios import FILTER_COMPONENT
-
-        job = self.job
-        metrics = dict(self.metrics.metrics.get(FILTER_COMPONENT, {}))
-        if FILTER_COMPONENT in self.mission.metrics:
-            metrics["mission"] = self.mission.metrics[FILTER_COMPONENT]
-        record = {"filter": job["filter"], "index": job["index"], "seeds": job["seeds"],
-                  "metrics": metrics, "stop_time": header.metadata["stop_time"],
-                  "wall_time_s": wall_time_s, "pid": os.getpid(),
-                  "commit": job.get("commit", "")}
-        if self.visible:
-            write_run(Path(job["out"]), record)
-        return record
-
-
-def run_one(job: Dict[str, Any]) -> Dict[str, Any]:
-    """Run one (filter, index) of a campaign; write its run file when the folder is visible
-    here; return the record.  ``job`` is plain data (picklable for any executor)."""
-    from ..cosim.master import Simulation
-    from ..running.scenarios import load_scenario, registry, swap_filter
-
-    interrupts.safe_point(f"campaign-run-{job['filter']}-{job['index']}")   # test hook
-    t0 = time.perf_counter()
-    model = swap_filter(load_scenario(job["ssd"]), job["filter"])
-    sim = Simulation(model, backend=job["backend"],
-                     registry=registry() if job["backend"] == "direct" else None,
-                     parameters=_job_parameters(job),
-                     isolation=Isolation(**job.get("isolation", {})))
-    sinks = _RunSinks(job, overlap=max(sim.decimation.values()) + 1)
-    header = sim.run(stop_time=job["stop_time"], sink=sinks.tee)
-    return sinks.record(header, time.perf_counter() - t0)
-
-
-def run_batch(jobs: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
-    """Run the jobs of one filter (other indices) as one batch on the direct backend
-    (:mod:`orchestrator.cosim.batch`): the records of :func:`run_one`, each run's file
-    written as soon as the batch ends.  A run that fails fails alone: the others' files are
-    written, then its error is raised, naming it (the first, when several failed)."""
-    from ..cosim.batch import BatchSimulation
-    from ..running.scenarios import load_scenario, registry, swap_filter
-
-    first = jobs[0]
-    for job in jobs:
-        interrupts.safe_point(f"campaign-run-{job['filter']}-{job['index']}")   # test hook
-    t0 = time.perf_counter()
-    model = swap_filter(load_scenario(first["ssd"]), first["filter"])
-    sim = BatchSimulation(model, registry(), [_job_parameters(job) for job in jobs])
-    overlap = max(sim.decimation.values()) + 1
-    sinks = [_RunSinks(job, overlap) for job in jobs]
-    outcomes = sim.run(stop_time=first["stop_time"], sinks=[s.tee for s in sinks])
-    wall = (time.perf_counter() - t0) / len(jobs)    # the batch's time, shared
-    records, failed = [], []
-    for job, run_sinks, outcome in zip(jobs, sinks, outcomes):
-        if isinstance(outcome, NavfmuError):
-            failed.append((job, outcome))
-        else:
-            records.append(run_sinks.record(outcome, wall))
-    if failed:
-        job, error = failed[0]
-        raise NavfmuError(f"run {job['index']} of {job['filter']}: {error}") from error
-    return records
-
-
-def write_run(out: Path, record: Dict[str, Any]) -> Path:
-    path = run_path(out, record["filter"], record["index"])
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return atomic_write(path, lambda f: f.write(json.dumps(jsonable(record), indent=1)))
-
-
-def read_run(out: Path, filter_name: str, index: int) -> Optional[Dict[str, Any]]:
-    """The record of a finished run, or None (missing; an unreadable file counts as missing
-    and is run again)."""
-    path = run_path(out, filter_name, index)
-    try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError):
-        return None
-    if record.get("filter") != filter_name or record.get("index") != index:
-        return None
-    return record
 
 
 # ----------------------------------------------------------------------------------------
@@ -377,7 +195,7 @@ class Campaign:
                 ensure_fmus(m, log=self.log)
         # every filter's wiring and overrides, checked before any run (mixed roles refused)
         randoms = [random_components(m, spec.backend, spec.parameters) for m in models]
-        _check_no_seed_override(spec, randoms[0])
+        check_no_seed_override(spec, randoms[0])
         self.offsets = seed_offsets(spec, randoms[0])
         self.identity = {
             "scenario": self.model.name, "ssd": str(Path(self.model.path).resolve()),
@@ -388,7 +206,7 @@ class Campaign:
             "series": spec.series, "code_sha256": code_hash()}
         self.commit = code_commit()
         self.runs = self._check_manifest()
-        _check_seed_range(spec, self.offsets, self.runs)
+        check_seed_range(spec, self.offsets, self.runs)
 
     def _check_manifest(self) -> int:
         """The run count of the campaign: the larger of ``--runs`` and the manifest's (a
@@ -562,9 +380,6 @@ __all__ = [
     "CampaignSpec",
     "Campaign",
     "run_campaign",
-    "run_one",
-    "run_path",
-    "read_run",
     "scenario_hash",
     "code_commit",
     "MANIFEST",

@@ -174,7 +174,7 @@ def sweep_table(results, filters: Sequence[str], phase_variables: Sequence[str] 
 
 def plot_sweep(results, filters: Sequence[str], path, title="", xlabel="level") -> Path:
     """RMS ratio to the first filter (position, velocity, attitude panels) over the level."""
-    from ..results.plots import _save, plt
+    from ..results.plot_style import plt, save_png
 
     levels = sorted({k for k, _, _ in results})
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), sharex=True)
@@ -193,4 +193,4 @@ def plot_sweep(results, filters: Sequence[str], path, title="", xlabel="level") 
     axes[0].legend(fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_png(fig, path)

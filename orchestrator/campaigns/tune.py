@@ -260,25 +260,9 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
     replay_batch`)."""
     batching.check_batch(batch, backend)
     batch_size = batch
-    model = load_scenario(scenario)
-    if component not in [c.name for c in model.components]:
-        raise NavfmuError(f"--component: {model.path} has no component '{component}'")
-    if backend == "fmu":
-        ensure_fmus(model, log=log)
-    model = bind_overrides(model, parameters or {})
-    lo, hi, types, current = resolve_parameters(model, component, list(names), ranges or {},
-                                                backend)
-    spec = TuneSpec(str(model.path), component, tuple(names),
-                    tuple(int(s) for s in train_seeds) or (None,), backend, stop_time,
-                    window, _seed_parameters(model, backend) if train_seeds else (),
-                    tuple((parameters or {}).items()),
-                    None if replay is None else str(Path(replay).expanduser().resolve()))
-    if replay is not None:      # a bad log or span: its error now, before any evaluation
-        replayed = spec_model(spec)[0]
-        if backend == "fmu":
-            ensure_fmus(replayed, log=log)
-        spec = dataclasses.replace(spec, seed_parameters=(
-            _seed_parameters(replayed, backend) if train_seeds else ()))
+    model, spec, (lo, hi, types, current) = _tuning_spec(
+        scenario, component, names, ranges, train_seeds, backend, stop_time, window,
+        parameters, replay, log)
     ga = GeneticAlgorithm(len(names), population, generations, crossover_probability,
                           mutation_probability, seed)
     # progress in individuals of the generations (an individual met before is not re-run)
@@ -311,10 +295,36 @@ def run_tune(scenario, component: str, names: Sequence[str], generations: int = 
             "generation_mean": result.generation_mean, "evaluations": result.evaluations}
 
 
+def _tuning_spec(scenario, component, names, ranges, train_seeds, backend, stop_time, window,
+                 parameters, replay, log):
+    """The model (overrides bound), the :class:`TuneSpec` every evaluation runs, and the tuned
+    parameters' ranges, types and current values; a bad component, parameter, range or
+    sensor log is refused here, before any evaluation."""
+    model = load_scenario(scenario)
+    if component not in [c.name for c in model.components]:
+        raise NavfmuError(f"--component: {model.path} has no component '{component}'")
+    if backend == "fmu":
+        ensure_fmus(model, log=log)
+    model = bind_overrides(model, parameters or {})
+    resolved = resolve_parameters(model, component, list(names), ranges or {}, backend)
+    spec = TuneSpec(str(model.path), component, tuple(names),
+                    tuple(int(s) for s in train_seeds) or (None,), backend, stop_time,
+                    window, _seed_parameters(model, backend) if train_seeds else (),
+                    tuple((parameters or {}).items()),
+                    None if replay is None else str(Path(replay).expanduser().resolve()))
+    if replay is not None:      # a bad log or span: its error now, before any evaluation
+        replayed = spec_model(spec)[0]
+        if backend == "fmu":
+            ensure_fmus(replayed, log=log)
+        spec = dataclasses.replace(spec, seed_parameters=(
+            _seed_parameters(replayed, backend) if train_seeds else ()))
+    return model, spec, resolved
+
+
 def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
     """``<component>_tuned.ssv``, ``tune.json`` and ``fitness.png``, all in ``out`` (never in
     the model's folder); none of them if one cannot be written."""
-    from ..results import plots  # not imported by the executor's workers
+    from ..results import filter_plots  # not imported by the executor's workers
 
     out = Path(out)
     made = not out.exists()
@@ -329,7 +339,7 @@ def write_tune_outputs(summary: Dict[str, Any], out: Path) -> List[Path]:
     writers = [lambda: atomic_write(ssv, lambda f: f.write(text)),
                lambda: atomic_write(out / "tune.json",
                                     lambda f: f.write(json.dumps(summary, indent=2))),
-               lambda: plots.plot_fitness(summary, out / "fitness.png")]
+               lambda: filter_plots.plot_fitness(summary, out / "fitness.png")]
     written: List[Path] = []
     try:
         for write in writers:

@@ -1,5 +1,7 @@
 """The ``navfmu`` command line: build, validate, env, run, compare, bench, convert,
-montecarlo, report, tune, verify.
+montecarlo, report, tune, verify, package, export (``convert`` is
+:mod:`.convert_commands`, ``package`` and ``export`` :mod:`.package_commands`, the options
+several commands share :mod:`.option_groups`).
 
 User errors (:class:`~orchestrator.errors.NavfmuError`, and click's usage errors) print one
 first line ``navfmu: error: ...`` (on its own line: progress bars are cleared first) and exit
@@ -26,8 +28,10 @@ from .cli_options import (DEFAULT_OUT, filter_names, nonempty_name, nonempty_pat
                           version_text)
 from ..errors import NavfmuError, SimulationError
 from ..cosim.exchange import ALGORITHMS
-from ..cosim.isolation import DEFAULT_CALL_TIMEOUT_S, ISOLATE_MODES, Isolation
 from .convert_commands import convert
+from .option_groups import (BATCH_HELP, SSV_HELP, common_run_options, isolation,
+                            isolation_options)
+from .package_commands import export, package
 from .progress import progress_bars
 from .user_warnings import in_cli_voice
 
@@ -53,10 +57,6 @@ DISK_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS)
 
 #: every command: -h as well as --help, and each option's default in its help
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "show_default": True}
-
-SSV_HELP = ("Bind a parameter set (.ssv) without editing the model: COMPONENT=FILE, or a FILE "
-            "whose parameter names carry the component (filter.r_pos_n); repeatable, later "
-            "over earlier, --set over all.")
 
 
 @click.group(cls=_Group, context_settings=CONTEXT_SETTINGS)
@@ -102,64 +102,6 @@ def env_(fmt):
     click.echo(hostenv.render(hostenv.host_environment(), fmt))
 
 
-def _common_run_options(f):
-    f = click.option("--out", "out", type=click.Path(file_okay=False), callback=nonempty_path,
-                     help="Output folder (default: navfmu-results/<scenario>).")(f)
-    f = click.option("--stop", "stop", type=float, help="Stop time [s] (default: the SSD's).")(f)
-    f = click.option("--backend", type=click.Choice(["fmu", "direct"]), default="fmu",
-                     show_default=True, help="Run the FMUs, or the navcore objects directly.")(f)
-    f = click.option("--window", help="Metric window t0:t1 [s] (default: the whole run).")(f)
-    f = click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
-                     help="Override a parameter (repeatable).")(f)
-    f = click.option("--ssv", "ssv", multiple=True, metavar="[COMPONENT=]FILE",
-                     help=SSV_HELP)(f)
-    f = click.option("--format", "fmt", type=click.Choice(["csv", "npz", "parquet"]),
-                     default="csv", show_default=True,
-                     help="Result file format; parquet streams the rows to disk while the run "
-                     "goes (memory flat in the flight length).")(f)
-    f = click.option("--no-plots", is_flag=True, help="Do not write PNG plots.")(f)
-    f = click.option("--replay", "replay", type=click.Path(), callback=nonempty_path,
-                     help="Replace the scenario's sensor components (trajectory/IMU, GNSS "
-                     "receiver) by ImuGnssReplay playing this sensor-log folder (--stop is "
-                     "then in the log's time).")(f)
-    f = click.option("--start", "start", type=float, expose_value=False,
-                     callback=lambda ctx, _, v: ctx.meta.__setitem__("start_time", v),
-                     help="With --replay: start at the first IMU interval beginning at or "
-                     "after this time of the log [s].")(f)
-    f = click.option("--max-dt-jitter", "max_dt_jitter", type=float, expose_value=False,
-                     callback=lambda ctx, _, v: ctx.meta.__setitem__("max_dt_jitter", v),
-                     help="With --replay: largest relative deviation of an IMU interval from "
-                     "the log's median interval (default 0.75).")(f)
-    f = click.option("--algorithm", type=click.Choice(ALGORITHMS), default=ALGORITHMS[0],
-                     show_default=True, expose_value=False,
-                     callback=lambda ctx, _, v: ctx.meta.__setitem__("algorithm", v),
-                     help="Exchange: Gauss-Seidel order, or Jacobi (libcosim's).")(f)
-    return _isolation_options(f)
-
-
-def _isolation_options(f):
-    """``--isolate`` and ``--call-timeout``, kept in the context for :func:`_isolation`."""
-    f = click.option("--isolate", type=click.Choice(ISOLATE_MODES), default=ISOLATE_MODES[0],
-                     show_default=True, expose_value=False,
-                     callback=lambda ctx, _, v: ctx.meta.__setitem__("isolate", v),
-                     help="Run FMUs in a host process of their own: the foreign ones (not "
-                     "this installation's build), always, or never; a crash or hang there "
-                     "ends the run with one error line.")(f)
-    f = click.option("--call-timeout", type=float, default=DEFAULT_CALL_TIMEOUT_S,
-                     show_default=True, expose_value=False,
-                     callback=lambda ctx, _, v: ctx.meta.__setitem__("call_timeout", v),
-                     help="Longest one FMI call of an FMU in a host process may take [s] "
-                     "before it counts as hung and is killed.")(f)
-    return f
-
-
-def _isolation():
-    """The ``--isolate`` / ``--call-timeout`` of the current command."""
-    meta = click.get_current_context().meta
-    return Isolation(meta.get("isolate", ISOLATE_MODES[0]),
-                     meta.get("call_timeout", DEFAULT_CALL_TIMEOUT_S))
-
-
 def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots,
              replay=None, log_sensors=None, smooth=False):
     from .run_command import run_scenarios
@@ -170,7 +112,7 @@ def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_p
                   algorithm=meta.get("algorithm", ALGORITHMS[0]),
                   replay=replay, log_sensors=log_sensors,
                   replay_options={k: meta.get(k) for k in ("start_time", "max_dt_jitter")},
-                  isolation=_isolation())
+                  isolation=isolation())
 
 
 @cli.command()
@@ -185,7 +127,7 @@ def _execute(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_p
 @click.option("--smooth", is_flag=True,
               help="Also write the filter's smoothed solution (Rauch-Tung-Striebel over the "
               "recorded run; Kf) with its own metrics, as the run '<filter>-smoothed'.")
-@_common_run_options
+@common_run_options
 def run(scenario, filter_, log_sensors, smooth, out, stop, backend, window, sets, ssv, fmt,
         no_plots, replay):
     """Co-simulate SCENARIO (a models/ folder or .ssd file) and report its metrics."""
@@ -196,7 +138,7 @@ def run(scenario, filter_, log_sensors, smooth, out, stop, backend, window, sets
 @cli.command()
 @click.argument("scenario", type=click.Path(), callback=nonempty_path)
 @click.option("--filters", required=True, help="Comma-separated filter FMUs, e.g. Kf,Iakf.")
-@_common_run_options
+@common_run_options
 def compare(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_plots, replay):
     """Run SCENARIO once per filter (same truth and sensor seeds) and compare them."""
     names = filter_names(filters)
@@ -205,6 +147,8 @@ def compare(scenario, filters, out, stop, backend, window, sets, ssv, fmt, no_pl
 
 
 cli.add_command(convert)
+cli.add_command(package)
+cli.add_command(export)
 
 
 @cli.command(short_help="Time SCENARIO through the FMUs against navcore directly (or, with "
@@ -246,10 +190,6 @@ def bench(scenario, stop, repeat, filters, against_libcosim, executors, runs, wo
                              log=lambda m: click.echo(m, err=True)))
 
 
-BATCH_HELP = ("Runs of one filter stepped together as one batch on the direct backend "
-              "(default: chosen from the runs, the workers and the free memory; 1: one "
-              "run at a time). Every run's numbers are those of its single run.")
-
 
 @cli.command()
 @click.argument("scenario", type=click.Path(), callback=nonempty_path)
@@ -278,12 +218,13 @@ BATCH_HELP = ("Runs of one filter stepped together as one batch on the direct ba
 @click.option("--series", type=click.Choice(["parquet", "csv"]),
               help="Also keep every run's time series in this format.")
 @click.option("--batch", type=int, default=None, help=BATCH_HELP)
-@_isolation_options
+@isolation_options
 def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, seed,
                seed_offsets, backend, stop, window, samples, sets, ssv, series, batch):
     """Monte Carlo campaign: RUNS seeds x FILTERS on SCENARIO; resumable (run the same
     command again to finish a killed campaign)."""
     from ..campaigns import campaign, campaign_summary
+    from ..campaigns import seeds as campaign_seeds
     from ..running import scenarios
     from ..running.ssv_bindings import overrides
 
@@ -292,9 +233,9 @@ def montecarlo(scenario, runs, filters, workers, out, scheduler, local_cluster, 
     spec = campaign.CampaignSpec(
         scenario=scenario, filters=names, runs=runs, seed=seed, backend=backend,
         stop_time=stop, window=parse_window(window), samples=samples,
-        seed_offsets=campaign.parse_seed_offsets(seed_offsets),
+        seed_offsets=campaign_seeds.parse_seed_offsets(seed_offsets),
         parameters=tuple(overrides(ssv, model, parse_sets(sets)).items()), series=series,
-        batch=batch, isolation=_isolation())
+        batch=batch, isolation=isolation())
     out = Path(out) if out else DEFAULT_OUT / f"{model.name}-montecarlo"
     with progress_bars() as progress_bar:
         summary = campaign.run_campaign(spec, out, workers=workers, scheduler=scheduler,
@@ -457,55 +398,6 @@ def verify(ctx, fmu, role, scenario_names, runs, sets, ssv, out, junit, workers,
     click.echo(f"{n['pass']} pass, {n['fail']} fail, {n['warn']} warn, {n['skip']} skip"
                + (f", {n['crash']} crash" if n["crash"] else "") + f"; wrote {summary['report']}")
     ctx.exit(summary["exit_status"])
-
-
-def _write_system(scenario, out, module_name, **options):
-    """Build the model's stale FMUs, then write it with ``orchestrator.packaging.<module_name>``
-    (``options``: its keyword arguments)."""
-    import importlib
-
-    from ..running import scenarios
-    from ..results.outputs import check_writable
-
-    from ..running.prechecks import check_initializes
-
-    check_writable(out, "--out")
-    model = scenarios.load_scenario(scenario)
-    scenarios.ensure_fmus(model, log=lambda m: click.echo(m, err=True))
-    check_initializes(model)        # a value its FMU refuses is not packaged
-    writer = importlib.import_module(f"..packaging.{module_name}", __package__)
-    click.echo(f"wrote {getattr(writer, module_name)(scenario, out, **options)}")
-
-
-def _system_command(name, what, doc, options=()):
-    """``navfmu <name> SCENARIO --out FILE``: write the model as ``what``; ``options``: click
-    options of this command, passed on to its writer."""
-    def command(scenario, out, **kwargs):
-        _write_system(scenario, out, name, **kwargs)
-
-    command.__doc__ = doc
-    for option in options:
-        command = option(command)
-    command = click.option("--out", required=True, type=click.Path(dir_okay=False),
-                           callback=nonempty_path,
-                           help=f"The {what} to write.")(command)
-    command = click.argument("scenario", type=click.Path(), callback=nonempty_path)(command)
-    return cli.command(name=name)(command)
-
-
-package = _system_command("package", "SSP archive (.ssp)",
-                          "Write SCENARIO as one self-contained SSP archive (FMUs under "
-                          "resources/).",
-                          options=[click.option(
-                              "--step-hints/--no-step-hints", default=True,
-                              help="Keep the components' osp:StepSizeHint (default: libcosim "
-                                   "and navfmu run honour them) or leave them out, for SSP "
-                                   "readers that refuse annotations on a component "
-                                   "(OMSimulator); then every component steps at the base "
-                                   "step.")])
-export = _system_command("export", "FMU (.fmu)",
-                         "Write SCENARIO as one co-simulation FMU (fmpy's container, Jacobi at "
-                         "the base step).")
 
 
 def main(argv=None):

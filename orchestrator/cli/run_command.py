@@ -118,28 +118,15 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
     """Run ``scenario`` once per entry of ``filters`` (None: the scenario's own filter), print
     the report with ``echo(text, err=False)`` and write the output folder ``out`` (default
     ``navfmu-results/<model>``), each run with its progress bar; the figures are titled from
-    the runs (:func:`orchestrator.results.plots.figure_title`).  ``replay_options``: the
+    the runs (:func:`orchestrator.results.plot_style.figure_title`).  ``replay_options``: the
     keyword arguments of :func:`orchestrator.running.replay.replay_model` (``--start``,
     ``--max-dt-jitter``), only with ``replay``.  ``isolation``: which FMUs run in a host
     process of their own (``--isolate``, ``--call-timeout``; default: the foreign ones).
     ``ssv``: the ``--ssv`` items (:mod:`orchestrator.running.ssv_bindings`), under ``sets``.
     ``smooth``: also the smoothed run of the (single) filter, after the real-time one."""
     replay_options = {k: v for k, v in (replay_options or {}).items() if v is not None}
-    if replay_options and replay is None:
-        raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
-                          "applies to a sensor log)")
-    model = scenarios.load_scenario(scenario)
-    scenarios.paper_reference(model)       # a malformed paper.json is refused before the run
-    prechecks.check_connected(model)
-    window = parse_window(window)
-    parameters = overrides(ssv, model, parse_sets(sets))
-    prechecks.check_stop_time(stop, model.start_time)
-    out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
-    if smooth:
-        if fmt == "parquet":
-            raise NavfmuError("--smooth keeps the run's rows in memory: use --format csv or npz "
-                              "with it")
-        smoothing.check_smoothable(model, filters[0])
+    model, window, parameters, out = _checked_inputs(scenario, filters, out, stop, window, sets,
+                                                     ssv, fmt, replay, replay_options, smooth)
     runs = _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, replay,
                          log_sensors, algorithm, echo, replay_options, isolation)
     if smooth:
@@ -160,6 +147,39 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         echo(f"wrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
         return
     reference = _comparable_reference(model, stop, replay, echo)
+    comparison = _print_report(scenario, model, filters, runs, reference, echo)
+    with progress_bars() as progress_bar:   # a long CSV takes seconds: show the writing
+        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots,
+                                reference=reference, comparison=comparison,
+                                progress=progress_bar("writing", unit="part"))
+    echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
+
+
+def _checked_inputs(scenario, filters, out, stop, window, sets, ssv, fmt, replay,
+                    replay_options, smooth):
+    """The scenario's model, the metric window, the parameter overrides and the output folder,
+    every option checked before anything runs."""
+    if replay_options and replay is None:
+        raise NavfmuError(f"{_REPLAY_OPTIONS[next(iter(replay_options))]} needs --replay (it "
+                          "applies to a sensor log)")
+    model = scenarios.load_scenario(scenario)
+    scenarios.paper_reference(model)       # a malformed paper.json is refused before the run
+    prechecks.check_connected(model)
+    window = parse_window(window)
+    parameters = overrides(ssv, model, parse_sets(sets))
+    prechecks.check_stop_time(stop, model.start_time)
+    out = outputs.check_target(Path(out) if out else DEFAULT_OUT / model.name)
+    if smooth:
+        if fmt == "parquet":
+            raise NavfmuError("--smooth keeps the run's rows in memory: use --format csv or npz "
+                              "with it")
+        smoothing.check_smoothable(model, filters[0])
+    return model, window, parameters, out
+
+
+def _print_report(scenario, model, filters, runs, reference, echo):
+    """Print the runs' RMS table, consistency lines, mission table and the comparison with
+    the paper; return that comparison (written with the outputs)."""
     first = next(iter(runs[0].metrics.values()))
     echo(f"\n{model.name}: RMS errors over {first['window_s']} s (the truth spans "
          f"{first['truth_span_s']} s)" + _time_origin_note(runs[0]))
@@ -182,11 +202,7 @@ def run_scenarios(scenario, filters: Sequence[Optional[str]], out, stop, backend
         show_missing=len(filters) > 1)
     if text:
         echo(text)
-    with progress_bars() as progress_bar:   # a long CSV takes seconds: show the writing
-        written = write_outputs(runs, out, fmt=fmt, plots_on=not no_plots,
-                                reference=reference, comparison=comparison,
-                                progress=progress_bar("writing", unit="part"))
-    echo(f"\nwrote {len(written)} files to {out}/: " + ", ".join(p.name for p in written))
+    return comparison
 
 
 __all__ = ["run_scenarios"]

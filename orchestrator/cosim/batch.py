@@ -32,7 +32,8 @@ import numpy as np
 from .backends import NUMERIC_TYPES
 from .batch_instance import BatchInstance, LoopBatchInstance, NativeBatchInstance
 from .exchange import Timing
-from .master import _DTYPES, Simulation, _row_recorder
+from .master import Simulation
+from .result_assembly import SIGNAL_DTYPES, row_recorder
 from ..errors import NavfmuError, SkippedParametersWarning
 from ..results.batch_recording import BatchRecording
 from ..results.run_results import Results
@@ -160,7 +161,7 @@ class BatchSimulation(Simulation):
         rec_index = self._rec_index(batch.position)
         recording = BatchRecording(
             n_steps // self.record_every + 1, sinks,
-            {t: len(rec_index[t]) for t in NUMERIC_TYPES}, _DTYPES,
+            {t: len(rec_index[t]) for t in NUMERIC_TYPES}, SIGNAL_DTYPES,
             lambda first, n, bufs: self._chunk(first, n, bufs, rec_index, batch.position))
         try:
             loop_ns = self._run_batch(batch, recording, start, stop, n_steps, progress)
@@ -186,7 +187,7 @@ class BatchSimulation(Simulation):
         batch.exchange.initialize(start, stop)
         if batch.failures:
             batch.drop_failed(recording)
-        record = _row_recorder(batch.vectors, self._rec_index(batch.position),
+        record = row_recorder(batch.vectors, self._rec_index(batch.position),
                                recording.buffers)
         record(recording.slot(0))
         # its components are Python components: none ends the simulation early

@@ -136,81 +136,26 @@ The exchange itself (both algorithms, sharing one input-copying path) is
 """
 from __future__ import annotations
 
-import time as _time
 import warnings
 from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Tuple
 
 import numpy as np
-from navcore.core.timing import TIME_TOLERANCE
 
 from .backends import NUMERIC_TYPES, Instance
 from .component_description import describe_direct, describe_fmu
-from ..errors import (NavfmuError, NavfmuWarning, SimulationTerminated,
-                      SkippedParametersWarning, WiringError)
+from ..errors import NavfmuError, NavfmuWarning
 from .exchange import ALGORITHMS, Timing, exchange_for, slots_for, step_order
 from .isolation import Isolation
 from .lever_arm_wiring import unconnected_lever_arms
+from .macro_loop import MacroLoop
+from .model_checks import ModelChecks
+from .result_assembly import SIGNAL_DTYPES, ResultAssembly, row_recorder
 from ..results.recorder import Recording
 from ..results.run_results import Results
-from ..model.ssp import ComponentSpec, Connection, SystemModel
-from ..model import units
-from ..model.suggestions import did_you_mean
-#: the types a parameter value can be set to
-SETTABLE_TYPES = ("Real", "Integer", "Enumeration", "Boolean", "String")
-_DTYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
+from ..model.ssp import Connection, SystemModel
 
 
-def _row_recorder(vectors, rec_index, recordings):
-    """``record(row)``: copy the recorded signals into row ``row`` of the recording buffers;
-    a type recorded whole, in vector order, is one row copy.  The vectors may carry a leading
-    run axis (a batch, :mod:`orchestrator.cosim.batch`); the buffers' rows then do too."""
-    whole = [t for t in NUMERIC_TYPES
-             if np.array_equal(rec_index[t], np.arange(vectors[t].shape[-1]))]
-    picked = [t for t in NUMERIC_TYPES if t not in whole and len(rec_index[t])]
-
-    def record(row):
-        for t in whole:
-            recordings[t][row] = vectors[t]
-        for t in picked:
-            vectors[t].take(rec_index[t], axis=-1, out=recordings[t][row], mode="clip")
-
-    return record
-
-
-def _column_blocks(sources):
-    """``sources[j]`` = (type, column) of output column j as blocks ``(j, type, column,
-    width)`` of consecutive columns of one type on both sides (one slice copy each instead
-    of one per column)."""
-    blocks = []
-    for j, (t, c) in enumerate(sources):
-        if blocks:
-            start, bt, bc, width = blocks[-1]
-            if bt == t and bc + width == c:
-                blocks[-1] = (start, bt, bc, width + 1)
-                continue
-        blocks.append((j, t, c, 1))
-    return blocks
-
-
-# ----------------------------------------------------------------------------------------
-# Simulation
-def _parameter_hint(d, name: str) -> str:
-    """The component's parameters close to the unknown ``name``, or all of them."""
-    names = sorted(v.name for v in d.variables.values() if v.causality == "parameter")
-    return did_you_mean(name, names) or f" (its parameters: {', '.join(names)})"
-
-
-def _check_settable(d, var) -> None:
-    """Refuse setting a parameter of a type no parameter value maps onto (an FMI 3.0
-    Float32, UInt8, array...: :mod:`orchestrator.cosim.fmi3_variables`)."""
-    if var.type not in SETTABLE_TYPES:
-        raise WiringError(f"component '{d.spec.name}' ({d.source}): parameter '{var.name}' has "
-                          f"type {var.type}, which cannot be set (settable: "
-                          f"{', '.join(SETTABLE_TYPES)})")
-
-
-# ----------------------------------------------------------------------------------------
-class Simulation:
+class Simulation(ModelChecks, MacroLoop, ResultAssembly):
     """Run a :class:`SystemModel` by the rules of the module docstring.
 
     ``backend`` is ``"fmu"`` (every component's ``source`` FMU through fmpy) or ``"direct"``
@@ -219,7 +164,8 @@ class Simulation:
     ``parameters`` overrides values as ``{"Component.variable": value}``.  ``isolation``
     (:mod:`orchestrator.cosim.isolation`, default: foreign FMUs) says which FMUs run in a
     host process of their own (rule 10).
-    Construction checks the wiring (rule 8); :meth:`run` instantiates, runs and terminates.
+    Construction checks the wiring (rule 8, :mod:`.model_checks`); :meth:`run` instantiates,
+    runs (:mod:`.macro_loop`) and terminates, and assembles the Results (:mod:`.result_assembly`).
     """
 
     def __init__(self, model: SystemModel, backend: str = "fmu",
@@ -265,136 +211,7 @@ class Simulation:
         # under Jacobi every connection is one step late: no loop needs breaking
         self.delayed_connections: List[Connection] = delayed if algorithm != "jacobi" else []
 
-    # -- checks -------------------------------------------------------------------------
-    def _decimation(self, spec: ComponentSpec) -> int:
-        if spec.step_hint is None:
-            return 1
-        ratio = spec.step_hint / self.base_step
-        n = int(round(ratio))
-        if n < 1 or abs(ratio - n) > TIME_TOLERANCE * ratio:
-            raise NavfmuError(f"component '{spec.name}': its step {spec.step_hint} s is not an "
-                              f"integer multiple of the base step {self.base_step} s")
-        return n
-
-    def _check_wiring(self) -> None:
-        for conn in self.model.connections:
-            for comp_name, var_name, causality in (
-                    (conn.start_component, conn.start_connector, "output"),
-                    (conn.end_component, conn.end_connector, "input")):
-                d = self.components[self._index[comp_name]]
-                var = d.variables.get(var_name)
-                where = f"component '{comp_name}' ({d.source})"
-                if var is None:
-                    raise WiringError(f"{where} has no variable '{var_name}', which the connection "
-                                      f"{conn} needs")
-                if var.causality != causality:
-                    raise WiringError(f"{where}: variable '{var_name}' has causality "
-                                      f"'{var.causality}', but the connection {conn} needs an "
-                                      f"{causality}")
-                declared = d.spec.connectors.get(var_name, (None, None))[1]
-                if declared is not None and var.type != declared:
-                    raise WiringError(f"{where}: variable '{var_name}' is a {var.type}, but the "
-                                      f"system structure declares it as {declared} "
-                                      f"(connection {conn})")
-                if var.type not in NUMERIC_TYPES:
-                    raise WiringError(f"{where}: variable '{var_name}' is a {var.type}; only Real, "
-                                      f"Integer and Boolean variables can be connected")
-                units.check_same(d.spec.units.get(var_name, ""), var.unit,
-                                 f"{where}: the system structure's connector '{var_name}' "
-                                 "against the FMU's variable")
-            self._check_connection_units(conn)
-
-    def _check_connection_units(self, conn: Connection) -> None:
-        """Both ends of ``conn`` in one unit (rule 8: the value passes unchanged)."""
-        ends = [self.components[self._index[c]].variables[v] for c, v in (
-            (conn.start_component, conn.start_connector),
-            (conn.end_component, conn.end_connector))]
-        units.check_same(ends[0].unit, ends[1].unit, f"connection {conn}")
-
-    def _parameters(self, overrides: Mapping[str, Any]):
-        values: Dict[str, Dict[str, Any]] = {n: {} for n in self.names}
-        skipped: List[str] = []
-        settable = ("parameter", "input")
-        for d in self.components:
-            swapped = d.spec.name in self.model.replaced_sources
-            for pname, (_, value) in d.spec.parameters.items():
-                var = d.variables.get(pname)
-                if var is None or var.causality not in settable:
-                    if swapped and pname not in d.spec.variant_parameters:
-                        skipped.append(f"{d.spec.name}.{pname}")
-                        continue
-                    raise WiringError(
-                        f"component '{d.spec.name}' ({d.source}): the system structure sets "
-                        f"parameter '{pname}', which "
-                        + ("does not exist" if var is None else
-                           f"has causality '{var.causality}' (not settable)")
-                    )
-                _check_settable(d, var)
-                unit = d.spec.parameter_units.get(pname)
-                if unit:
-                    value = units.convert(value, unit, var.unit,
-                                          f"component '{d.spec.name}' ({d.source}): parameter "
-                                          f"'{pname}' = {value!r} {unit}")
-                values[d.spec.name][pname] = value
-        if skipped:
-            warnings.warn("parameters not present in the swapped-in component(s), skipped: "
-                          + ", ".join(skipped), SkippedParametersWarning, stacklevel=3)
-        for key, value in overrides.items():
-            comp, var_name = self._split(key, "parameter override")
-            d = self.components[self._index[comp]]
-            var = d.variables.get(var_name)
-            if var is None or var.causality not in settable:
-                raise WiringError(
-                    f"parameter override '{key}': component '{comp}' ({d.source}) has no "
-                    f"parameter '{var_name}'" + (_parameter_hint(d, var_name) if var is None
-                                                 else f" (it is an {var.causality})")
-                )
-            _check_settable(d, var)
-            values[comp][var_name] = value
-        return values, skipped
-
-    def _split(self, key: str, what: str) -> Tuple[str, str]:
-        comp, dot, var = key.partition(".")
-        if comp not in self._index:
-            raise WiringError(f"{what} '{key}': no component named '{comp}' "
-                              f"(components: {', '.join(self.names)})"
-                              + did_you_mean(comp, self.names))
-        return comp, var if dot else ""
-
-    def _recorded(self, record: Optional[Iterable[str]]) -> Dict[str, List[str]]:
-        """component -> recorded output names, in the component's variable order."""
-        def outputs(d):
-            return [v.name for v in d.variables.values()
-                    if v.causality == "output" and v.type in NUMERIC_TYPES]
-
-        if record is None:
-            return {d.spec.name: outputs(d) for d in self.components}
-        wanted: Dict[str, set] = {n: set() for n in self.names}
-        for item in ([record] if isinstance(record, str) else record):
-            comp, var_name = self._split(item, "record")
-            d = self.components[self._index[comp]]
-            if not var_name:
-                wanted[comp].update(outputs(d))
-                continue
-            var = d.variables.get(var_name)
-            if var is None or var.causality != "output" or var.type not in NUMERIC_TYPES:
-                raise WiringError(f"record '{item}': component '{comp}' ({d.source}) has no "
-                                  f"Real/Integer/Boolean output '{var_name}'")
-            wanted[comp].add(var_name)
-        return {d.spec.name: [n for n in outputs(d) if n in wanted[d.spec.name]]
-                for d in self.components}
-
     # -- running ------------------------------------------------------------------------
-    def _n_steps(self, start: float, stop: float) -> int:
-        if not stop > start:
-            raise NavfmuError(f"the stop time {stop} must be greater than the start time {start}")
-        ratio = (stop - start) / self.base_step
-        n = int(round(ratio))
-        if n < 1 or abs(ratio - n) > TIME_TOLERANCE * max(ratio, 1.0):
-            raise NavfmuError(f"the run from {start} s to {stop} s is not an integer number of "
-                              f"base steps of {self.base_step} s")
-        return n
-
     def _layout(self):
         """Signal vectors (per type, every component's read outputs, one slice each), the
         position of every (component, output) in them, and every component's input sources."""
@@ -418,7 +235,7 @@ class Simulation:
                 for j, v in enumerate(names):
                     position[(n, v)] = (t, sizes[t] + j)
                 sizes[t] += len(names)
-        vectors = {t: np.zeros(sizes[t], dtype=_DTYPES[t]) for t in NUMERIC_TYPES}
+        vectors = {t: np.zeros(sizes[t], dtype=SIGNAL_DTYPES[t]) for t in NUMERIC_TYPES}
         return vectors, position, slices, out_names, source_of
 
     def _prepare(self, instances, vectors, slices, out_names, source_of) -> None:
@@ -426,12 +243,6 @@ class Simulation:
             n = d.spec.name
             views = [vectors[t][slice(*slices[n][t])] for t in NUMERIC_TYPES]
             inst.prepare(list(source_of[n]), out_names[n], *views)
-
-    def _rec_index(self, position) -> Dict[str, np.ndarray]:
-        """Per type, the positions of the recorded signals in the signal vector."""
-        return {t: np.array([position[(n, v)][1] for n in self.names
-                             for v in self.recorded[n] if position[(n, v)][0] == t],
-                            dtype=np.intp) for t in NUMERIC_TYPES}
 
     def _exchange(self, instances, vectors, position, source_of, start: float, n_steps: int,
                   timing: Timing):
@@ -456,11 +267,11 @@ class Simulation:
         vectors, position, slices, out_names, source_of = self._layout()
         rec_index = self._rec_index(position)
         recording = Recording(n_steps // self.record_every + 1,
-                              {t: len(rec_index[t]) for t in NUMERIC_TYPES}, _DTYPES,
+                              {t: len(rec_index[t]) for t in NUMERIC_TYPES}, SIGNAL_DTYPES,
                               lambda first, n, bufs: self._chunk(first, n, bufs, rec_index,
                                                                  position),
                               sink=sink)
-        record = _row_recorder(vectors, rec_index, recording.buffers)
+        record = row_recorder(vectors, rec_index, recording.buffers)
         timing = Timing(len(self.components))
         instances: List[Instance] = []
         try:
@@ -499,106 +310,6 @@ class Simulation:
             sink.close(results)
         return results
 
-    def _loop(self, step, record, recording, n_steps: int, progress):
-        """The macro steps 0 .. n_steps-1, each row recorded when due; returns the loop's
-        wall time [ns], the macro steps done and the :class:`SimulationTerminated` that
-        ended it early (or None).  ``progress`` is called about every 1 % and at the end."""
-        record_every = self.record_every
-        progress_every = max(1, n_steps // 100)
-        next_progress = progress_every if progress is not None else n_steps + 1
-        ended = None
-        loop_start = _time.perf_counter_ns()
-        for k in range(n_steps):
-            try:
-                step(k)
-            except SimulationTerminated as exc:
-                ended, n_steps = exc, k
-                break
-            kp1 = k + 1
-            if kp1 % record_every == 0:
-                record(recording.slot(kp1 // record_every))
-            if kp1 == next_progress:
-                progress(kp1, n_steps)
-                next_progress = kp1 + progress_every
-        loop_ns = _time.perf_counter_ns() - loop_start
-        if progress is not None and n_steps % progress_every:
-            progress(n_steps, n_steps)
-        return loop_ns, n_steps, ended
-
-    def _ended(self, ended: SimulationTerminated, start: float, done: int, recording):
-        """A component ended the simulation in macro step ``done`` (rule 9): the run ends at
-        its last recorded row before it, which every component reached; returns that stop
-        time and its macro steps.  With no row past the initial one, the run fails."""
-        rows = done // self.record_every
-        if rows == 0:
-            raise ended
-        recording.end_at(rows + 1)
-        n_steps = rows * self.record_every
-        stop = start + n_steps * self.base_step
-        warnings.warn(f"{ended}; the results end at t = {stop:.9g} s, the last recorded "
-                      f"communication point every component reached", NavfmuWarning,
-                      stacklevel=3)
-        return stop, n_steps
-
-    # -- results ------------------------------------------------------------------------
-    def _chunk(self, first_row, n_rows, recordings, rec_index, position) -> Results:
-        """Rows ``first_row ..`` of the recording from the first ``n_rows`` buffer rows."""
-        time_column = (self.model.start_time + (first_row + np.arange(n_rows, dtype=np.float64))
-                       * (self.record_every * self.base_step))
-        # column of each recorded (component, variable) inside its type's recording
-        rec_col = {t: {int(g): j for j, g in enumerate(rec_index[t])} for t in NUMERIC_TYPES}
-        data, columns, units = {}, {}, {}
-        for d in self.components:
-            n = d.spec.name
-            names = self.recorded[n]
-            arr = np.empty((n_rows, len(names)), dtype=np.float64)
-            sources = [position[(n, v)] for v in names]
-            for j, t, c, width in _column_blocks([(t, rec_col[t][g]) for t, g in sources]):
-                arr[:, j:j + width] = recordings[t][:n_rows, c:c + width]
-            data[n] = arr
-            columns[n] = list(names)
-            units[n] = [d.variables[v].unit or d.spec.units.get(v, "") for v in names]
-        return Results(time=time_column, data=data, columns=columns, units=units)
-
-    def _results(self, start, stop, n_steps, n_rows, recordings, rec_index, position,
-                 timing, loop_ns) -> Results:
-        h = self.base_step
-        chunk = self._chunk(0, n_rows, recordings, rec_index, position)
-        time_column, data, columns, units = chunk.time, chunk.data, chunk.columns, chunk.units
-        do_ns, all_ns, calls = timing.do_ns, timing.all_ns, timing.calls
-        step_time = {}
-        exchange_time = {}
-        for i, n in enumerate(self.names):
-            step_time[n] = do_ns[i] / calls[i] * 1e-9 if calls[i] else float("nan")
-            exchange_time[n] = all_ns[i] / calls[i] * 1e-9 if calls[i] else float("nan")
-        overhead = (loop_ns - sum(all_ns)) * 1e-9 / n_steps
-        metadata = {
-            "model": self.model.name,
-            "ssd": str(self.model.path),
-            "backend": self.backend,
-            "algorithm": self.algorithm,
-            "base_step": h,
-            "start_time": start,
-            "stop_time": stop,
-            "n_steps": n_steps,
-            "record_every": self.record_every,
-            "order": list(self.order),
-            "decimation": dict(self.decimation),
-            "delayed_connections": [str(c) for c in self.delayed_connections],
-            "sources": {d.spec.name: d.source for d in self.components},
-            "model_names": {d.spec.name: d.model_name for d in self.components},
-            "hosted": [d.spec.name for d in self.components if d.hosted],
-            "replaced_sources": {k: str(v) for k, v in self.model.replaced_sources.items()},
-            "skipped_parameters": list(self.skipped_parameters),
-            "parameters": {n: {k: v for k, v in p.items()}
-                           for n, p in self.parameter_values.items()},
-            "step_calls": {n: calls[i] for i, n in enumerate(self.names)},
-            "wall_time_s": loop_ns * 1e-9,
-            "master_overhead_s_per_step": overhead,
-        }
-        return Results(time=time_column, data=data, columns=columns, units=units,
-                       step_time_s=step_time, exchange_step_time_s=exchange_time,
-                       metadata=metadata)
 
 
 def simulate(model: SystemModel, backend: str = "fmu", stop_time: Optional[float] = None,

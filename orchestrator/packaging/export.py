@@ -86,11 +86,11 @@ def without_step_hints(model: SystemModel) -> SystemModel:
         model, components=[dataclasses.replace(c, step_hint=None) for c in model.components])
 
 
-def _configuration(model: SystemModel, copies: Dict[str, Path]):
+def _read_components(model: SystemModel, copies: Dict[str, Path]):
+    """Every component of the container (its FMU copy's model description read and its FMI
+    version checked), every component's variables by name, and the unit definitions of all."""
     from fmpy import read_model_description
-    from fmpy.container_fmu.config import Component, Configuration, Connection
-    from fmpy.model_description import (CoSimulation, DefaultExperiment, ModelDescription,
-                                        ModelVariable, Unknown)
+    from fmpy.container_fmu.config import Component
 
     components, variables, units = {}, {}, {}
     for spec in model.components:
@@ -101,6 +101,15 @@ def _configuration(model: SystemModel, copies: Dict[str, Path]):
         variables[spec.name] = {v.name: v for v in md.modelVariables}
         for u in md.unitDefinitions:
             units.setdefault(u.name, u)
+    return components, variables, units
+
+
+def _container_variables(model: SystemModel, components, variables):
+    """The container's variables (time, every component's parameters and non-String,
+    non-Enumeration outputs as ``Component.variable``) and each one's mapping onto its
+    component's variable."""
+    from fmpy.model_description import ModelVariable
+
     container_vars: List = [ModelVariable(name="time", type="Real", causality="independent",
                                           variability="continuous")]
     mappings: Dict = {}
@@ -123,6 +132,16 @@ def _configuration(model: SystemModel, copies: Dict[str, Path]):
                                description=v.description)
             container_vars.append(cv)
             mappings[cv] = [(comp, v)]
+    return container_vars, mappings
+
+
+def _configuration(model: SystemModel, copies: Dict[str, Path]):
+    from fmpy.container_fmu.config import Configuration, Connection
+    from fmpy.model_description import (CoSimulation, DefaultExperiment, ModelDescription,
+                                        Unknown)
+
+    components, variables, units = _read_components(model, copies)
+    container_vars, mappings = _container_variables(model, components, variables)
     specs = {spec.name: spec for spec in model.components}
     connections = [Connection(components[c.start_component],
                               [_as_connector(specs[c.start_component],

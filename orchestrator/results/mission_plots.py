@@ -6,7 +6,7 @@ import numpy as np
 from navcore.vehicles.route_guidance import LocalPlane, parse_route
 
 from . import mission_metrics
-from .plots import _save, plt, titled
+from .plot_style import plt, save_png, titled
 
 
 #: margin around the route and the true paths, as a fraction of their larger extent
@@ -78,4 +78,4 @@ def plot_mission(entries, vehicle, path, title=""):
     ax_t.grid(True, alpha=0.3)
     fig.suptitle(titled("mission", title))
     fig.tight_layout()
-    return _save(fig, path)
+    return save_png(fig, path)

@@ -97,7 +97,9 @@ def _write_files(runs, out: Path, fmt, plots_on, title, reference, comparison,
 
 
 def _write_plots(runs, streamed, out: Path, title, reference, written: _Written) -> None:
-    from ..results import plots  # matplotlib only where plots are drawn (not in executor workers)
+    # matplotlib only where plots are drawn (not in executor workers)
+    from ..results import plots
+    from ..results.plot_style import figure_title
 
     entries = []
     for run in runs:
@@ -109,7 +111,7 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
     navigation = [en for en in entries if "pos_n" in en[3]]
     attitude = [en for en in entries if "pos_n" not in en[3]]
     if attitude:
-        for path in _attitude_plots(attitude, out, title or plots.figure_title(attitude)):
+        for path in _attitude_plots(attitude, out, title or figure_title(attitude)):
             written.add(path)
     if navigation:
         _navigation_plots(navigation, out, title, reference, written)
@@ -124,46 +126,48 @@ def _write_plots(runs, streamed, out: Path, title, reference, written: _Written)
         from ..results.mission_plots import plot_mission
 
         written.add(plot_mission(missions, vehicle, out / "mission.png",
-                                 title or (plots.figure_title(shown) if shown else "")))
+                                 title or (figure_title(shown) if shown else "")))
 
 
 def _navigation_plots(entries, out: Path, title, reference, written: _Written) -> None:
     """Plots of INS/GNSS filters: errors (and each filter's +-3 sigma apart when several),
     NIS, the adaptive diagnostics, the R estimate, chi-square and the outliers.  ``title``:
-    the caller's, else each figure's from the run (:func:`~orchestrator.results.plots.
+    the caller's, else each figure's from the run (:func:`~orchestrator.results.plot_style.
     figure_title`: the model, the filters it shows, the profile and the span)."""
-    from ..results import plots
+    from ..results import filter_plots, plots
+    from ..results.plot_style import figure_title
 
     if len(entries) > 1:  # errors.png compares RMS; each filter's +-3 sigma apart
         for entry in entries:
             safe = "".join(c if c.isalnum() or c in "-_" else "_" for c in entry[0])
             written.add(plots.plot_errors([entry], out / f"errors_{safe}.png",
                                           f"{entry[0]} ({title})" if title
-                                          else plots.figure_title([entry])))
-    title = title or plots.figure_title(entries)
+                                          else figure_title([entry])))
+    title = title or figure_title(entries)
     written.add(plots.plot_errors(entries, out / "errors.png", title))
-    written.add(plots.plot_nis(entries, out / "nis.png", title))
+    written.add(filter_plots.plot_nis(entries, out / "nis.png", title))
     windows = scenario_phases.phase_windows(reference)
-    written.add(plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png", title,
-                                  phases=windows))
-    written.add(plots.plot_r_estimate(entries, out / "r_estimate.png", title))
-    written.add(plots.plot_chi2(entries, out / "chi2.png", title, phases=windows))
-    written.add(plots.plot_outliers(entries, out / "outliers.png", title))
+    written.add(filter_plots.plot_series(entries, ADAPTIVE_OUTPUTS, out / "adaptive.png",
+                                         title, phases=windows))
+    written.add(filter_plots.plot_r_estimate(entries, out / "r_estimate.png", title))
+    written.add(filter_plots.plot_chi2(entries, out / "chi2.png", title, phases=windows))
+    written.add(filter_plots.plot_outliers(entries, out / "outliers.png", title))
 
 
 def _attitude_plots(entries, out: Path, title: str) -> List[Path]:
     """Plots of attitude-only filters: Euler errors with +-3 sigma, the pitch error alone
     (paper 003's Fig. 3), NIS, the R scale factors and the fuzzy inputs when present."""
-    from ..results import plots
+    from ..results import filter_plots, plots
 
     written = [plots.plot_attitude_errors(entries, out / "attitude_errors.png", title),
                plots.plot_attitude_errors(entries, out / "pitch_error.png",
                                           f"{title}: pitch error (paper 003 Fig. 3)",
                                           angles=("pitch",)),
-               plots.plot_nis(entries, out / "nis.png", title)]
-    for p in (plots.plot_series(entries, R_SCALE_OUTPUTS, out / "r_scale.png", title,
-                                log_variables=R_SCALE_OUTPUTS),
-              plots.plot_series(entries, FUZZY_INPUT_OUTPUTS, out / "fuzzy_inputs.png", title)):
+               filter_plots.plot_nis(entries, out / "nis.png", title)]
+    for p in (filter_plots.plot_series(entries, R_SCALE_OUTPUTS, out / "r_scale.png", title,
+                                       log_variables=R_SCALE_OUTPUTS),
+              filter_plots.plot_series(entries, FUZZY_INPUT_OUTPUTS, out / "fuzzy_inputs.png",
+                                       title)):
         if p:
             written.append(p)
     return written

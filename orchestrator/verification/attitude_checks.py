@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import List
 
 from ..campaigns import campaign
+from ..campaigns import seeds as campaign_seeds
 from ..running import scenarios
 from ..results.metric_comparisons import pooled_rms
 from .filter_cases import failed_run
@@ -42,12 +43,12 @@ def plan(setting: Setting, runs: int, quick: bool = False) -> Plan:
     model = setting.model()
     spec = campaign.CampaignSpec(scenario=str(setting.scenario), filters=(REFERENCE,),
                                  runs=runs)
-    offsets = campaign.seed_offsets(spec, campaign.random_components(model, "direct"))
+    offsets = campaign_seeds.seed_offsets(spec, campaign_seeds.random_components(model, "direct"))
     reference = str(scenarios.resolve_filter(REFERENCE))
     windows = {"before": [0.0, DISTURBANCE_S - 1.0], "after": [DISTURBANCE_S, 1e9]}
     jobs = []
     for i in range(runs):
-        seeds = {f"{c}.seed": s for c, s in campaign.run_seeds(spec, offsets, i).items()}
+        seeds = {f"{c}.seed": s for c, s in campaign_seeds.run_seeds(spec, offsets, i).items()}
         base = {"ssd": str(setting.scenario), "component": setting.component,
                 "parameters": seeds, "windows": windows}
         jobs.append((("ahrs", "filter", i), dict(base, fmu=str(setting.facts.path),

@@ -25,7 +25,8 @@ exactly one disturbance:
 * ``lever_arm`` and ``mems_imu``: an antenna lever arm, a MEMS IMU through an outage
   (:mod:`.error_source_cases`).
 
-The random components get the campaign seeds (:func:`orchestrator.campaign.run_seeds`):
+The random components get the campaign seeds
+(:func:`orchestrator.campaigns.seeds.run_seeds`):
 run i of every filter sees the same truth, IMU and GNSS noise.
 """
 from __future__ import annotations
@@ -35,6 +36,7 @@ from dataclasses import dataclass
 from typing import Any, Dict, List
 
 from ..campaigns import campaign
+from ..campaigns import seeds as campaign_seeds
 from ..running import scenarios
 from ..results.metric_comparisons import pooled_rms, rms_3d
 from ..results.metrics import nis_band95
@@ -115,9 +117,11 @@ def jobs(setting: Setting, case_list: List[Case], seed: int = 1):
         model = scenarios.load_scenario(case.ssd)
         spec = campaign.CampaignSpec(scenario=case.ssd, filters=(REFERENCE,), runs=case.seeds,
                                      seed=seed)
-        offsets = campaign.seed_offsets(spec, campaign.random_components(model, "direct"))
+        offsets = campaign_seeds.seed_offsets(
+            spec, campaign_seeds.random_components(model, "direct"))
         for i in range(case.seeds):
-            seeds = {f"{c}.seed": s for c, s in campaign.run_seeds(spec, offsets, i).items()}
+            seeds = {f"{c}.seed": s
+                     for c, s in campaign_seeds.run_seeds(spec, offsets, i).items()}
             base = {"ssd": case.ssd, "component": setting.component, "stop": case.stop,
                     "parameters": {**case.parameters, **case.filter_parameters, **seeds},
                     "windows": {**({"case": case.window} if case.window else {}),
