@@ -24,6 +24,18 @@ DT = 0.01
 SECONDS = 600.0
 
 
+def _assert_failed_alone_else_passing(checks, failed, run_id, error_text, passing_ids):
+    """A failed run gives its run check alone, failing with the run's error; a good run
+    gives ``passing_ids``, all passing."""
+    ids = [c.id for c in checks]
+    if failed:
+        assert ids == [run_id] and checks[0].verdict == "fail"
+        assert error_text in checks[0].reason
+    else:
+        assert ids == passing_ids
+        assert {c.verdict for c in checks} == {"pass"}
+
+
 def _sensor_setting(**declared):
     return SimpleNamespace(datasheet=declared, parameters={},
                            facts=SimpleNamespace(variables={}))
@@ -103,6 +115,23 @@ def test_accel_bias_instability_in_micro_g():
         assert sensor_checks._gm_check(setting, "accel", curves).verdict == verdict
 
 
+@pytest.mark.parametrize("failed", [False, True])
+def test_imu_static_run_fails_only_a_sensor_that_did_not_run(curves, tmp_path, failed):
+    """``imu.static_run`` stands alone when the standing-still run failed; a sensor that ran
+    gets its four Allan checks (here all passing: the declared values are the generated ones)."""
+    setting = _sensor_setting(gyro_arw_dpsh=0.1, accel_vrw_ugpsHz=50.0, **GYRO_GM)
+    setting.role = "imu_sensor"
+    run = ({"error": "doStep at t = 3 s: ZeroDivisionError"} if failed
+           else {"allan": {k: list(v) for k, v in curves.items()}})
+    checks, files = sensor_checks.judge_plan(setting, None, {("static", "imu", 0): run}, tmp_path)
+    if failed:
+        assert [c.id for c in checks] == ["imu.static_run"] and not files
+        assert checks[0].verdict == "fail" and "ZeroDivisionError" in checks[0].reason
+    else:
+        assert len(checks) == 4 and "imu.static_run" not in [c.id for c in checks]
+        assert files["allan.png"].exists()
+
+
 # -- GNSS receiver -----------------------------------------------------------------------
 SIGMAS = {"pos_sigma_n": 2.0, "pos_sigma_e": 2.0, "pos_sigma_d": 3.0, "vel_sigma_n": 0.1,
           "vel_sigma_e": 0.1, "vel_sigma_d": 0.1}
@@ -158,6 +187,19 @@ def test_gnss_flags_exactly_inside_the_window(cid, key):
     assert check.verdict == "fail" and check.measured.startswith("1 of")
 
 
+@pytest.mark.parametrize("failed", [False, True])
+def test_gnss_run_fails_only_a_receiver_that_did_not_run(failed):
+    """``gnss.run`` stands alone (the receiver's error, no noise or flag verdicts) when the
+    receiver's run failed; a receiver that ran gets its noise and flag checks instead."""
+    setting = _sensor_setting(**SIGMAS)
+    setting.role = "gnss_receiver"
+    setting.facts.variables = {"outages": None, "outlier_patches": None}
+    run = {"error": "doStep at t = 12 s: ValueError"} if failed else {"fixes": _fixes()}
+    checks, _ = sensor_checks.judge_plan(setting, None, {("receiver", "gnss", 0): run}, None)
+    _assert_failed_alone_else_passing(checks, failed, "gnss.run", "ValueError",
+                                      ["gnss.noise", "gnss.outage", "gnss.outliers"])
+
+
 # -- attitude filter -----------------------------------------------------------------------
 def _ahrs_run(before_nrms, after_rms, after_nrms=1.0, ms=0.1):
     level = ("roll", "pitch", "yaw")
@@ -195,6 +237,19 @@ def test_ahrs_disturbance_after_it(after, nrms, verdict):
 def test_ahrs_timing(ms, verdict):
     check = attitude_checks._timing([_ahrs_run(1, 1, ms=ms)], [_ahrs_run(1, 1, ms=0.1)])
     assert check.verdict == verdict
+
+
+@pytest.mark.parametrize("reference_failed", [False, True])
+def test_ahrs_reference_fails_when_only_the_reference_did_not_run(reference_failed):
+    """A reference that did not run gives ``ahrs.reference`` alone (no verdict on the filter
+    under test from a comparison that cannot be made); a good pair gives the three checks."""
+    good = _ahrs_run(1.0, after_rms=1.0)
+    theirs = {"error": "reference: doStep failed"} if reference_failed else good
+    results = {("ahrs", "filter", 0): good, ("ahrs", attitude_checks.REFERENCE, 0): theirs}
+    checks, _ = attitude_checks.judge_plan(None, SimpleNamespace(seeds=1), results, None)
+    _assert_failed_alone_else_passing(checks, reference_failed, "ahrs.reference",
+                                      "doStep failed",
+                                      ["ahrs.consistency", "ahrs.disturbance", "ahrs.timing"])
 
 
 # -- INS/GNSS filter: robustness ratios and timing -----------------------------------------
