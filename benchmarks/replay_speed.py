@@ -185,8 +185,8 @@ def kf_gins_binary(args):
     binary = args.kf_gins or os.environ.get("NAVFMU_KF_GINS")
     if not binary:
         print("replay_speed: KF-GINS skipped: no binary given.  Get the source from "
-              "https://github.com/i2Nav-WHU/KF-GINS, build it as its README says (cmake "
-              "-DCMAKE_BUILD_TYPE=Release, then make), and pass --kf-gins PATH or set "
+              "https://github.com/i2Nav-WHU/KF-GINS, build it as its README "
+              "says (a Release build), and pass --kf-gins PATH or set "
               "NAVFMU_KF_GINS=PATH.", flush=True)
         return None
     binary = Path(binary).expanduser().resolve()
