@@ -45,6 +45,9 @@ def setup(slave, component_class):
     slave._read_inputs = _reader(slave._input_names)
     slave._component = None
     slave._entered = None      # (parameters, component) started in initialization mode
+    slave._parameter_names = frozenset(p.name for p in cls.parameters)
+    slave._in_initialization = False
+    slave._stale_start = False  # a parameter set in initialization mode since the start
     slave._start_time = 0.0
     slave._stop_time = None
     slave._failed = None
@@ -122,9 +125,17 @@ def _parameters(slave):
 def enter_initialization_mode(slave):
     """Start the component already, so its outputs are valid in initialization mode (a host
     may read them then to set the inputs of others: a sensor takes its vehicle's start
-    sample from them).  Nothing is reported here: exit_initialization_mode starts it again,
-    with its errors, if this failed or a parameter changed since."""
-    slave._entered = None
+    sample from them).  A parameter set in initialization mode (FMI 2.0 allows it for
+    fixed parameters) starts it again at the next read of an output, so what a host reads
+    there always belongs to the parameters set so far.  Nothing is reported here:
+    exit_initialization_mode starts it again, with its errors, if this failed or a
+    parameter changed since."""
+    slave._in_initialization = True
+    _start_in_initialization(slave)
+
+
+def _start_in_initialization(slave):
+    slave._entered, slave._stale_start = None, False
     if slave._start_error is not None:   # reported by exit_initialization_mode
         return
     params = _parameters(slave)
@@ -139,6 +150,7 @@ def enter_initialization_mode(slave):
 
 def exit_initialization_mode(slave):
     values = slave._values
+    slave._in_initialization = slave._stale_start = False
     if slave._start_error is not None:
         _fail(slave, slave._start_error, refuse=True)
         return
@@ -236,6 +248,8 @@ _PLACEHOLDER = {"Real": float("nan"), "Integer": 0, "Boolean": False, "String": 
 
 def _getter(type_name):
     def get(slave, vrs):
+        if slave._stale_start:
+            _start_in_initialization(slave)
         names = slave._vr_names.get(type_name, {})
         values = slave._values
         try:
@@ -257,6 +271,8 @@ def _setter(type_name):
             refuse(slave, f"fmi2Set{type_name}: " + _why_not_settable(slave, type_name, vrs))
             return
         slave._values.update(zip(names, new_values))
+        if slave._in_initialization and not slave._parameter_names.isdisjoint(names):
+            slave._stale_start = True
     return set_
 
 
