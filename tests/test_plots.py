@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from orchestrator.results import filter_plots, plots
+from orchestrator.results import filter_plots, plot_style, plots
 from orchestrator.results.run_results import Results
 
 N = 2001
@@ -40,7 +40,7 @@ def figures(monkeypatch):
         kept.append(fig)
         return path
 
-    for module in (plots, filter_plots):
+    for module in (plots, filter_plots, plot_style):
         monkeypatch.setattr(module, "save_png", save)
     yield kept
     for fig in kept:

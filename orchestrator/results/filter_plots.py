@@ -14,7 +14,7 @@ from navcore.filters.innovation_stats import chi2_lower_quantile
 
 from . import metrics as nav_metrics
 from .phases import shade_phases
-from .plot_style import legend_outside, plt, save_png, titled
+from .plot_style import legend_outside, plt, save_png, save_time_figure, titled
 
 
 def plot_fitness(summary, path):
@@ -54,13 +54,7 @@ def plot_nis(entries, path, title=""):
         lo, hi = chi2_lower_quantile(np.array([0.025, 0.975]), dof)
         ax.axhline(hi, color="k", lw=0.8, ls="--", label=f"chi2({dof}) 97.5 %")
         ax.axhline(lo, color="k", lw=0.8, ls=":", label=f"chi2({dof}) 2.5 %")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("NIS")
-    ax.grid(True, alpha=0.3)
-    legend_outside(ax)
-    ax.set_title(titled("normalized innovation squared", title))
-    fig.tight_layout()
-    return save_png(fig, path)
+    return save_time_figure(fig, ax, "NIS", "normalized innovation squared", title, path)
 
 
 def _constant(values):
@@ -172,13 +166,8 @@ def plot_chi2(entries, path, title="", phases=()):
         ax.axhline(g["value"], color="k", lw=0.9, ls=("--", ":", "-.")[i % 3],
                    label=_gate_label(g))
     shade_phases(ax, phases)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("chi-square statistic")
-    ax.grid(True, alpha=0.3)
-    legend_outside(ax)
-    ax.set_title(titled("chi-square statistic of the innovations", title))
-    fig.tight_layout()
-    return save_png(fig, path)
+    return save_time_figure(fig, ax, "chi-square statistic",
+                            "chi-square statistic of the innovations", title, path)
 
 
 def plot_outliers(entries, path, title=""):

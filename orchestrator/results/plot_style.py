@@ -32,7 +32,6 @@ def legend_outside(ax, **kwargs):
                      **{"fontsize": 8, **kwargs})
 
 
-
 def run_title(results, title="", truth_name=None):
     """``title`` with what the run was: its model and, for the truth, the motion profile and
     the time span actually simulated (from ``results.metadata``), so a figure of another
@@ -57,6 +56,18 @@ def figure_title(entries):
     model = (results.metadata or {}).get("model") or ""
     truth = next((c for c in results.components if "truth_time" in results.columns[c]), None)
     return run_title(results, f"{model}: {labels}" if model else labels, truth)
+
+
+def save_time_figure(fig, ax, ylabel: str, what: str, title: str, path):
+    """The common end of a one-axes figure over time: labels, grid, the legend outside, the
+    title (:func:`titled`), then :func:`save_png`."""
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    legend_outside(ax)
+    ax.set_title(titled(what, title))
+    fig.tight_layout()
+    return save_png(fig, path)
 
 
 def titled(what: str, title: str) -> str:
