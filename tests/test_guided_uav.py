@@ -147,7 +147,7 @@ def _nav(t, **change):
 
 @pytest.mark.parametrize("change, words", [
     ({"nav_time": -2.0}, ["'nav_time' = -2.0 s", "2 s old", "max_nav_age' = 1 s"]),
-    ({"nav_time": 1.5}, ["'nav_time' = 1.5 s", "1.5 s ahead"]),
+    ({"nav_time": 1.5}, ["'nav_time' = 1.5 s", "1.49 s ahead of the communication step's end"]),
     ({"nav_lat": 0.0}, ["'nav_lat'/'nav_lon'", "km from the nearest waypoint"]),
     ({"nav_vn": math.nan}, ["'nav_vn' = nan"]),
 ])

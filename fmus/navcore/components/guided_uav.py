@@ -10,12 +10,16 @@ baseline of a filter comparison).  The height loop holds the active leg's height
 solution; the airspeed loop uses air data (the true airspeed).
 
 Timing: the vehicle samples every ``sample_period`` on its own grid, like TrajectoryImu; a
-sample over ``[t_k, t_k + dt]`` flies the commands computed at ``t_k`` from the inputs as
-they are at the start of the communication step.  So the outputs at t (truth, rates, mission
-signals) never depend on the inputs at t: no algebraic loop closes through the vehicle
-(declared in the model description: every output has no input dependency), and a master
-may step it first (Gauss-Seidel, where it takes the filter's output of the previous step) or
-with everyone at once (Jacobi).
+sample over ``[t_k, t_k + dt]`` flies the commands computed at ``t_k`` from the newest
+navigation solution tagged at or before ``t_k`` (``nav_time``), extrapolated by its velocity
+to ``t_k``.  A solution received with a later tag (a master that steps the filter first
+hands over its output at the step's end) waits until the samples reach its tag
+(:mod:`navcore.vehicles.tagged_solutions`; it is state), so the time tags decide which
+solution a sample flies on, not the order of the calls nor the communication step size.
+The outputs at t (truth, rates, mission signals) never depend on the inputs at t: no
+algebraic loop closes through the vehicle (declared in the model description: every output
+has no input dependency), and a master may step it first (Gauss-Seidel, where it takes the
+filter's output of the previous step), with everyone at once (Jacobi) or after the filter.
 
 Outputs: the truth of TrajectoryImu's names (ImuSensor and GnssReceiver connect name to
 name), ``body_rate_*`` and ``specific_force_*`` at each sample (ImuSensor's ``rates`` input
@@ -27,8 +31,9 @@ latest waypoint at the moment guidance switched past it, less the switching dist
 guidance meant (the fly-by lead or the acceptance radius; so 0 for a vehicle that knows
 where it is, positive when it switched too far out, negative too close).
 
-Refusals: a non-finite navigation input; a solution more than ``max_nav_age`` older or
-newer than the sample's start; a solution more than :data:`MAX_ROUTE_DISTANCE` from every
+Refusals: a non-finite navigation input; a solution tagged more than ``max_nav_age`` after
+the end of the step that delivers it; one more than ``max_nav_age`` older (or, at the start,
+newer) than the sample it is flown on; a solution more than :data:`MAX_ROUTE_DISTANCE` from every
 waypoint (an unconnected or diverged filter).
 """
 from __future__ import annotations
@@ -40,6 +45,7 @@ from ..core.component import Component, InputError, Limits, boolean, integer, re
 from ..core.timing import samples_reached, time_tolerance
 from ..vehicles.point_mass_uav import PointMassUav
 from ..vehicles.route_guidance import L1Guidance, LocalPlane, Route, parse_route
+from ..vehicles.tagged_solutions import TaggedSolutions
 from ..vehicles.turbulence import DrydenTurbulence
 from .imu_measurement import SEED_LIMITS
 from .imu_sensor import RATE_NAMES, RATES
@@ -122,7 +128,8 @@ class GuidedUav(Component):
     inputs = NAV_INPUTS
     outputs = signals.TRUTH + RATES + MISSION
     default_experiment = (0.0, 600.0, 0.01)
-    state_fields = ("uav", "turbulence", "gust_ned", "leg", "n_reached", "miss", "n", "out")
+    state_fields = ("uav", "turbulence", "gust_ned", "leg", "n_reached", "miss", "n", "out",
+                    "solutions")
     derived_fields = ("dt", "route", "plane", "guidance", "start_time")
 
     def initialize(self, start_time):
@@ -147,6 +154,7 @@ class GuidedUav(Component):
         self.gust_ned = self._gust_ned(self.uav.psi)
         self.uav.start_gust(self.gust_ned)
         self.leg, self.n_reached, self.miss, self.n = 0, 0, 0.0, 0
+        self.solutions = TaggedSolutions()
         self.out = self._outputs()
         return dict(self.out)
 
@@ -167,16 +175,28 @@ class GuidedUav(Component):
         out["waypoint_miss"] = self.miss
         return out
 
+    def initial_inputs(self, inputs):
+        """The inputs at the end of initialization mode: the solution at the start time when
+        the vehicle accepts them (a host that sets none there leaves their start values, 0,
+        thousands of km from any route: then the first step's solution stands in until one
+        is due, :mod:`navcore.vehicles.tagged_solutions`).  The outputs do not change."""
+        if not self.params["guide_on_truth"]:
+            try:
+                self._receive(self.start_time, inputs)
+            except InputError:
+                pass
+        return None
+
     def step(self, t, h, inputs):
+        on_truth = self.params["guide_on_truth"]
+        if not on_truth:
+            self._receive(t + h, inputs)
         due = samples_reached(self.start_time, self.dt, t + h) - self.n
         if due <= 0:
             return self.out
-        on_truth = self.params["guide_on_truth"]
-        if not on_truth:
-            self.check_inputs(inputs, NAV_NAMES)
         for _ in range(due):
             t_sample = self.start_time + self.n * self.dt
-            self._fly(self._truth_view() if on_truth else self._nav_view(inputs, t_sample))
+            self._fly(self._truth_view() if on_truth else self._nav_view(t_sample))
         self.out = self._outputs()
         return self.out
 
@@ -185,27 +205,40 @@ class GuidedUav(Component):
         north, east = self.plane.to_plane(uav.lat, uav.lon)
         return north, east, uav.h, uav.v_ned[0], uav.v_ned[1], uav.yaw()
 
-    def _nav_view(self, inputs, t_sample):
-        """The navigation solution extrapolated to ``t_sample`` on the route's plane."""
-        age = t_sample - inputs["nav_time"]
+    def _receive(self, end, inputs):
+        """Check the navigation inputs of the step ending at ``end`` and keep their solution,
+        on the route's plane, for the samples its tag is due at (module docstring)."""
+        self.check_inputs(inputs, NAV_NAMES)
+        tag = inputs["nav_time"]
         limit = self.params["max_nav_age"]
-        # a host may tag inputs with the step's end (within the time tolerance, which is
-        # >= 0: so an age within the limit needs no tolerance computed)
-        if not abs(age) <= limit and not abs(age) <= limit + time_tolerance(self.dt, t_sample):
+        if tag - end > limit + time_tolerance(self.dt, end):
             raise InputError(
-                f"{self.model_name}: input 'nav_time' = {inputs['nav_time']!r} s is "
-                f"{age:.6g} s {'old' if age > 0 else 'ahead'} at t = {t_sample!r} s (parameter "
-                f"'max_nav_age' = {limit:g} s): guidance needs a current navigation solution")
-        vn, ve, vd = inputs["nav_vn"], inputs["nav_ve"], inputs["nav_vd"]
+                f"{self.model_name}: input 'nav_time' = {tag!r} s is {tag - end:.6g} s ahead "
+                f"of the communication step's end t = {end!r} s (parameter 'max_nav_age' = "
+                f"{limit:g} s): is the filter's clock the vehicle's?")
         north, east = self.plane.to_plane(inputs["nav_lat"], inputs["nav_lon"])
         if self._off_route(north, east):
             nearest = min(math.hypot(north - w[0], east - w[1]) for w in self.route.waypoints)
             raise InputError(
                 f"{self.model_name}: inputs 'nav_lat'/'nav_lon' put the vehicle {nearest / 1e3:.6g}"
-                f" km from the nearest waypoint at t = {t_sample!r} s (more than "
+                f" km from the nearest waypoint at t = {end!r} s (more than "
                 f"{MAX_ROUTE_DISTANCE / 1e3:g} km): is a filter's navigation solution connected?")
-        return (north + vn * age, east + ve * age, inputs["nav_h"] - vd * age, vn, ve,
-                inputs["nav_yaw"])
+        self.solutions.receive(tag, (north, east, inputs["nav_h"], inputs["nav_vn"],
+                                     inputs["nav_ve"], inputs["nav_vd"], inputs["nav_yaw"]))
+
+    def _nav_view(self, t_sample):
+        """The newest navigation solution due at ``t_sample``, extrapolated to it on the
+        route's plane."""
+        tag, (north, east, h, vn, ve, vd, yaw) = self.solutions.due(t_sample, self.dt)
+        age = t_sample - tag
+        limit = self.params["max_nav_age"]
+        # the tolerance (>= 0) is needed only beyond the limit
+        if not abs(age) <= limit and not abs(age) <= limit + time_tolerance(self.dt, t_sample):
+            raise InputError(
+                f"{self.model_name}: input 'nav_time' = {tag!r} s is {abs(age):.6g} s "
+                f"{'old' if age > 0 else 'ahead'} at t = {t_sample!r} s (parameter "
+                f"'max_nav_age' = {limit:g} s): guidance needs a current navigation solution")
+        return north + vn * age, east + ve * age, h - vd * age, vn, ve, yaw
 
     def _off_route(self, north, east):
         """Whether (north, east) is more than :data:`MAX_ROUTE_DISTANCE` from every waypoint;
