@@ -25,6 +25,12 @@ What each of the peer's names becomes (its ``GNSS_IMU.py`` says how it uses them
   ``p0_gyro_bias_dph``, ``p0_accel_bias_ug``.
 * ``float_err_gain``, ``single_err_gain``: the fix sigmas' factors of ``convert rtklib
   --sigma-scale``.
+* The fixes: the peer's GNSS update takes the position and the velocity of each fix, each
+  with the receiver's sigmas times ``gnss_noise_factors`` (position, velocity):
+  ``measurement = position_velocity``, ``r_from_receiver`` for the position; navfmu's
+  filters take the velocity's R as the fixed ``r_vel_n/e/d``, which
+  :func:`velocity_sigmas` makes the median of the receiver's velocity sigmas over the log's
+  fixes times the factor.
 * ``yaw_align_min_vel`` [m/s]: ``init_speed_min`` (the speed from which the course gives
   the heading).
 * ZUPT: ``zupt_vel_SD`` [m/s] -> ``zupt_sigma``, ``zaru_gyro_SD`` [deg/s] -> ``zaru_sigma``;
@@ -42,6 +48,8 @@ from __future__ import annotations
 import ast
 import math
 from pathlib import Path
+
+import numpy as np
 
 G0 = 9.80665                       # m/s^2 per g
 #: [s] correlation time given the bias instabilities made from the peer's random walks
@@ -144,7 +152,7 @@ def filter_parameters(cfg: dict, path="config") -> dict:
     lever = [g - i for g, i in zip(need("gnss_offset"), need("imu_offset"))]
     att = need("init.att_unc")
     out = {
-        "filter.imu_noise_factor": 1.0,
+        "filter.imu_noise_factor": 1.0, "filter.measurement": "position_velocity",
         "filter.q_gyro_arw_dpsh": need("gyro_noise_PSD") * 60.0 * root_hz * f_att,
         "filter.q_accel_vrw_ugpsHz": need("accel_noise_PSD") * root_hz * f_vel,
         "filter.q_accel_bias_instability_ug": need("accel_bias_PSD") * root_hz * f_ba * half_tau,
@@ -175,6 +183,18 @@ def filter_parameters(cfg: dict, path="config") -> dict:
     if "zupt_epcoh_count" in cfg:
         out["filter.stationary_window_s"] = cfg["zupt_epcoh_count"] / need("imu_sample_rate")
     return out
+
+
+def velocity_sigmas(cfg: dict, gnss) -> dict:
+    """``r_vel_n/e/d`` [m/s]: per axis the median over the valid fixes of ``gnss`` (a sensor
+    log's GNSS table) of the receiver's velocity sigmas, times the config's velocity factor
+    (``gnss_noise_factors[1]``); empty without velocity sigmas in the log."""
+    if "std_vn" not in gnss:
+        return {}
+    valid = gnss["valid"] > 0.5
+    factor = float(cfg.get("gnss_noise_factors", [1.0, 1.0])[1])
+    return {f"filter.r_vel_{a}": factor * float(np.median(gnss[f"std_v{a}"][valid]))
+            for a in "ned"}
 
 
 def sigma_scale(cfg: dict) -> str:

@@ -355,10 +355,10 @@ def _setup(args, parser) -> dict:
     :data:`DRIVE_PARAMETERS`: from ``--config`` when given, else the drive's; the
     ``--misalign``, ``--time-offset`` and ``--rate`` given over them."""
     misalign, time_offset, rate = [180.0, -6.79, 185.35], -0.125, 100.0
-    out = {"schedule": PEER_SCHEDULE, "sigma_scale": None, "parameters": {}}
+    out = {"schedule": PEER_SCHEDULE, "sigma_scale": None, "parameters": {}, "config": None}
     if args.config is not None:
         try:
-            cfg = gnss_imu_config.read_config(args.config)
+            out["config"] = cfg = gnss_imu_config.read_config(args.config)
             misalign, time_offset, rate = gnss_imu_config.imu_preparation(cfg, args.config)
             out.update(schedule=gnss_imu_config.schedule(cfg, args.config),
                        sigma_scale=gnss_imu_config.sigma_scale(cfg),
@@ -412,7 +412,12 @@ def main(argv=None) -> int:
     peer = args.outages == "peer"
     outages = (peer_fixes_outages(args.drive, setup["schedule"]) if peer
                else parse_outages(args.outages))
+    work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
+    log, first = build_log(args.drive, work, outages, setup["misalign"], setup["time_offset"],
+                           setup["rate"], args.imu_start, setup["sigma_scale"])
     parameters = {**DRIVE_PARAMETERS, **setup["parameters"]}
+    if setup["config"] is not None:
+        parameters.update(gnss_imu_config.velocity_sigmas(setup["config"], log.gnss))
     for aid in filter(None, args.aids.split(",")):
         if aid not in AIDS:
             p.error(f"--aids: {aid!r} is not one of {', '.join(AIDS)}")
@@ -422,9 +427,6 @@ def main(argv=None) -> int:
     for item in args.set:
         key, _, value = item.partition("=")
         parameters[key] = _value(value)
-    work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
-    log, first = build_log(args.drive, work, outages, setup["misalign"], setup["time_offset"],
-                           setup["rate"], args.imu_start, setup["sigma_scale"])
     rows = {}
     runs = [(name, False) for name in args.filters.split(",")]
     if args.smooth:
