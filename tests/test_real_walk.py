@@ -14,38 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from peer_configs import WALK_VALUES, config_text
+
 ROOT = Path(__file__).resolve().parents[1]
 WALK = ROOT / "tests" / "data" / "rtklib_walk"
-#: the peer's walk_config.py, the values real_drive.py --config reads
-WALK_CONFIG = """from imu_math import Init
-import numpy as np
-imu_sample_rate = 100
-imu_offset   = [0, 0.05, 0]
-gyro_noise_PSD =  0.0038
-accel_noise_PSD = 70
-accel_bias_PSD = 7
-gyro_bias_PSD = 3.8e-5
-imu_misalign = np.array([180.0, 0.0, -90.0])
-gnss_offset = [0, 0, 0]
-imu_noise_factors = [4, 4, 4, 4, 1, 0.25]
-gnss_noise_factors = [1, 1]
-init =Init()
-init.att_unc = [10, 10, 100]
-init.bias_acc_unc = 0.2
-init.bias_gyro_unc = 0.2
-imu_t_off = 0
-float_err_gain = 2
-single_err_gain = 5
-zupt_epcoh_count = 50
-zupt_accel_thresh = 0.25
-zupt_gyro_thresh = 0.25
-zupt_vel_SD = 0.01
-zaru_gyro_SD = 0.01
-yaw_align_min_vel = 1.0
-start_coast = 25
-end_coast = 45
-coast_len = 15
-"""
 
 
 def _module(name):
@@ -79,7 +51,7 @@ def outage_ends(tmp_path_factory):
     bench = _module("real_drive")
     work = tmp_path_factory.mktemp("walk")
     config = work / "walk_config.py"
-    config.write_text(WALK_CONFIG)
+    config.write_text(config_text(WALK_VALUES))
     out = {}
     for mode in ("static", "gnss"):
         rows = work / f"{mode}.json"
