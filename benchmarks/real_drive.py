@@ -9,7 +9,7 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
 1. writes ``gnss.csv`` with ``navfmu convert rtklib --time unix`` (the receiver's per-epoch
    sigmas);
 2. prepares the IMU as the drive's own filter does (its ``convert_imu_file.py``): times from
-   the tag file (the counter stretched to the tag's first and last record), a zero-phase
+   the tag file (the counter fitted to the lines' arrivals, :mod:`rtklib_tag`), a zero-phase
    4th-order Butterworth low pass (10 Hz; 5 Hz on the vertical accelerometer), the sensor to
    body rotation ``--misalign`` (Groves' Euler angles) and the logging delay
    ``--time-offset``; resampled to a uniform grid (``--rate``) and written as ``imu.csv`` by
@@ -17,7 +17,9 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
 3. cuts GNSS outages into the fixes (``--outages``, seconds after the first fix) and keeps
    the uncut fixes as the truth;
 4. replays the log through every filter (direct backend, ``models/replay_gnss_ins_sim``,
-   the drive's parameters :data:`DRIVE_PARAMETERS` with ``--set`` over them) and scores each
+   the drive's parameters :data:`DRIVE_PARAMETERS`, the ones of the peer's configuration
+   file ``--config`` over them (:mod:`gnss_imu_config`: a walk as well as the drive), and
+   ``--set`` over both) and scores each
    at the epochs of the reference fixes: RMS N/E/D over the run, RMS with fixes (outside the
    outages), the 3-D error five fixes after each outage, the share of epochs inside +/-3
    sigma per axis, the mean position NEES (diagonal sigmas) and the warnings of the run.
@@ -376,8 +378,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("drive", type=Path, help="folder with the .pos, imu csv and .tag files")
     p.add_argument("--outages", default=OUTAGES,
-                   help="a:b,... seconds after the first fix, or 'peer': the drive's own "
-                        "schedule (15 s every 45 s from 40 s; scored on its 2nd to last)")
+                   help="a:b,... seconds after the first fix, or 'peer': the peer's own "
+                        "schedule (the drive's, 15 s every 45 s from 40 s, or --config's)")
     p.add_argument("--scored-from", type=int, default=2, metavar="N",
                    help="with --outages peer, score its outages from the N-th (default 2: the "
                         "drive's scoring, outages 2 to 11; 1 scores them all)")
