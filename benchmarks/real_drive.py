@@ -9,7 +9,7 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
 1. writes ``gnss.csv`` with ``navfmu convert rtklib --time unix`` (the receiver's per-epoch
    sigmas);
 2. prepares the IMU as the drive's own filter does (its ``convert_imu_file.py``): times from
-   the tag file (the counter stretched to the tag's first and last record), a zero-phase
+   the tag file (the counter fitted to the lines' arrivals, :mod:`rtklib_tag`), a zero-phase
    4th-order Butterworth low pass (10 Hz; 5 Hz on the vertical accelerometer), the sensor to
    body rotation ``--misalign`` (Groves' Euler angles) and the logging delay
    ``--time-offset``; resampled to a uniform grid (``--rate``) and written as ``imu.csv`` by
@@ -17,7 +17,9 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
 3. cuts GNSS outages into the fixes (``--outages``, seconds after the first fix) and keeps
    the uncut fixes as the truth;
 4. replays the log through every filter (direct backend, ``models/replay_gnss_ins_sim``,
-   the drive's parameters :data:`DRIVE_PARAMETERS` with ``--set`` over them) and scores each
+   the drive's parameters :data:`DRIVE_PARAMETERS`, the ones of the peer's configuration
+   file ``--config`` over them (:mod:`gnss_imu_config`: a walk as well as the drive), and
+   ``--set`` over both) and scores each
    at the epochs of the reference fixes: RMS N/E/D over the run, RMS with fixes (outside the
    outages), the 3-D error five fixes after each outage, the share of epochs inside +/-3
    sigma per axis, the mean position NEES (diagonal sigmas) and the warnings of the run.
@@ -31,7 +33,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import struct
 import sys
 import tempfile
 import warnings
@@ -42,8 +43,10 @@ import numpy as np
 from scipy.signal import butter, filtfilt
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "fmus")]
+sys.path[:0] = [str(ROOT), str(ROOT / "fmus"), str(ROOT / "benchmarks")]
 
+import gnss_imu_config  # noqa: E402
+import rtklib_tag  # noqa: E402
 from navcore.filters.correlated_gnss import MEASURED_CORR_TIME  # noqa: E402
 from navcore.filters.process_noise_factor import CONSUMER_IMU_NOISE_FACTOR  # noqa: E402
 from navcore.ins import earth  # noqa: E402
@@ -84,37 +87,29 @@ NHC_PARAMETERS = {"filter.nhc_lever_z": 0.65}
 
 
 # -- the IMU ----------------------------------------------------------------------------
-def tag_times(tag_file: Path):
-    """(UNIX start time on GPST [s], first and last record's milliseconds) of an RTKLIB
-    time-tag file: 60-byte header, uint32 tick, uint32 seconds, float64 fraction, then
-    (uint32 ms, uint32 byte offset) records, little-endian."""
-    raw = tag_file.read_bytes()
-    _, seconds = struct.unpack_from("<II", raw, 60)
-    fraction, = struct.unpack_from("<d", raw, 68)
-    records = np.frombuffer(raw[76:76 + (len(raw) - 76) // 8 * 8], dtype="<u4").reshape(-1, 2)
-    return seconds + fraction, float(records[0, 0]), float(records[-1, 0])
-
-
 def imu_samples(csv_file: Path, tag_file: Path, start=None):
     """(UNIX GPST times [s], accel [m/s^2], gyro [rad/s]) in the sensor's axes: the counter
-    of the logger (column 7, ms) stretched to the tag file's first and last record, or with
-    ``start`` (UNIX GPST [s] of the first sample) taken as it is; lines without seven
-    numbers (a cut-off last line) are left out."""
-    rows = []
-    for line in csv_file.read_text().splitlines():
-        parts = line.split(",")
+    of the logger (column 7, ms) fitted to the arrival times of the lines in the tag file
+    (:func:`rtklib_tag.sample_times`), or with ``start`` (UNIX GPST [s] of the first sample)
+    taken as it is; lines without seven numbers (a cut-off first or last line) are left
+    out."""
+    lines = csv_file.read_bytes().split(b"\n")
+    rows, where = [], []
+    for k, line in enumerate(lines):
+        parts = line.split(b",")
         try:
-            rows.append([float(p) for p in parts]) if len(parts) == 7 else None
+            if len(parts) == 7:
+                rows.append([float(p) for p in parts])
+                where.append(k)
         except ValueError:
             continue
     rows = np.array(rows)
     counter = rows[:, 6]
     if start is not None:
         times = start + (counter - counter[0]) / 1000.0
-        return times, rows[:, :3] * G0, np.radians(rows[:, 3:6])
-    start, ms0, ms1 = tag_times(tag_file)
-    ms = ms0 + (counter - counter[0]) * (ms1 - ms0) / (counter[-1] - counter[0])
-    return start + ms / 1000.0, rows[:, :3] * G0, np.radians(rows[:, 3:6])
+    else:
+        times = rtklib_tag.sample_times(lines, counter, np.array(where), tag_file)
+    return times, rows[:, :3] * G0, np.radians(rows[:, 3:6])
 
 
 def body_imu(t, acc, gyr, misalign_deg, time_offset, fs=100.0):
@@ -151,27 +146,30 @@ def parse_outages(text: str):
 
 
 def peer_outages(first_fix: float, last_fix: float, schedule=PEER_SCHEDULE):
-    """The outages (s after ``first_fix``) of the drive's own schedule :data:`PEER_SCHEDULE`
-    over fixes from ``first_fix`` to ``last_fix`` (seconds on one scale)."""
+    """The outages (s after ``first_fix``) of the peer's schedule ``schedule`` (start,
+    length, period, margin before the end: :data:`PEER_SCHEDULE`, the drive's, or
+    :func:`gnss_imu_config.schedule`) over fixes from ``first_fix`` to ``last_fix`` (seconds
+    on one scale): as its ``GNSS_IMU.py`` marks them, every outage that starts before the
+    margin, the last one cut there."""
     start, length, period, end_margin = schedule
     last = last_fix - first_fix - end_margin
     out, a = [], start
-    while a + length <= last:
-        out.append((a, a + length))
+    while a < last:
+        out.append((a, min(a + length, last)))
         a += period
     return out
 
 
 def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
-              imu_start=None) -> SensorLog:
+              imu_start=None, sigma_scale=None) -> SensorLog:
     """The sensor log of ``drive`` in ``dst`` with ``outages`` (s after the first fix) cut
     into the fixes and the uncut fixes as its truth (``imu_start``: :func:`imu_samples`'s
-    ``start``)."""
+    ``start``; ``sigma_scale``: ``convert rtklib --sigma-scale``)."""
     pos = next(drive.glob("*.pos"))
     imu_csv = next(p for p in drive.glob("imu*.csv"))
     raw = dst / "raw"
     raw.mkdir(parents=True, exist_ok=True)
-    print(convert_rtklib(pos, raw, time_scale="unix", force=True))
+    print(convert_rtklib(pos, raw, time_scale="unix", sigma_scale=sigma_scale, force=True))
     t, acc, gyr = body_imu(*imu_samples(imu_csv, imu_csv.with_suffix(".csv.tag"), imu_start),
                            misalign, time_offset, fs=rate)
     with tempfile.TemporaryDirectory() as tmp:
@@ -335,15 +333,15 @@ def outage_table(rows) -> str:
     return "\n".join(lines)
 
 
-def peer_fixes_outages(drive: Path):
-    """:func:`peer_outages` over the fixes of the drive's RTKLIB solution."""
+def peer_fixes_outages(drive: Path, schedule=PEER_SCHEDULE):
+    """:func:`peer_outages` of ``schedule`` over the fixes of the drive's RTKLIB solution."""
     pos = next(drive.glob("*.pos"))
     times = [line.split()[1] for line in pos.read_text().splitlines()
              if line.strip() and not line.startswith("%")]
     seconds = [sum(float(x) * f for x, f in zip(hms.split(":"), (3600.0, 60.0, 1.0)))
                for hms in times]
     shift = seconds[0] - math.floor(seconds[0])    # build_log counts from the whole second
-    return [(a + shift, b + shift) for a, b in peer_outages(seconds[0], seconds[-1])]
+    return [(a + shift, b + shift) for a, b in peer_outages(seconds[0], seconds[-1], schedule)]
 
 
 def _value(text: str):
@@ -354,22 +352,55 @@ def _value(text: str):
         return text
 
 
+def _setup(args, parser) -> dict:
+    """The run's IMU preparation, outage schedule, fix sigma gains and parameters over
+    :data:`DRIVE_PARAMETERS`: from ``--config`` when given, else the drive's; the
+    ``--misalign``, ``--time-offset`` and ``--rate`` given over them."""
+    misalign, time_offset, rate = [180.0, -6.79, 185.35], -0.125, 100.0
+    out = {"schedule": PEER_SCHEDULE, "sigma_scale": None, "parameters": {}, "config": None}
+    if args.config is not None:
+        try:
+            out["config"] = cfg = gnss_imu_config.read_config(args.config)
+            misalign, time_offset, rate = gnss_imu_config.imu_preparation(cfg, args.config)
+            out.update(schedule=gnss_imu_config.schedule(cfg, args.config),
+                       sigma_scale=gnss_imu_config.sigma_scale(cfg),
+                       parameters=gnss_imu_config.filter_parameters(cfg, args.config))
+        except gnss_imu_config.ConfigError as exc:
+            parser.error(f"--config: {exc}")
+    if args.misalign is not None:
+        misalign = [float(x) for x in args.misalign.split(",")]
+    return {**out, "misalign": misalign,
+            "time_offset": time_offset if args.time_offset is None else args.time_offset,
+            "rate": rate if args.rate is None else args.rate}
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("drive", type=Path, help="folder with the .pos, imu csv and .tag files")
     p.add_argument("--outages", default=OUTAGES,
-                   help="a:b,... seconds after the first fix, or 'peer': the drive's own "
-                        "schedule (15 s every 45 s from 40 s; scored on its 2nd to last)")
+                   help="a:b,... seconds after the first fix, or 'peer': the peer's own "
+                        "schedule (the drive's, 15 s every 45 s from 40 s, or --config's)")
+    p.add_argument("--scored-from", type=int, default=2, metavar="N",
+                   help="with --outages peer, score its outages from the N-th (default 2: the "
+                        "drive's scoring, outages 2 to 11; 1 scores them all)")
     p.add_argument("--aids", default="",
                    help="land aids to switch on: any of zupt,zaru,nhc (with nhc the drive's "
                         "NHC point, NHC_PARAMETERS; --set over it)")
     p.add_argument("--filters", default=",".join(FILTERS))
     p.add_argument("--set", action="append", default=[], metavar="COMPONENT.NAME=VALUE",
                    help="a parameter over the drive's (repeatable)")
-    p.add_argument("--misalign", default="180,-6.79,185.35",
-                   help="sensor-to-body Euler angles roll,pitch,yaw [deg]")
-    p.add_argument("--time-offset", type=float, default=-0.125, help="[s] added to the IMU times")
-    p.add_argument("--rate", type=float, default=100.0, help="[Hz] the IMU grid")
+    p.add_argument("--config", type=Path, default=None,
+                   help="the peer's configuration of the log (its drive_config.py, "
+                        "walk_config.py): filter parameters, IMU mounting, delay and rate, "
+                        "fix sigma gains and the 'peer' outage schedule from it "
+                        "(benchmarks/gnss_imu_config.py); --set and the options over it")
+    p.add_argument("--misalign", default=None,
+                   help="sensor-to-body Euler angles roll,pitch,yaw [deg] (default: the "
+                        "config's, else the drive's 180,-6.79,185.35)")
+    p.add_argument("--time-offset", type=float, default=None,
+                   help="[s] added to the IMU times (default: the config's, else -0.125)")
+    p.add_argument("--rate", type=float, default=None,
+                   help="[Hz] the IMU grid (default: the config's, else 100)")
     p.add_argument("--imu-start", type=float, default=None,
                    help="[s] UNIX GPST time of the IMU file's first sample (without a .tag "
                    "file: the counter taken as it is)")
@@ -379,22 +410,25 @@ def main(argv=None) -> int:
     p.add_argument("--smooth", action="store_true",
                    help="add each filter's smoothed solution (a row '<filter>-smoothed')")
     args = p.parse_args(argv)
+    setup = _setup(args, p)
     peer = args.outages == "peer"
-    outages = peer_fixes_outages(args.drive) if peer else parse_outages(args.outages)
-    parameters = dict(DRIVE_PARAMETERS)
+    outages = (peer_fixes_outages(args.drive, setup["schedule"]) if peer
+               else parse_outages(args.outages))
+    work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
+    log, first = build_log(args.drive, work, outages, setup["misalign"], setup["time_offset"],
+                           setup["rate"], args.imu_start, setup["sigma_scale"])
+    parameters = {**DRIVE_PARAMETERS, **setup["parameters"]}
+    if setup["config"] is not None:
+        parameters.update(gnss_imu_config.velocity_sigmas(setup["config"], log.gnss))
     for aid in filter(None, args.aids.split(",")):
         if aid not in AIDS:
             p.error(f"--aids: {aid!r} is not one of {', '.join(AIDS)}")
         parameters[f"filter.{aid}"] = True
-        if aid == "nhc":
+        if aid == "nhc" and args.config is None:
             parameters.update(NHC_PARAMETERS)
     for item in args.set:
         key, _, value = item.partition("=")
         parameters[key] = _value(value)
-    work = args.work or Path(tempfile.mkdtemp(prefix="real_drive_"))
-    log, first = build_log(args.drive, work, outages,
-                           [float(x) for x in args.misalign.split(",")], args.time_offset,
-                           args.rate, args.imu_start)
     rows = {}
     runs = [(name, False) for name in args.filters.split(",")]
     if args.smooth:
@@ -406,7 +440,8 @@ def main(argv=None) -> int:
             t, err, std = fix_epoch_errors(run, first)
             rows[label] = {**score(t, err, std, outages), "warnings": said,
                            "residual_corr_time_s": correlation_time(t, err, outages),
-                           **outage_score(t, err, outages[1:] if peer else outages)}
+                           **outage_score(t, err, outages[args.scored_from - 1:] if peer
+                                          else outages)}
         except Exception as exc:  # a filter that stops is a row of the table, not the end
             rows[label] = {"error": str(exc).splitlines()[0][:120]}
         print(label, json.dumps(rows[label]), flush=True)

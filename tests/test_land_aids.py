@@ -164,8 +164,9 @@ def test_an_aid_update_leaves_the_adaptive_laws_alone(car, name):
     H[:, 3:6] = np.eye(3)
     engine.aid_update(H, np.array([0.05, -0.03, 0.01]), np.eye(3) * 1e-4)
     after = capture(engine)
+    # blind_P: the covariance without the aids since the last fix (navcore.filters.aid_blind)
     moved = {"nav", "P", "gyro_bias", "accel_bias", "phi_acc", "q_acc", "n_updates", "ukf",
-             "bank", "history"}
+             "bank", "history", "blind_P"}
     stored = list(engine.history._values) if name == "NewtonRobustKf" else None
     lat, lon, h, v = engine.nav.lat, engine.nav.lon, engine.nav.h, engine.nav.v_ned.copy()
     assert before["nav"] != after["nav"]
@@ -183,6 +184,37 @@ def test_an_aid_update_leaves_the_adaptive_laws_alone(car, name):
         assert len(shifted) == len(stored) > 0
         for new_z, old_z in zip(shifted, stored):
             assert np.allclose(new_z, old_z - dr, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ("NewtonRobustKf", "Igg3RobustKf"))
+def test_an_aid_never_makes_a_robust_law_reject_a_fix(car, name):
+    """After 10 s of the car at rest (millimetre fixes from then on), a pseudo-measurement of
+    the position at 0.1 mm shrinks P; a fix whose position is 2 sigma off for the filter
+    without it (per component: chi2 = 4 < 6.635, an IGG-III u = 2 in the down-weighted band,
+    not the rejected one) is more than 10 sigma off for the aided covariance, which would
+    reject it, and is kept with the aid-blind test, which sees the covariance of the fixes
+    alone; the update itself uses the aided P (the two runs differ), and after the fix the
+    test's covariance is the filter's own again."""
+    sensors = car[0]
+    run = run_filter(sensors, registry()[name], overrides={**FILTER_START, **DETECTOR},
+                     stop_row=int(round(10.0 / sensors.h)))
+    plain = run.component.engine
+    plain.R0 = np.eye(plain.m) * 1e-6              # millimetre fixes: P dominates S
+    aided = copy.deepcopy(plain)
+    H = np.zeros((3, N_STATES))
+    H[:, 0:3] = np.eye(3)
+    aided.aid_update(H, np.zeros(3), np.eye(3) * 1e-8)
+    _, S = plain.predicted_innovation()
+    z = np.zeros(plain.m)
+    z[:3] = 2.0 * np.sqrt(np.diag(S)[:3])          # position 2 sigma off, velocity exact
+    _, S_aided = aided.predicted_innovation()
+    assert np.all(z[:3] / np.sqrt(np.diag(S_aided)[:3]) > 10.0)  # the aided P would reject
+    assert aided.blind_P is not None
+    for engine in (plain, aided):
+        engine.update(z)
+        assert int(engine.n_rejected) == 0, name
+    assert aided.blind_P is None
+    assert not np.allclose(aided.P, plain.P)
 
 
 # -- the real drive's first seconds at rest --------------------------------------------

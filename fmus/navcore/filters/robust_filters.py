@@ -19,6 +19,7 @@ from . import robust_laws
 from ..ins.error_model import N_STATES
 from ..errors import InputError
 from .adaptive_filters import RowUpdates, _require_finite, masked_update
+from .aid_blind import AidBlindTest
 from .innovation_stats import chi_square_per_observation, nis, nis_rows
 from .ins_gnss_kf import KfEngine, UpdateResult, kalman_rows
 from .recovery import GuardedEngine, inflate_navigation
@@ -32,7 +33,7 @@ UNUSABLE_VARIANCE_FACTOR = 1e6
 REPLACEMENT_VARIANCES = ("propagated", "nominal")
 
 
-class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
+class NewtonRobustKfEngine(RowUpdates, AidBlindTest, GuardedEngine, KfEngine):
     """Paper 004: per-observation chi-square test + Newton extrapolation of failed observations.
 
     Each update:
@@ -78,6 +79,9 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
     faults or an outage) is re-acquired: the prediction is inflated until its innovation is
     consistent, the test runs again on it and the component is taken as measured.
 
+    With land aids the test of step 2 uses the covariance without the aids' updates since the
+    last fix (:mod:`navcore.filters.aid_blind`): an aid never makes a fix fail it.
+
     After an update: ``chi2_values`` (m,), ``chi2_max``, ``rejected`` (bool mask),
     ``n_rejected``.
     """
@@ -91,6 +95,7 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
                  recovery, recovery_epochs):
         super().__init__(config, nav)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
+        self.init_blind()
         self.chi2_threshold = float(chi2_threshold)
         self.newton_order = int(newton_order)
         self.replacement_variance = replacement_variance
@@ -163,10 +168,11 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
         R = np.array([engine.R0 for engine in engines])
         S = P_pred[:, :m, :m] + R
         _require_finite(("innovation", z), ("S", S), show_values=False)
-        s = np.diagonal(S, axis1=1, axis2=2)
+        s = np.array([np.diag(engine.tested_prediction(P_pred[b])[:m, :m]) for b, engine in
+                      enumerate(engines)]) + np.diagonal(R, axis1=1, axis2=2)
         if np.any(s <= 0.0):
             raise InputError(f"S: diagonal must be > 0, got {s[(s <= 0.0).any(axis=1)][0]}")
-        chi2 = z * z / s                        # chi_square_per_observation of every run
+        chi2 = z * z / s            # chi_square_per_observation of every run (aid_blind's S)
         faults = chi2 > np.array([engine.chi2_threshold for engine in engines])[:, None]
         outcome = dict(z=z, P_pred=P_pred, S=S, chi2=chi2, faults=faults, R=R, z_used=z,
                        variance_used=np.diagonal(R, axis1=1, axis2=2).copy(),
@@ -244,6 +250,7 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
         while len(self.sample_variances) > len(self.history):
             self.sample_variances.popleft()
         self.apply(outcome["dx"][b], outcome["P"][b])
+        self.fix_taken()
         guard.close_epoch(~faults)
         self.history.apply_correction(outcome["shift"][b])
         chi2 = outcome["chi2"][b]
@@ -256,7 +263,7 @@ class NewtonRobustKfEngine(RowUpdates, GuardedEngine, KfEngine):
 
 
 # ------------------------------------------------------------------------------------------
-class Igg3RobustKfEngine(GuardedEngine, KfEngine):
+class Igg3RobustKfEngine(AidBlindTest, GuardedEngine, KfEngine):
     """IGG-III equivalent-weight robust filter (the "等价权函数法" of paper 004 sec. 1.2).
 
     Per component, the standardized innovation ``u_i = v_i / sqrt(S_ii)`` with
@@ -271,6 +278,9 @@ class Igg3RobustKfEngine(GuardedEngine, KfEngine):
     re-acquired: the prediction is inflated until its innovation is consistent, the weights
     are computed again on it and the component keeps at least full weight.
 
+    With land aids the weights come from the covariance without the aids' updates since the
+    last fix (:mod:`navcore.filters.aid_blind`): an aid never down-weights a fix.
+
     After an update: ``weights`` (m,), ``n_rejected`` (components with w = 0).
     """
 
@@ -280,6 +290,7 @@ class Igg3RobustKfEngine(GuardedEngine, KfEngine):
     def __init__(self, config, nav, *, igg_k0, igg_k1, recovery, recovery_epochs):
         super().__init__(config, nav)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
+        self.init_blind()
         self.igg_k0 = float(igg_k0)
         self.igg_k1 = float(igg_k1)
         self.weights = np.ones(self.m)
@@ -289,7 +300,8 @@ class Igg3RobustKfEngine(GuardedEngine, KfEngine):
         """IGG-III weighted update; see the class docstring."""
         z = np.asarray(z, dtype=float)
         P_pred, S = self.predicted_innovation()
-        u = z / np.sqrt(np.diag(S))
+        tested = self.tested_prediction(P_pred)
+        u = z / np.sqrt(np.diag(tested)[:self.m] + np.diag(self.R0))
         w = robust_laws.igg3_weight(u, self.igg_k0, self.igg_k1)
         self.guard.open_epoch()
         due = self.guard.due(w == 0.0)
@@ -308,6 +320,7 @@ class Igg3RobustKfEngine(GuardedEngine, KfEngine):
         else:
             dx, P = masked_update(P_pred, z, R, keep)
         self.apply(dx, P)
+        self.fix_taken()
         self.guard.close_epoch(keep)
         self.weights = w
         self.n_rejected = int((~keep).sum())
