@@ -7,6 +7,12 @@ filter; it only keeps what the backward pass needs) under the direct backend, an
 session for the smoothed solution afterwards.  The master knows nothing of the recording:
 it runs a component class from a registry, as always.
 
+A replayed log's IMU may be stamped late against the GNSS clock (a logger's latency): the
+session then synchronizes (:meth:`SmoothingSession.synchronize`, after the first run): it
+estimates the offset from the IMU and the fixes that run saw
+(:mod:`navcore.filters.imu_time_offset`) and, when it matters, asks for the run again with
+the fixes on the IMU's clock; the smoothed solution is then read back on the GNSS clock.
+
 Supported: :data:`SMOOTHABLE` (the filters whose forward covariances are the model's own:
 ``Kf``).  The adaptive and robust filters rescale P, Q or R inside their updates (fading
 memory, Sage-Husa, robust weights), so the transitions and noise the smoother rebuilds
@@ -18,7 +24,8 @@ import numpy as np
 
 from ..errors import NavcoreError
 from ..filters.ins_gnss_kf import KfEngine
-from ..filters.rts_smoother import KfRecording, smooth
+from ..filters import imu_time_offset
+from ..filters.rts_smoother import GrowingRows, KfRecording, smooth
 from .kf_components import Kf
 
 #: filter model name -> its component class, the filters the smoother supports
@@ -61,6 +68,14 @@ def _recording_class(base, session):
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
             session.recordings.append(self)
+            self.clock_inputs = ClockInputs()
+
+        def step(self, t, h, inputs):
+            if session.time_offset:          # the fixes on the IMU's clock
+                inputs = {**inputs, "gnss_time": inputs["gnss_time"] + session.time_offset}
+            else:
+                self.clock_inputs.take(inputs)
+            return super().step(t, h, inputs)
 
         def _begin_recording(self):
             cfg = self.engine.config
@@ -109,9 +124,43 @@ def _recording_class(base, session):
     return Recording
 
 
+class ClockInputs:
+    """The IMU intervals and the valid fixes a run's filter received, as they came: what
+    :func:`navcore.filters.imu_time_offset.estimate` compares."""
+
+    def __init__(self):
+        self.imu = GrowingRows(8)         # imu_time, imu_dt, dtheta x/y/z, dvel x/y/z
+        self.fixes = GrowingRows(3)       # gnss_time, lat, lon
+        self.last_epoch = None
+
+    def take(self, inputs):
+        """The inputs of one step: a new IMU interval, a new valid fix."""
+        imu = self.imu
+        if inputs["imu_dt"] > 0 and (imu.n == 0 or inputs["imu_time"] > imu.rows[-1, 0]):
+            imu.append(inputs["imu_time"], inputs["imu_dt"],
+                       *(inputs[f"imu_dtheta_{a}"] for a in "xyz"),
+                       *(inputs[f"imu_dvel_{a}"] for a in "xyz"))
+        epoch = inputs["gnss_epoch"]
+        if epoch != self.last_epoch:
+            self.last_epoch = epoch
+            if inputs["gnss_valid"] and np.isfinite(inputs["gnss_time"]):
+                self.fixes.append(inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"])
+
+    def estimate(self):
+        """The IMU's time offset (:class:`navcore.filters.imu_time_offset.TimeOffset`)."""
+        i, f = self.imu.rows, self.fixes.rows
+        return imu_time_offset.estimate(i[:, 0], i[:, 1], i[:, 2:5], i[:, 5:8], f[:, 0],
+                                        f[:, 1], f[:, 2])
+
+    def imu_interval(self):
+        """[s] the median IMU interval received."""
+        return float(np.median(self.imu.rows[:, 1])) if self.imu.n else 0.0
+
+
 class SmoothingSession:
-    """One smoothed run of filter ``model_name``: :attr:`component_class` to run (direct
-    backend), then :meth:`solution`."""
+    """One smoothed run of filter ``model_name``: run :attr:`component_class` (direct
+    backend); then, with ``synchronize``, :meth:`synchronize` and, when it says so, the
+    run again; then :meth:`solution`."""
 
     def __init__(self, model_name: str):
         if model_name not in SMOOTHABLE:
@@ -119,19 +168,40 @@ class SmoothingSession:
                                f"not {model_name} (its updates rescale P, Q or R, or it has "
                                "no transition matrix): run it without smoothing")
         self.recordings = []
+        self.time_offset = 0.0           # [s] the IMU's stamps less the GNSS time
+        self.clock = None                # the estimate (TimeOffset) once synchronized
         self.component_class = _recording_class(SMOOTHABLE[model_name], self)
 
-    def solution(self):
-        """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`),
-        with ``recording_bytes``: the memory the recording held."""
+    def _started(self):
         started = [c for c in self.recordings if getattr(c, "recording", None) is not None]
         if not started:
             raise NavcoreError("the filter never started (init_mode: no initial state from the "
                                "data): nothing to smooth")
-        rec = started[-1].recording
+        return started[-1]
+
+    def synchronize(self) -> bool:
+        """After the first run: estimate the IMU's time offset from the inputs its filter
+        received (:mod:`navcore.filters.imu_time_offset`).  True when the offset applies
+        (at least half an IMU interval): run again, the fixes then go to the filter on the
+        IMU's clock and :meth:`solution` reads the smoothed solution on the GNSS clock."""
+        first = self._started()
+        self.clock = first.clock_inputs.estimate()
+        if not self.clock.applies(first.clock_inputs.imu_interval()):
+            return False
+        self.time_offset = self.clock.tau
+        self.recordings = []
+        return True
+
+    def solution(self):
+        """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`; on
+        the GNSS clock after a synchronized run), with ``recording_bytes``: the memory the
+        recording held."""
+        rec = self._started().recording
         out = smooth(rec)
+        if self.time_offset:
+            out = imu_time_offset.on_gnss_clock(out, self.time_offset)
         out["recording_bytes"] = rec.nbytes
         return out
 
 
-__all__ = ["SMOOTHABLE", "SmoothingSession"]
+__all__ = ["SMOOTHABLE", "ClockInputs", "SmoothingSession"]
