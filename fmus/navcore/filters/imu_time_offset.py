@@ -23,11 +23,11 @@ systems", IROS, is started from the correlation of the angular rates):
   at least :data:`MIN_SPEED` (a wheeled vehicle's course is its heading, a walker's on
   average);
 
-both turned into a rate by the same central difference over the fixes ``k - 1`` and
-``k + 1``::
+both turned into a rate by the same central difference over the fixes ``k - m`` and
+``k + m`` (``m`` fixes make half of :data:`RATE_SPAN`, at least one)::
 
-    r_gnss(k)      = (chi_{k+1} - chi_{k-1}) / (t_{k+1} - t_{k-1})
-    r_imu(k, lag)  = (psi(t_{k+1} + lag) - psi(t_{k-1} + lag)) / (t_{k+1} - t_{k-1})
+    r_gnss(k)      = (chi_{k+m} - chi_{k-m}) / (t_{k+m} - t_{k-m})
+    r_imu(k, lag)  = (psi(t_{k+m} + lag) - psi(t_{k-m} + lag)) / (t_{k+m} - t_{k-m})
     tau            = argmax over lag of corr(r_imu(., lag), r_gnss)        (Pearson)
 
 (a symmetric difference on both keeps the lag of the peak unbiased).  The lag is searched
@@ -53,6 +53,9 @@ from ..ins import earth
 MIN_SPEED = 1.0
 #: [s] the largest offset searched, either sign
 MAX_OFFSET = 1.0
+#: [s] the span of the central difference that makes the course a rate (the fixes'
+#: noise, differentiated twice, averaged; a turn lasts several seconds)
+RATE_SPAN = 1.0
 #: [s] the window of the specific force averaged for the vertical
 GRAVITY_WINDOW = 1.0
 #: the fewest fix epochs with a course rate
@@ -60,7 +63,7 @@ MIN_EPOCHS = 40
 #: [rad/s] the smallest RMS course rate (a run without turns carries no offset)
 MIN_TURN_RATE = math.radians(2.0)
 #: the smallest peak correlation taken
-MIN_CORRELATION = 0.8
+MIN_CORRELATION = 0.5
 #: the solution's columns that are angles (interpolated unwrapped)
 ANGLES = ("roll", "pitch", "yaw")
 
@@ -97,28 +100,30 @@ def imu_heading(time, dt, dtheta, dvel):
 
 
 def course_rates(time, lat, lon):
-    """(indices k, rates r_gnss(k)) of the fixes at ``time`` (sorted, valid ones only) with
-    a course rate: both neighbours' velocities defined in one stretch of consecutive fixes
-    (no gap over 1.5 intervals) and the speed there at least :data:`MIN_SPEED`."""
+    """(indices k, half-span m, rates r_gnss(k)) of the fixes at ``time`` (sorted, valid
+    ones only) with a course rate over ``k - m .. k + m`` (:data:`RATE_SPAN`): every
+    velocity from ``k - m`` to ``k + m`` defined in one stretch of consecutive fixes (no gap
+    over 1.5 intervals) with a speed of at least :data:`MIN_SPEED`."""
     t = np.asarray(time, dtype=float)
+    n = len(t)
+    if n < 5:
+        return np.zeros(0, dtype=int), 1, np.zeros(0)
     rn, re = earth.radii(float(lat[0]))
     p = np.column_stack([(np.asarray(lat) - lat[0]) * rn,
                          (np.asarray(lon) - lon[0]) * re * math.cos(float(lat[0]))])
-    n = len(t)
-    if n < 5:
-        return np.zeros(0, dtype=int), np.zeros(0)
     gap = np.diff(t)
-    joined = gap <= 1.5 * float(np.median(gap))           # fix j and j + 1 in one stretch
+    interval = float(np.median(gap))
+    m = max(1, int(round(0.5 * RATE_SPAN / interval)))
+    joined = gap <= 1.5 * interval                          # fix j and j + 1 in one stretch
     v = np.full((n, 2), np.nan)
     mid = joined[:-1] & joined[1:]                          # j - 1, j, j + 1 joined
     v[1:-1][mid] = ((p[2:] - p[:-2]) / (t[2:] - t[:-2])[:, None])[mid]
     course = np.arctan2(v[:, 1], v[:, 0])
     fast = np.hypot(v[:, 0], v[:, 1]) >= MIN_SPEED          # False for NaN
-    k = np.arange(2, n - 2)
-    ok = fast[k - 1] & fast[k + 1] & fast[k]
-    k = k[ok]
-    turn = np.angle(np.exp(1j * (course[k + 1] - course[k - 1])))
-    return k, turn / (t[k + 1] - t[k - 1])
+    window = np.lib.stride_tricks.sliding_window_view(fast, 2 * m + 1).all(axis=1)
+    k = np.flatnonzero(window) + m
+    turn = np.angle(np.exp(1j * (course[k + m] - course[k - m])))
+    return k, m, turn / (t[k + m] - t[k - m])
 
 
 def _correlations(nodes, psi, t_minus, t_plus, r_gnss, lags):
@@ -152,8 +157,8 @@ def estimate(imu_time, imu_dt, dtheta, dvel, fix_time, fix_lat, fix_lon) -> Time
         return TimeOffset(0.0, math.nan, 0, "too few IMU intervals or fixes")
     nodes, psi = imu_heading(np.asarray(imu_time, float), imu_dt, dtheta, dvel)
     ft = np.asarray(fix_time, dtype=float)
-    k, r_gnss = course_rates(ft, fix_lat, fix_lon)
-    inside = (ft[k - 1] - MAX_OFFSET >= nodes[0]) & (ft[k + 1] + MAX_OFFSET <= nodes[-1])
+    k, m, r_gnss = course_rates(ft, fix_lat, fix_lon)
+    inside = (ft[k - m] - MAX_OFFSET >= nodes[0]) & (ft[k + m] + MAX_OFFSET <= nodes[-1])
     k, r_gnss = k[inside], r_gnss[inside]
     if len(k) < MIN_EPOCHS:
         return TimeOffset(0.0, math.nan, len(k), f"{len(k)} fix epochs while moving "
@@ -162,7 +167,7 @@ def estimate(imu_time, imu_dt, dtheta, dvel, fix_time, fix_lat, fix_lon) -> Time
     if rms < MIN_TURN_RATE:
         return TimeOffset(0.0, math.nan, len(k), f"RMS course rate {math.degrees(rms):.2g} "
                           f"deg/s (at least {math.degrees(MIN_TURN_RATE):.2g}): no turns")
-    t_minus, t_plus = ft[k - 1], ft[k + 1]
+    t_minus, t_plus = ft[k - m], ft[k + m]
     coarse = np.linspace(-MAX_OFFSET, MAX_OFFSET, int(round(2 * MAX_OFFSET / 0.01)) + 1)
     c = _correlations(nodes, psi, t_minus, t_plus, r_gnss, coarse)
     best = float(coarse[int(np.nanargmax(c))])
