@@ -7,7 +7,8 @@ laid on the run's rows (the row whose filter ``nav_time`` is the epoch) as the o
 filter component of the same name, so the metrics, files and plots treat it as one more
 filter, labelled ``<filter>-smoothed``.  When the IMU's time offset to the GNSS clock
 applies (the session's estimate after that run), the scenario runs once more with the fixes
-on the IMU's clock, and the smoothed solution of that run is laid on its rows.
+on the IMU's clock, and the smoothed solution of the run whose fixes fit better is laid on
+its rows.
 """
 from __future__ import annotations
 
@@ -41,8 +42,8 @@ def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.
 
     ``synchronize``: estimate the IMU's time offset to the GNSS clock from the first run
     (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`) and, when it
-    applies, smooth a second run with the fixes on the IMU's clock (only that run's
-    warnings are raised)."""
+    applies, run again with the fixes on the IMU's clock, and smooth that run when its
+    fixes fit better, else the first (only the warnings of the run smoothed are raised)."""
     from navcore.components.smoothing import SmoothingSession
 
     label = scenarios.filter_label(model, filter)
@@ -54,14 +55,13 @@ def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.
                                            components={label: session.component_class},
                                            **simulate)
 
-    with warnings.catch_warnings(record=True) as said:
-        warnings.simplefilter("always")
-        run = recorded_run()
+    run, said = _quietly(recorded_run)
     if synchronize and session.synchronize():
-        run = recorded_run()
-    else:
-        for w in said:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        second, said_second = _quietly(recorded_run)
+        if session.keeps_synchronization():
+            run, said = second, said_second
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     solution = session.solution()
     results = smoothed_results(run.results, solution)
     smoothed = scenarios.measured_run(label + SMOOTHED_SUFFIX, run.model, results, window,
@@ -70,13 +70,22 @@ def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.
         "method": "Rauch-Tung-Striebel (error state, closed-loop corrections)",
         "epochs": int(len(solution["time"])),
         "recording_mb": round(solution["recording_bytes"] / 1e6, 2),
-        **clock_metadata(session.clock, session.time_offset)}
+        **clock_metadata(session.clock, session.time_offset, session.fits)}
     return scenarios.report_inconsistency(smoothed)
 
 
-def clock_metadata(clock, applied) -> dict:
+def _quietly(run):
+    """(``run()``, the warnings it raised, held back)."""
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        return run(), list(said)
+
+
+def clock_metadata(clock, applied, fits=None) -> dict:
     """The synchronization's entries of the smoothed run's metadata: the IMU time offset
-    applied [s], and the estimate's correlation, epochs and reason it was not taken."""
+    applied [s], the estimate's correlation, epochs and reason it was not taken, and the
+    fixes' fit (mean negative log-likelihood per fix) of the run on the IMU's clock and of
+    the run with the estimate, when both ran."""
     if clock is None:
         return {}
     out = {"imu_time_offset_s": round(float(applied), 4),
@@ -86,6 +95,8 @@ def clock_metadata(clock, applied) -> dict:
            "imu_time_offset_epochs": int(clock.epochs)}
     if clock.reason:
         out["imu_time_offset_not_estimated"] = clock.reason
+    if fits is not None:
+        out["imu_time_offset_fit_per_fix"] = [round(float(f), 3) for f in fits]
     return out
 
 

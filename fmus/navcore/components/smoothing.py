@@ -11,7 +11,8 @@ A replayed log's IMU may be stamped late against the GNSS clock (a logger's late
 session then synchronizes (:meth:`SmoothingSession.synchronize`, after the first run): it
 estimates the offset from the IMU and the fixes that run saw
 (:mod:`navcore.filters.imu_time_offset`) and, when it matters, asks for the run again with
-the fixes on the IMU's clock; the smoothed solution is then read back on the GNSS clock.
+the fixes on the IMU's clock, and keeps that run when its fixes fit the filter better; the
+smoothed solution is then read back on the GNSS clock.
 
 Supported: :data:`SMOOTHABLE` (the filters whose forward covariances are the model's own:
 ``Kf``).  The adaptive and robust filters rescale P, Q or R inside their updates (fading
@@ -25,7 +26,8 @@ import numpy as np
 from ..errors import NavcoreError
 from ..filters.ins_gnss_kf import KfEngine
 from ..filters import imu_time_offset
-from ..filters.rts_smoother import GrowingRows, KfRecording, smooth
+from ..filters.rts_smoother import KfRecording, smooth
+from .smoothing_clock import ClockInputs, FixFit
 from .kf_components import Kf
 
 #: filter model name -> its component class, the filters the smoother supports
@@ -69,6 +71,7 @@ def _recording_class(base, session):
             super().__init__(*args, **kwargs)
             session.recordings.append(self)
             self.clock_inputs = ClockInputs()
+            self.fit = FixFit()
 
         def step(self, t, h, inputs):
             if session.time_offset:          # the fixes on the IMU's clock
@@ -119,48 +122,19 @@ def _recording_class(base, session):
             self.recording.truncate_after(self.nav_time)     # a fix applied in the past
             super()._apply(fix)
 
+        def _applied(self, z, result):
+            super()._applied(z, result)
+            self.fit.add(result)
+
     Recording.__name__ = Recording.__qualname__ = base.__name__
     Recording.model_name = base.model_name
     return Recording
 
 
-class ClockInputs:
-    """The IMU intervals and the valid fixes a run's filter received, as they came: what
-    :func:`navcore.filters.imu_time_offset.estimate` compares."""
-
-    def __init__(self):
-        self.imu = GrowingRows(8)         # imu_time, imu_dt, dtheta x/y/z, dvel x/y/z
-        self.fixes = GrowingRows(3)       # gnss_time, lat, lon
-        self.last_epoch = None
-
-    def take(self, inputs):
-        """The inputs of one step: a new IMU interval, a new valid fix."""
-        imu = self.imu
-        if inputs["imu_dt"] > 0 and (imu.n == 0 or inputs["imu_time"] > imu.rows[-1, 0]):
-            imu.append(inputs["imu_time"], inputs["imu_dt"],
-                       *(inputs[f"imu_dtheta_{a}"] for a in "xyz"),
-                       *(inputs[f"imu_dvel_{a}"] for a in "xyz"))
-        epoch = inputs["gnss_epoch"]
-        if epoch != self.last_epoch:
-            self.last_epoch = epoch
-            if inputs["gnss_valid"] and np.isfinite(inputs["gnss_time"]):
-                self.fixes.append(inputs["gnss_time"], inputs["gnss_lat"], inputs["gnss_lon"])
-
-    def estimate(self):
-        """The IMU's time offset (:class:`navcore.filters.imu_time_offset.TimeOffset`)."""
-        i, f = self.imu.rows, self.fixes.rows
-        return imu_time_offset.estimate(i[:, 0], i[:, 1], i[:, 2:5], i[:, 5:8], f[:, 0],
-                                        f[:, 1], f[:, 2])
-
-    def imu_interval(self):
-        """[s] the median IMU interval received."""
-        return float(np.median(self.imu.rows[:, 1])) if self.imu.n else 0.0
-
-
 class SmoothingSession:
     """One smoothed run of filter ``model_name``: run :attr:`component_class` (direct
-    backend); then, with ``synchronize``, :meth:`synchronize` and, when it says so, the
-    run again; then :meth:`solution`."""
+    backend); then, to synchronize the IMU's clock, :meth:`synchronize` and, when it says
+    so, the run again and :meth:`keeps_synchronization`; then :meth:`solution`."""
 
     def __init__(self, model_name: str):
         if model_name not in SMOOTHABLE:
@@ -170,6 +144,8 @@ class SmoothingSession:
         self.recordings = []
         self.time_offset = 0.0           # [s] the IMU's stamps less the GNSS time
         self.clock = None                # the estimate (TimeOffset) once synchronized
+        self.fits = None                 # (first run's, second run's) FixFit.mean
+        self._first = None               # the first run's component during the second
         self.component_class = _recording_class(SMOOTHABLE[model_name], self)
 
     def _started(self):
@@ -182,15 +158,28 @@ class SmoothingSession:
     def synchronize(self) -> bool:
         """After the first run: estimate the IMU's time offset from the inputs its filter
         received (:mod:`navcore.filters.imu_time_offset`).  True when the offset applies
-        (at least half an IMU interval): run again, the fixes then go to the filter on the
-        IMU's clock and :meth:`solution` reads the smoothed solution on the GNSS clock."""
+        (at least half an IMU interval): run again (the fixes then go to the filter on the
+        IMU's clock), then :meth:`keeps_synchronization`."""
         first = self._started()
         self.clock = first.clock_inputs.estimate()
         if not self.clock.applies(first.clock_inputs.imu_interval()):
             return False
-        self.time_offset = self.clock.tau
-        self.recordings = []
+        self._first, self.time_offset, self.recordings = first, self.clock.tau, []
         return True
+
+    def keeps_synchronization(self) -> bool:
+        """After the second run: whether its fixes fit its filter better than the first
+        run's fit theirs (:class:`navcore.components.smoothing_clock.FixFit`: the mean
+        negative log-likelihood of the innovations, the likelihood ratio of "late by the
+        estimate" against "on time").  If not, the session goes back to the first run (its
+        recording, no offset) and says False: the estimate read a lag that is not the
+        clock's (a walker's heading leads the course)."""
+        second = self._started()
+        self.fits = (self._first.fit.mean(), second.fit.mean())
+        if self.fits[1] < self.fits[0]:
+            return True
+        self.time_offset, self.recordings = 0.0, [self._first]
+        return False
 
     def solution(self):
         """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`; on
@@ -204,4 +193,4 @@ class SmoothingSession:
         return out
 
 
-__all__ = ["SMOOTHABLE", "ClockInputs", "SmoothingSession"]
+__all__ = ["SMOOTHABLE", "SmoothingSession"]
