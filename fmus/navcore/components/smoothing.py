@@ -70,8 +70,6 @@ def _recording_class(base, session):
         def __init__(self, *args, **kwargs):
             super().__init__(*args, **kwargs)
             session.recordings.append(self)
-            self.clock_inputs = ClockInputs()
-            self.fit = FixFit()
 
         def step(self, t, h, inputs):
             if session.time_offset:          # the fixes on the IMU's clock
@@ -95,6 +93,8 @@ def _recording_class(base, session):
 
         def initialize(self, start_time):
             self.recording = None
+            self.clock_inputs = ClockInputs()        # what synchronize() compares
+            self.fit = FixFit()                      # what keeps_synchronization() compares
             out = super().initialize(start_time)
             if self.initializer.done:
                 self._begin_recording()
