@@ -197,12 +197,13 @@ def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
 
 
 # -- the runs ---------------------------------------------------------------------------
-def run_filter(log_dir: Path, name: str, parameters, smooth=False):
+def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=True):
     """One replay of ``log_dir`` through filter ``name`` (its smoothed solution with
-    ``smooth``, :mod:`orchestrator.running.smoothing`): (run, the warnings it raised)."""
+    ``smooth``, :mod:`orchestrator.running.smoothing`, the IMU's clock synchronized with
+    ``synchronize``): (run, the warnings it raised)."""
     model = scenarios.load_scenario(ROOT / "models" / "replay_gnss_ins_sim")
-    simulate = smoothing.smoothed_run if smooth else partial(scenarios.simulate_scenario,
-                                                             backend="direct")
+    simulate = (partial(smoothing.smoothed_run, synchronize=synchronize) if smooth
+                else partial(scenarios.simulate_scenario, backend="direct"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         run = simulate(model, filter=name, log=None, replay=log_dir, parameters=parameters)
@@ -409,6 +410,8 @@ def main(argv=None) -> int:
     p.add_argument("--json", type=Path, default=None, help="write the numbers here too")
     p.add_argument("--smooth", action="store_true",
                    help="add each filter's smoothed solution (a row '<filter>-smoothed')")
+    p.add_argument("--no-sync", action="store_true",
+                   help="smooth without estimating the IMU's time offset to the GNSS clock")
     args = p.parse_args(argv)
     setup = _setup(args, p)
     peer = args.outages == "peer"
@@ -436,9 +439,11 @@ def main(argv=None) -> int:
     for name, smooth in runs:
         label = name + smoothing.SMOOTHED_SUFFIX if smooth else name
         try:
-            run, said = run_filter(work / "log", name, parameters, smooth)
+            run, said = run_filter(work / "log", name, parameters, smooth, not args.no_sync)
             t, err, std = fix_epoch_errors(run, first)
+            clock = run.results.metadata.get("smoother", {}).get("imu_time_offset_s")
             rows[label] = {**score(t, err, std, outages), "warnings": said,
+                           **({"imu_time_offset_s": clock} if clock is not None else {}),
                            "residual_corr_time_s": correlation_time(t, err, outages),
                            **outage_score(t, err, outages[args.scored_from - 1:] if peer
                                           else outages)}

@@ -81,6 +81,10 @@ def test_the_smoother_on_the_real_car_at_rest(drive_log):
     assert rms_forward > 0.1
     assert rms_smoothed < 0.05 and rms_smoothed < 0.2 * rms_forward, (rms_smoothed,
                                                                       rms_forward)
+    # at rest the IMU's clock cannot be matched to the fixes' course: no second run
+    meta = smoothed.results.metadata["smoother"]
+    assert meta["imu_time_offset_s"] == 0.0
+    assert "while moving" in meta["imu_time_offset_not_estimated"], meta
 
 
 def test_the_detector_finds_the_car_at_rest(drive_log):

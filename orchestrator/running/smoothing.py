@@ -5,9 +5,14 @@ run once more under the direct backend with the filter's recording class from th
 facade, which then gives the smoothed solution at every IMU epoch.  Here that solution is
 laid on the run's rows (the row whose filter ``nav_time`` is the epoch) as the outputs of a
 filter component of the same name, so the metrics, files and plots treat it as one more
-filter, labelled ``<filter>-smoothed``.
+filter, labelled ``<filter>-smoothed``.  When the IMU's time offset to the GNSS clock
+applies (the session's estimate after that run), the scenario runs once more with the fixes
+on the IMU's clock, and the smoothed solution of the run whose fixes fit better is laid on
+its rows.
 """
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -29,18 +34,34 @@ def check_smoothable(model, filter=None) -> None:
     SmoothingSession(scenarios.filter_label(model, filter))
 
 
-def smoothed_run(model, filter=None, **simulate) -> scenarios.Run:
+def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.Run:
     """The smoothed run of ``model`` with ``filter`` (None: the model's own): the keyword
     arguments of :func:`orchestrator.running.scenarios.simulate_scenario` but the backend,
     which is the direct one.  Refused, before running, for a filter the smoother does not
-    support; the run's own warnings are raised as they are for the real-time run."""
+    support; the run's own warnings are raised as they are for the real-time run.
+
+    ``synchronize``: estimate the IMU's time offset to the GNSS clock from the first run
+    (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`) and, when it
+    applies, run again with the fixes on the IMU's clock, and smooth that run when its
+    fixes fit better, else the first (only the warnings of the run smoothed are raised)."""
     from navcore.components.smoothing import SmoothingSession
 
     label = scenarios.filter_label(model, filter)
     session = SmoothingSession(label)
     window = simulate.pop("window", None)
-    run = scenarios.simulate_scenario(model, filter=filter, backend="direct",
-                                      components={label: session.component_class}, **simulate)
+
+    def recorded_run():
+        return scenarios.simulate_scenario(model, filter=filter, backend="direct",
+                                           components={label: session.component_class},
+                                           **simulate)
+
+    run, said = _quietly(recorded_run)
+    if synchronize and session.synchronize():
+        second, said_second = _quietly(recorded_run)
+        if session.keeps_synchronization():
+            run, said = second, said_second
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     solution = session.solution()
     results = smoothed_results(run.results, solution)
     smoothed = scenarios.measured_run(label + SMOOTHED_SUFFIX, run.model, results, window,
@@ -48,8 +69,35 @@ def smoothed_run(model, filter=None, **simulate) -> scenarios.Run:
     smoothed.results.metadata["smoother"] = {
         "method": "Rauch-Tung-Striebel (error state, closed-loop corrections)",
         "epochs": int(len(solution["time"])),
-        "recording_mb": round(solution["recording_bytes"] / 1e6, 2)}
+        "recording_mb": round(solution["recording_bytes"] / 1e6, 2),
+        **clock_metadata(session.clock, session.time_offset, session.fits)}
     return scenarios.report_inconsistency(smoothed)
+
+
+def _quietly(run):
+    """(``run()``, the warnings it raised, held back)."""
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        return run(), list(said)
+
+
+def clock_metadata(clock, applied, fits=None) -> dict:
+    """The synchronization's entries of the smoothed run's metadata: the IMU time offset
+    applied [s], the estimate's correlation, epochs and reason it was not taken, and the
+    fixes' fit (mean negative log-likelihood per fix) of the run on the IMU's clock and of
+    the run with the estimate, when both ran."""
+    if clock is None:
+        return {}
+    out = {"imu_time_offset_s": round(float(applied), 4),
+           "imu_time_offset_estimate_s": round(float(clock.tau), 4),
+           "imu_time_offset_correlation": (None if clock.correlation != clock.correlation
+                                           else round(float(clock.correlation), 4)),
+           "imu_time_offset_epochs": int(clock.epochs)}
+    if clock.reason:
+        out["imu_time_offset_not_estimated"] = clock.reason
+    if fits is not None:
+        out["imu_time_offset_fit_per_fix"] = [round(float(f), 3) for f in fits]
+    return out
 
 
 def smoothed_results(results: Results, solution) -> Results:
@@ -83,4 +131,5 @@ def smoothed_results(results: Results, solution) -> Results:
     return Results(results.time, data, cols, unit_map, metadata=dict(results.metadata))
 
 
-__all__ = ["SMOOTHED_SUFFIX", "check_smoothable", "smoothed_results", "smoothed_run"]
+__all__ = ["SMOOTHED_SUFFIX", "check_smoothable", "clock_metadata", "smoothed_results",
+           "smoothed_run"]

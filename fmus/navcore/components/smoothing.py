@@ -7,6 +7,13 @@ filter; it only keeps what the backward pass needs) under the direct backend, an
 session for the smoothed solution afterwards.  The master knows nothing of the recording:
 it runs a component class from a registry, as always.
 
+A replayed log's IMU may be stamped late against the GNSS clock (a logger's latency): the
+session then synchronizes (:meth:`SmoothingSession.synchronize`, after the first run): it
+estimates the offset from the IMU and the fixes that run saw
+(:mod:`navcore.filters.imu_time_offset`) and, when it matters, asks for the run again with
+the fixes on the IMU's clock, and keeps that run when its fixes fit the filter better; the
+smoothed solution is then read back on the GNSS clock.
+
 Supported: :data:`SMOOTHABLE` (the filters whose forward covariances are the model's own:
 ``Kf``).  The adaptive and robust filters rescale P, Q or R inside their updates (fading
 memory, Sage-Husa, robust weights), so the transitions and noise the smoother rebuilds
@@ -18,7 +25,9 @@ import numpy as np
 
 from ..errors import NavcoreError
 from ..filters.ins_gnss_kf import KfEngine
+from ..filters import imu_time_offset
 from ..filters.rts_smoother import KfRecording, smooth
+from .smoothing_clock import ClockInputs, FixFit
 from .kf_components import Kf
 
 #: filter model name -> its component class, the filters the smoother supports
@@ -62,6 +71,13 @@ def _recording_class(base, session):
             super().__init__(*args, **kwargs)
             session.recordings.append(self)
 
+        def step(self, t, h, inputs):
+            if session.time_offset:          # the fixes on the IMU's clock
+                inputs = {**inputs, "gnss_time": inputs["gnss_time"] + session.time_offset}
+            else:
+                self.clock_inputs.take(inputs)
+            return super().step(t, h, inputs)
+
         def _begin_recording(self):
             cfg = self.engine.config
             self.recording = KfRecording(self.engine.q_density, cfg.gyro_bias_tau,
@@ -77,6 +93,8 @@ def _recording_class(base, session):
 
         def initialize(self, start_time):
             self.recording = None
+            self.clock_inputs = ClockInputs()        # what synchronize() compares
+            self.fit = FixFit()                      # what keeps_synchronization() compares
             out = super().initialize(start_time)
             if self.initializer.done:
                 self._begin_recording()
@@ -104,14 +122,19 @@ def _recording_class(base, session):
             self.recording.truncate_after(self.nav_time)     # a fix applied in the past
             super()._apply(fix)
 
+        def _applied(self, z, result):
+            super()._applied(z, result)
+            self.fit.add(result)
+
     Recording.__name__ = Recording.__qualname__ = base.__name__
     Recording.model_name = base.model_name
     return Recording
 
 
 class SmoothingSession:
-    """One smoothed run of filter ``model_name``: :attr:`component_class` to run (direct
-    backend), then :meth:`solution`."""
+    """One smoothed run of filter ``model_name``: run :attr:`component_class` (direct
+    backend); then, to synchronize the IMU's clock, :meth:`synchronize` and, when it says
+    so, the run again and :meth:`keeps_synchronization`; then :meth:`solution`."""
 
     def __init__(self, model_name: str):
         if model_name not in SMOOTHABLE:
@@ -119,17 +142,53 @@ class SmoothingSession:
                                f"not {model_name} (its updates rescale P, Q or R, or it has "
                                "no transition matrix): run it without smoothing")
         self.recordings = []
+        self.time_offset = 0.0           # [s] the IMU's stamps less the GNSS time
+        self.clock = None                # the estimate (TimeOffset) once synchronized
+        self.fits = None                 # (first run's, second run's) FixFit.mean
+        self._first = None               # the first run's component during the second
         self.component_class = _recording_class(SMOOTHABLE[model_name], self)
 
-    def solution(self):
-        """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`),
-        with ``recording_bytes``: the memory the recording held."""
+    def _started(self):
         started = [c for c in self.recordings if getattr(c, "recording", None) is not None]
         if not started:
             raise NavcoreError("the filter never started (init_mode: no initial state from the "
                                "data): nothing to smooth")
-        rec = started[-1].recording
+        return started[-1]
+
+    def synchronize(self) -> bool:
+        """After the first run: estimate the IMU's time offset from the inputs its filter
+        received (:mod:`navcore.filters.imu_time_offset`).  True when the offset applies
+        (at least half an IMU interval): run again (the fixes then go to the filter on the
+        IMU's clock), then :meth:`keeps_synchronization`."""
+        first = self._started()
+        self.clock = first.clock_inputs.estimate()
+        if not self.clock.applies(first.clock_inputs.imu_interval()):
+            return False
+        self._first, self.time_offset, self.recordings = first, self.clock.tau, []
+        return True
+
+    def keeps_synchronization(self) -> bool:
+        """After the second run: whether its fixes fit its filter better than the first
+        run's fit theirs (:class:`navcore.components.smoothing_clock.FixFit`: the mean
+        negative log-likelihood of the innovations, the likelihood ratio of "late by the
+        estimate" against "on time").  If not, the session goes back to the first run (its
+        recording, no offset) and says False: the estimate read a lag that is not the
+        clock's (a walker's heading leads the course)."""
+        second = self._started()
+        self.fits = (self._first.fit.mean(), second.fit.mean())
+        if self.fits[1] < self.fits[0]:
+            return True
+        self.time_offset, self.recordings = 0.0, [self._first]
+        return False
+
+    def solution(self):
+        """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`; on
+        the GNSS clock after a synchronized run), with ``recording_bytes``: the memory the
+        recording held."""
+        rec = self._started().recording
         out = smooth(rec)
+        if self.time_offset:
+            out = imu_time_offset.on_gnss_clock(out, self.time_offset)
         out["recording_bytes"] = rec.nbytes
         return out
 

@@ -56,7 +56,7 @@ def rts_step(A, P_post, P_prior_next, Ps_next, d_next):
     return A @ d_next, 0.5 * (Ps + Ps.T)
 
 
-class _Growing:
+class GrowingRows:
     """A float64 table growing by rows (amortized doubling), cut back by :meth:`truncate`."""
 
     def __init__(self, width):
@@ -100,8 +100,8 @@ class KfRecording:
     def __init__(self, q_density, gyro_tau, accel_tau):
         self.q_density = np.asarray(q_density, dtype=float)
         self.taus = (float(gyro_tau), float(accel_tau))
-        self.epochs = _Growing(2 + NAV_COLUMNS + 3)     # time, dt, nav, f_ned
-        self.updates = _Growing(1 + N_STATES + N_STATES * N_STATES + NAV_COLUMNS + 6)
+        self.epochs = GrowingRows(2 + NAV_COLUMNS + 3)     # time, dt, nav, f_ned
+        self.updates = GrowingRows(1 + N_STATES + N_STATES * N_STATES + NAV_COLUMNS + 6)
         self.started = False
 
     def start(self, time, engine):
@@ -246,4 +246,4 @@ def _corrected(rec, fields, ds, Ps_diag):
     return out
 
 
-__all__ = ["KfRecording", "backward", "gains", "rts_step", "smooth"]
+__all__ = ["GrowingRows", "KfRecording", "backward", "gains", "rts_step", "smooth"]
