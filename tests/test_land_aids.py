@@ -217,6 +217,45 @@ def test_an_aid_never_makes_a_robust_law_reject_a_fix(car, name):
     assert not np.allclose(aided.P, plain.P)
 
 
+@pytest.mark.parametrize("name", ("CtfaUkf", "ImmUkf"))
+def test_an_aid_never_makes_a_good_fix_drive_the_adaptation(car, name):
+    """After 10 s of the car at rest (millimetre fixes from then on), a pseudo-measurement of
+    the position at 0.1 mm shrinks P; a fix whose position is off by its own covariance's
+    square root (CtfaUkf: NIS 3 for the filter without the aid, below the test's lower
+    threshold; ImmUkf: twice that in each component) is far outside the aided covariance
+    (NIS above 100), which would raise CTFA's Q to its maximum and give the IMM's Q x100
+    model 0.007 more; against the covariance without the aids the adaptation is the one of
+    the filter without the aid (the same chi-square and Q scale, the model probabilities to
+    2e-3), while the update itself uses the aided P."""
+    sensors = car[0]
+    run = run_filter(sensors, registry()[name], overrides={**FILTER_START, **DETECTOR},
+                     stop_row=int(round(10.0 / sensors.h)))
+    plain = run.component.engine
+    plain.R0 = np.eye(plain.m) * 1e-6              # millimetre fixes: P dominates S
+    plain._predict()                               # the prediction due is not the aid's
+    aided = copy.deepcopy(plain)
+    H = np.zeros((3, N_STATES))
+    H[:, 0:3] = np.eye(3)
+    aided.aid_update(H, np.zeros(3), np.eye(3) * 1e-8)
+    m = plain.m
+    u = np.zeros(m)
+    u[:3] = 1.0 if name == "CtfaUkf" else 2.0
+    z = np.linalg.cholesky(plain.covariance()[:m, :m] + plain.R0) @ u   # NIS |u|^2
+    S_aided = aided.covariance()[:m, :m] + aided.R0
+    assert z @ np.linalg.solve(S_aided, z) > 100.0  # the aided P would call it a mismatch
+    for engine in (plain, aided):
+        engine.update(z)
+    if name == "CtfaUkf":
+        assert plain.chi2 == pytest.approx(3.0, rel=1e-6)
+        assert aided.chi2 == pytest.approx(plain.chi2, rel=1e-3)
+        assert aided.q_scale == plain.q_scale < aided.q_max_scale
+    else:
+        # against the aided P the Q x100 model gains 0.007 more (0.048 against 0.041)
+        assert np.allclose(aided.bank.mu, plain.bank.mu, atol=2e-3)
+    assert not np.allclose(aided.covariance(), plain.covariance())
+    assert aided.blind_P is None
+
+
 # -- the real drive's first seconds at rest --------------------------------------------
 def test_zupt_and_zaru_on_the_real_car_at_rest():
     """The drive's first 12 s (the car at rest; its IMU prepared as the drive's own filter

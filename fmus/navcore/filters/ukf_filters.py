@@ -31,13 +31,17 @@ loop: :meth:`Strapdown.correct`, biases accumulated) and the error mean is reset
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
+from .aid_blind import AidBlindCovariance
 from .ctfa import PAPER_T1, PAPER_T2, CtfaQSchedule, ctfa_thresholds
 from ..ins.error_model import ATT, BA, BG, N_STATES, POS, VEL
 from ..ins.strapdown import Strapdown
-from .imm import ImmBank, imm_combine, update_banks
-from .innovation_stats import nis
+from .imm import ImmBank, imm_combine, imm_mix, update_banks
+from .innovation_stats import (checked_cholesky, gaussian_log_likelihood,
+                               log_det_from_cholesky, nis, nis_from_cholesky)
 from .land_aids import linear_update
 from .ins_gnss_kf import KfEngine, UpdateResult
 from .recovery import GuardedEngine, flag_by_gate, inflate_navigation
@@ -122,7 +126,13 @@ class UkfEngine(KfEngine):
     def predict_filters(self, nom, Q, tau_g, tau_a):
         """Predict the filter(s) over one interval (subclasses with several filters override):
         :func:`~navcore.filters.ukf_time_update.predict_unscented_filters` of this run's filter."""
-        predict_unscented_filters([self.ukf], nom, Q, [self.q_scale], tau_g, tau_a)
+        self.predict_with_blind([self.ukf], nom, Q, [self.q_scale], tau_g, tau_a)
+
+    def predict_with_blind(self, filters, nom, Q, q_scales, tau_g, tau_a):
+        """:func:`~navcore.filters.ukf_time_update.predict_unscented_filters` of ``filters``
+        (an engine that keeps the covariances without the land aids predicts them with them:
+        :class:`UnscentedAidBlind`)."""
+        predict_unscented_filters(filters, nom, Q, q_scales, tau_g, tau_a)
 
     def prediction_covariance(self):
         """P of the latest prediction (or update): the part of :meth:`covariance_diagonal`
@@ -225,7 +235,43 @@ class UkfEngine(KfEngine):
         self.n_updates += 1
 
 
-class CtfaUkfEngine(GuardedEngine, UkfEngine):
+class UnscentedAidBlind(AidBlindCovariance):
+    """:class:`~navcore.filters.aid_blind.AidBlindCovariance` of an adaptive UKF (CtfaUkf,
+    ImmUkf), whose adaptation reads the fixes' innovations: ``blind_P`` (F, n, n) holds one
+    covariance per filter of :meth:`aided_filters`, predicted with them by the same unscented
+    time update (:meth:`predict_with_blind`), so the adaptation sees
+    :meth:`blind_innovation_covariances` while the update uses the aided filters."""
+
+    def blind_now(self):
+        self._predict()
+        if self.blind_P is not None:
+            return self.blind_P
+        return np.stack([flt.P for flt in self.aided_filters()])
+
+    def predict_with_blind(self, filters, nom, Q, q_scales, tau_g, tau_a):
+        """:func:`~navcore.filters.ukf_time_update.predict_unscented_filters` of ``filters``
+        and, while ``blind_P`` is held, of copies of them with the blind covariances (the
+        same means, process noise and scales), in one call."""
+        if self.blind_P is None:
+            super().predict_with_blind(filters, nom, Q, q_scales, tau_g, tau_a)
+            return
+        shadows = [copy.copy(flt) for flt in filters]
+        for shadow, P in zip(shadows, self.blind_P):
+            shadow.P = P
+        super().predict_with_blind(list(filters) + shadows, nom, Q, list(q_scales) * 2, tau_g,
+                                   tau_a)
+        self.blind_P = np.stack([shadow.P for shadow in shadows])
+
+    def blind_innovation_covariances(self):
+        """``S = H P_blind H' + R0`` of each filter (F, m, m), or None while no aid updated
+        since the last fix (the adaptation then reads the update's own S)."""
+        if self.blind_P is None:
+            return None
+        m = self.m
+        return self.blind_P[:, :m, :m] + self.R0
+
+
+class CtfaUkfEngine(UnscentedAidBlind, GuardedEngine, UkfEngine):
     """Paper 000's CTFA-UKF: the UKF plus the chi-square fuzzy adaptive Q schedule (paper 000
     eqs. 24-25).
 
@@ -244,6 +290,8 @@ class CtfaUkfEngine(GuardedEngine, UkfEngine):
     ``pass_decay`` (ours, not the paper's; 1 = paper 000 eq. 25 as printed): factor on ``Q - Qmin``
     at every update that passes the test, so Q returns towards Qmin after a manoeuvre.
     Recovery guard (ours; off = paper 000's law): :meth:`UkfEngine.reacquire` before the update.
+    With land aids, ``q_k`` is taken against the covariance without the aids' updates since
+    the last fix (:class:`UnscentedAidBlind`): an aid never makes a good fix raise Q.
     """
 
     state_fields = ("schedule", "chi2")
@@ -264,6 +312,7 @@ class CtfaUkfEngine(GuardedEngine, UkfEngine):
         self.schedule = CtfaQSchedule(np.eye(1), self.q_max_scale * np.eye(1), T1, T2,
                                       pass_decay)
         self.chi2 = 0.0
+        self.init_blind()
 
     def measured_filters(self, z):
         filters, before = super().measured_filters(z)
@@ -271,14 +320,17 @@ class CtfaUkfEngine(GuardedEngine, UkfEngine):
         return filters, before
 
     def update_finished(self, before, corrections):
+        S_blind = self.blind_innovation_covariances()
         result = super().update_finished(before, corrections)
-        self.chi2 = result.nis                       # paper 000 eq. 24
+        # paper 000 eq. 24, against the covariance without the land aids (aid_blind)
+        self.chi2 = result.nis if S_blind is None else nis(corrections[0].v, S_blind[0])
+        self.fix_taken()
         self.q_scale = float(self.schedule.update(self.chi2)[0, 0])   # paper 000 eq. 25, next steps
         result.q_scale = self.q_scale
         return result
 
 
-class ImmUkfEngine(GuardedEngine, UkfEngine):
+class ImmUkfEngine(UnscentedAidBlind, GuardedEngine, UkfEngine):
     """IMM-UKF (paper 000's comparison, its ref. [14]): a bank of UKFs differing in Q.
 
     ``q_scales`` (one per model) multiply the configured Q; ``p_stay`` is the diagonal of the
@@ -289,7 +341,9 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
     combined error estimate is fed back to the single nominal INS and subtracted from every model
     (closed loop).  ``q_scale`` = probability-weighted scale; ``model_probabilities``;
     the NIS is that of the combined prediction.  Recovery guard (ours; off = the plain IMM):
-    :meth:`UkfEngine.reacquire` on the mixed prediction, inflating every model.
+    :meth:`UkfEngine.reacquire` on the mixed prediction, inflating every model.  With land
+    aids, each model's likelihood is taken against its covariance without the aids' updates
+    since the last fix (:class:`UnscentedAidBlind`); its update uses the aided one.
     """
 
     state_fields = ("bank",)
@@ -309,6 +363,7 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
         self.ukf = None
         self.q_scale = float(self.bank.mu @ self.q_scales)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
+        self.init_blind()
 
     @property
     def model_probabilities(self):
@@ -320,7 +375,32 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
         after the bank's mixing."""
         scales = self.q_scales
         self.bank.predict_all(
-            lambda filters: predict_unscented_filters(filters, nom, Q, scales, tau_g, tau_a))
+            lambda filters: self.predict_with_blind(filters, nom, Q, scales, tau_g, tau_a))
+
+    def blind_now(self):
+        """The blind covariances start as the models' own, mixed when the bank's mixing is
+        due at the next prediction (the step the blind path takes before that prediction,
+        the aided filters taking it after the aid)."""
+        blind = super().blind_now()
+        bank = self.bank
+        if self.blind_P is None and bank.needs_mixing:
+            blind = np.stack(imm_mix(bank.mu, bank.Pi, [f.x for f in bank.filters],
+                                     list(blind))[1])
+        return blind
+
+    def adapted_log_likelihoods(self, corrections):
+        """The models' log-likelihoods of the fix that move the model probabilities: the
+        update's own, or against the blind covariances while an aid updated since the last
+        fix."""
+        S_blind = self.blind_innovation_covariances()
+        if S_blind is None:
+            return [c.log_likelihood for c in corrections]
+        out = []
+        for c, S in zip(corrections, S_blind):
+            v, L = checked_cholesky(c.v, S, f"{type(self).__name__}: blind S")
+            out.append(gaussian_log_likelihood(nis_from_cholesky(L, v), log_det_from_cholesky(L),
+                                               self.m))
+        return out
 
     def prediction_covariance(self):
         return self.bank.P
@@ -358,7 +438,8 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
         """The banks' model probabilities and combinations after their models' updates
         (:func:`~navcore.filters.imm.update_banks`: all banks' combinations in one call)."""
         return update_banks([engine.bank for engine in engines],
-                            [[c.log_likelihood for c in models] for models in corrections])
+                            [engine.adapted_log_likelihoods(models)
+                             for engine, models in zip(engines, corrections)])
 
     def update_finished(self, before, corrections):
         v, S, statistic = before
@@ -367,4 +448,5 @@ class ImmUkfEngine(GuardedEngine, UkfEngine):
         self._feedback(dx)
         bank.subtract_from_states(dx)
         self.q_scale = float(bank.mu @ self.q_scales)
+        self.fix_taken()
         return UpdateResult(v, S, statistic, q_scale=self.q_scale)
