@@ -441,9 +441,10 @@ def main(argv=None) -> int:
         try:
             run, said = run_filter(work / "log", name, parameters, smooth, not args.no_sync)
             t, err, std = fix_epoch_errors(run, first)
-            clock = run.results.metadata.get("smoother", {}).get("imu_time_offset_s")
-            rows[label] = {**score(t, err, std, outages), "warnings": said,
-                           **({"imu_time_offset_s": clock} if clock is not None else {}),
+            smoother = run.results.metadata.get("smoother", {})
+            clock = {k: v for k, v in smoother.items() if k in (
+                "imu_time_offset_s", "imu_time_offset_runs", "imu_time_offset_fit_per_fix")}
+            rows[label] = {**score(t, err, std, outages), "warnings": said, **clock,
                            "residual_corr_time_s": correlation_time(t, err, outages),
                            **outage_score(t, err, outages[args.scored_from - 1:] if peer
                                           else outages)}
