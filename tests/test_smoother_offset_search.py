@@ -5,6 +5,8 @@ fixes best is the lag put into the IMU's stamps, and the car on time gives about
 """
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from direct_replay import run_filter
@@ -50,7 +52,8 @@ def test_the_search_finds_the_lag_without_turns(straight_car):
 def test_the_search_reuses_what_ran_and_keeps_its_budget():
     """A cost with two dips (the deeper at 0.137 s, a shallow one at -0.35 s, where a
     refinement started from -0.5 would stop): the grid finds the deeper one and Brent
-    refines it to the tolerance; the known offsets are not run again."""
+    refines it to the tolerance; the known offsets are not run again.  Refined from an
+    estimate (0.12 s, +/-0.05 s): Brent only, inside that interval."""
     ran = []
 
     def cost(tau):
@@ -61,6 +64,11 @@ def test_the_search_reuses_what_ran_and_keeps_its_budget():
     assert best == pytest.approx(0.137, abs=SEARCH.tolerance)
     assert len(ran) <= 1 + 4 + SEARCH.refinements and len(set(ran)) == len(ran)
     assert ran.count(0.0) == 1 and 0.61 in costs and 0.61 not in ran
+    ran.clear()
+    near = dataclasses.replace(SEARCH, around_start=0.05)
+    best, costs = time_offset_search.refine(cost, 0.12, {0.12: cost(0.12)}, near)
+    assert best == pytest.approx(0.137, abs=SEARCH.tolerance)
+    assert len(ran) <= 1 + SEARCH.refinements and all(abs(t - 0.12) <= 0.05 for t in ran)
 
 
 def test_an_offset_is_taken_only_beyond_chance():

@@ -18,6 +18,7 @@ import warnings
 import numpy as np
 
 from navcore.core import signals
+from navcore.filters.time_offset_search import OffsetSearch
 
 from ..results.run_results import Results
 from . import scenarios
@@ -35,7 +36,8 @@ def check_smoothable(model, filter=None) -> None:
     SmoothingSession(scenarios.filter_label(model, filter))
 
 
-def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.Run:
+def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
+                 **simulate) -> scenarios.Run:
     """The smoothed run of ``model`` with ``filter`` (None: the model's own): the keyword
     arguments of :func:`orchestrator.running.scenarios.simulate_scenario` but the backend,
     which is the direct one.  Refused, before running, for a filter the smoother does not
@@ -44,11 +46,14 @@ def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.
     ``synchronize``: synchronize the IMU's clock with the GNSS clock after the first run
     (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`: the course
     estimate, else the likelihood search, each offset one more run with the fixes on the
-    IMU's clock) and smooth the run whose fixes fit best (only its warnings are raised)."""
+    IMU's clock) and smooth the run whose fixes fit best (only its warnings are raised);
+    ``search``: the likelihood search's bounds and budget
+    (:class:`navcore.filters.time_offset_search.OffsetSearch`; None: the course estimate
+    only)."""
     from navcore.components.smoothing import SmoothingSession
 
     label = scenarios.filter_label(model, filter)
-    session = SmoothingSession(label)
+    session = SmoothingSession(label, search)
     window = simulate.pop("window", None)
 
     def recorded_run():

@@ -197,6 +197,9 @@ class SmoothingSession:
                 and self.clock.epochs >= imu_time_offset.MIN_EPOCHS):
             self.searched = True
             time_offset_search.search(fit_at, self.fits, self.search)
+        elif best[0] != 0.0 and self.search is not None and self.search.around_start > 0:
+            self.searched = True
+            time_offset_search.refine(fit_at, best[0], self.fits, self.search)
         if not time_offset_search.significant(self.fits[0.0], best[1], start.fit.n):
             best = [0.0, self.fits[0.0], start, first]
         self.time_offset, self.recordings = best[0], [best[2]]

@@ -37,6 +37,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.stats import chi2
 
+from ..errors import NavcoreError
+
 #: the likelihood-ratio test's level: the chance of taking an offset when there is none
 SIGNIFICANCE = 0.01
 
@@ -52,6 +54,14 @@ class OffsetSearch:
     step: float = 0.25
     tolerance: float = 0.01
     refinements: int = 8
+    #: [s] with a course estimate kept: refine it within +/- this (0: taken as it is)
+    around_start: float = 0.0
+
+    def __post_init__(self):
+        if not (self.step > 0 and self.bound >= 0 and self.tolerance > 0
+                and self.refinements >= 0 and self.around_start >= 0):
+            raise NavcoreError(f"the time offset search: step and tolerance must be positive, "
+                               f"bound, refinements and around_start not negative ({self})")
 
     def grid(self):
         """The coarse grid's offsets [s]."""
@@ -63,10 +73,8 @@ def _key(offset):
     return round(float(offset), 3)
 
 
-def search(cost, known, settings: OffsetSearch = OffsetSearch()):
-    """(the offset of the smallest cost, {offset: cost} of every offset run) minimizing
-    ``cost(offset)`` (one filter run each) over ``settings`` (module docstring); ``known``:
-    {offset: cost} already run (reused, never run again)."""
+def _cached(cost, known):
+    """(cost with each millisecond-rounded offset run once, the costs so far)."""
     costs = {_key(k): float(v) for k, v in known.items()}
 
     def at(offset):
@@ -75,16 +83,36 @@ def search(cost, known, settings: OffsetSearch = OffsetSearch()):
             costs[key] = float(cost(key))
         return costs[key]
 
-    for offset in settings.grid():
-        at(offset)
-    inside = {k: v for k, v in costs.items() if abs(k) <= settings.bound + 1e-9}
-    best = min(inside, key=inside.get)
-    lo = max(-settings.bound, best - settings.step)
-    hi = min(settings.bound, best + settings.step)
+    return at, costs
+
+
+def _brent(at, lo, hi, settings):
     if settings.refinements > 0 and hi > lo:
         minimize_scalar(at, bounds=(lo, hi), method="bounded",
                         options={"xatol": settings.tolerance,
                                  "maxiter": settings.refinements})
+
+
+def search(cost, known, settings: OffsetSearch = OffsetSearch()):
+    """(the offset of the smallest cost, {offset: cost} of every offset run) minimizing
+    ``cost(offset)`` (one filter run each) over ``settings`` (module docstring); ``known``:
+    {offset: cost} already run (reused, never run again)."""
+    at, costs = _cached(cost, known)
+    for offset in settings.grid():
+        at(offset)
+    inside = {k: v for k, v in costs.items() if abs(k) <= settings.bound + 1e-9}
+    best = min(inside, key=inside.get)
+    _brent(at, max(-settings.bound, best - settings.step),
+           min(settings.bound, best + settings.step), settings)
+    best = min(costs, key=costs.get)
+    return best, costs
+
+
+def refine(cost, start, known, settings: OffsetSearch = OffsetSearch()):
+    """(best offset, costs) as :func:`search`, but bounded Brent only, within
+    +/-``settings.around_start`` of ``start`` (an estimate from elsewhere, the course's)."""
+    at, costs = _cached(cost, known)
+    _brent(at, start - settings.around_start, start + settings.around_start, settings)
     best = min(costs, key=costs.get)
     return best, costs
 
@@ -97,4 +125,4 @@ def significant(fit_zero, fit, fixes) -> bool:
     return 2.0 * fixes * (fit_zero - fit) > chi2.ppf(1.0 - SIGNIFICANCE, 1)
 
 
-__all__ = ["OffsetSearch", "SIGNIFICANCE", "search", "significant"]
+__all__ = ["OffsetSearch", "SIGNIFICANCE", "refine", "search", "significant"]
