@@ -170,8 +170,9 @@ class SmoothingSession:
         keep the run whose fixes fit its filter best (:class:`FixFit`: the mean negative
         log-likelihood of the innovations).  The offsets run: the course estimate
         (:mod:`navcore.filters.imu_time_offset`) when it applies (at least half an IMU
-        interval); when there is none or its run fits worse than the run on the IMU's own
-        clock (a walker's heading leads the course), the likelihood search
+        interval); when there is none or its run does not fit significantly better than
+        the run on the IMU's own clock (a walker's heading leads the course), the likelihood
+        search
         (:mod:`navcore.filters.time_offset_search`) within its bounds, if the run moved
         (the course's moving fix epochs: without motion the offset is not observable).  An
         offset is kept only when it passes the likelihood-ratio test against none
@@ -191,16 +192,19 @@ class SmoothingSession:
                 best[:] = [offset, fit, run, returned]
             return fit
 
+        def kept():
+            return time_offset_search.significant(self.fits[0.0], best[1], start.fit.n)
+
         if self.clock.applies(start.clock_inputs.imu_interval()):
             fit_at(float(self.clock.tau))
-        if (best[0] == 0.0 and self.search is not None
-                and self.clock.epochs >= imu_time_offset.MIN_EPOCHS):
-            self.searched = True
-            time_offset_search.search(fit_at, self.fits, self.search)
-        elif best[0] != 0.0 and self.search is not None and self.search.around_start > 0:
+        if self.search is not None and not kept():
+            if self.clock.epochs >= imu_time_offset.MIN_EPOCHS:
+                self.searched = True
+                time_offset_search.search(fit_at, self.fits, self.search)
+        elif self.search is not None and self.search.around_start > 0:
             self.searched = True
             time_offset_search.refine(fit_at, best[0], self.fits, self.search)
-        if not time_offset_search.significant(self.fits[0.0], best[1], start.fit.n):
+        if not kept():
             best = [0.0, self.fits[0.0], start, first]
         self.time_offset, self.recordings = best[0], [best[2]]
         return best[3]
