@@ -31,6 +31,7 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -49,6 +50,8 @@ import gnss_imu_config  # noqa: E402
 import rtklib_tag  # noqa: E402
 from navcore.filters.correlated_gnss import MEASURED_CORR_TIME  # noqa: E402
 from navcore.filters.process_noise_factor import CONSUMER_IMU_NOISE_FACTOR  # noqa: E402
+from navcore.errors import NavcoreError  # noqa: E402
+from navcore.filters.time_offset_search import OffsetSearch  # noqa: E402
 from navcore.ins import earth  # noqa: E402
 from navcore.ins.rotations import euler_to_dcm  # noqa: E402
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
@@ -197,12 +200,34 @@ def build_log(drive: Path, dst: Path, outages, misalign, time_offset, rate,
 
 
 # -- the runs ---------------------------------------------------------------------------
-def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=True):
+def offset_search(text: str, parser):
+    """The ``--offset-search`` text as an :class:`OffsetSearch` (None for 'off')."""
+    if text.strip() == "off":
+        return None
+    fields = [f.name for f in dataclasses.fields(OffsetSearch)]
+    values = {}
+    for item in filter(None, (x.strip() for x in text.split(","))):
+        key, _, value = (x.strip() for x in item.partition("="))
+        if key not in fields:
+            parser.error(f"--offset-search: no setting {key!r} (one of {', '.join(fields)})")
+        try:
+            values[key] = (int if key == "refinements" else float)(value)
+        except ValueError:
+            parser.error(f"--offset-search: {item!r} is not {key}=NUMBER")
+    try:
+        return OffsetSearch(**values)
+    except NavcoreError as exc:
+        parser.error(f"--offset-search: {exc}")
+
+
+def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=True,
+               search=OffsetSearch()):
     """One replay of ``log_dir`` through filter ``name`` (its smoothed solution with
     ``smooth``, :mod:`orchestrator.running.smoothing`, the IMU's clock synchronized with
-    ``synchronize``): (run, the warnings it raised)."""
+    ``synchronize``, the likelihood search ``search``): (run, the warnings it raised)."""
     model = scenarios.load_scenario(ROOT / "models" / "replay_gnss_ins_sim")
-    simulate = (partial(smoothing.smoothed_run, synchronize=synchronize) if smooth
+    simulate = (partial(smoothing.smoothed_run, synchronize=synchronize, search=search)
+                if smooth
                 else partial(scenarios.simulate_scenario, backend="direct"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -412,8 +437,13 @@ def main(argv=None) -> int:
                    help="add each filter's smoothed solution (a row '<filter>-smoothed')")
     p.add_argument("--no-sync", action="store_true",
                    help="smooth without estimating the IMU's time offset to the GNSS clock")
+    p.add_argument("--offset-search", default="",
+                   help="the smoother's likelihood search of the IMU's time offset: 'off' "
+                   "(the course estimate only) or KEY=VALUE,... of OffsetSearch (bound, step, "
+                   "tolerance, refinements, around_start)")
     args = p.parse_args(argv)
     setup = _setup(args, p)
+    search = offset_search(args.offset_search, p)
     peer = args.outages == "peer"
     outages = (peer_fixes_outages(args.drive, setup["schedule"]) if peer
                else parse_outages(args.outages))
@@ -439,11 +469,13 @@ def main(argv=None) -> int:
     for name, smooth in runs:
         label = name + smoothing.SMOOTHED_SUFFIX if smooth else name
         try:
-            run, said = run_filter(work / "log", name, parameters, smooth, not args.no_sync)
+            run, said = run_filter(work / "log", name, parameters, smooth, not args.no_sync,
+                                   search)
             t, err, std = fix_epoch_errors(run, first)
-            clock = run.results.metadata.get("smoother", {}).get("imu_time_offset_s")
-            rows[label] = {**score(t, err, std, outages), "warnings": said,
-                           **({"imu_time_offset_s": clock} if clock is not None else {}),
+            smoother = run.results.metadata.get("smoother", {})
+            clock = {k: v for k, v in smoother.items() if k in (
+                "imu_time_offset_s", "imu_time_offset_runs", "imu_time_offset_fit_per_fix")}
+            rows[label] = {**score(t, err, std, outages), "warnings": said, **clock,
                            "residual_corr_time_s": correlation_time(t, err, outages),
                            **outage_score(t, err, outages[args.scored_from - 1:] if peer
                                           else outages)}

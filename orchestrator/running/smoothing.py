@@ -5,18 +5,20 @@ run once more under the direct backend with the filter's recording class from th
 facade, which then gives the smoothed solution at every IMU epoch.  Here that solution is
 laid on the run's rows (the row whose filter ``nav_time`` is the epoch) as the outputs of a
 filter component of the same name, so the metrics, files and plots treat it as one more
-filter, labelled ``<filter>-smoothed``.  When the IMU's time offset to the GNSS clock
-applies (the session's estimate after that run), the scenario runs once more with the fixes
-on the IMU's clock, and the smoothed solution of the run whose fixes fit better is laid on
-its rows.
+filter, labelled ``<filter>-smoothed``.  To synchronize the IMU's clock with the GNSS
+clock, the session may ask for more runs with the fixes on the IMU's clock (the course
+estimate, the likelihood search); the smoothed solution of the run whose fixes fit best is
+laid on its rows.
 """
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
 
 from navcore.core import signals
+from navcore.filters.time_offset_search import OffsetSearch
 
 from ..results.run_results import Results
 from . import scenarios
@@ -34,20 +36,24 @@ def check_smoothable(model, filter=None) -> None:
     SmoothingSession(scenarios.filter_label(model, filter))
 
 
-def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.Run:
+def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
+                 **simulate) -> scenarios.Run:
     """The smoothed run of ``model`` with ``filter`` (None: the model's own): the keyword
     arguments of :func:`orchestrator.running.scenarios.simulate_scenario` but the backend,
     which is the direct one.  Refused, before running, for a filter the smoother does not
     support; the run's own warnings are raised as they are for the real-time run.
 
-    ``synchronize``: estimate the IMU's time offset to the GNSS clock from the first run
-    (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`) and, when it
-    applies, run again with the fixes on the IMU's clock, and smooth that run when its
-    fixes fit better, else the first (only the warnings of the run smoothed are raised)."""
+    ``synchronize``: synchronize the IMU's clock with the GNSS clock after the first run
+    (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`: the course
+    estimate, else the likelihood search, each offset one more run with the fixes on the
+    IMU's clock) and smooth the run whose fixes fit best (only its warnings are raised);
+    ``search``: the likelihood search's bounds and budget
+    (:class:`navcore.filters.time_offset_search.OffsetSearch`; None: the course estimate
+    only)."""
     from navcore.components.smoothing import SmoothingSession
 
     label = scenarios.filter_label(model, filter)
-    session = SmoothingSession(label)
+    session = SmoothingSession(label, search)
     window = simulate.pop("window", None)
 
     def recorded_run():
@@ -56,10 +62,8 @@ def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.
                                            **simulate)
 
     run, said = _quietly(recorded_run)
-    if synchronize and session.synchronize():
-        second, said_second = _quietly(recorded_run)
-        if session.keeps_synchronization():
-            run, said = second, said_second
+    if synchronize:
+        run, said = session.synchronize(lambda: _quietly(recorded_run), first=(run, said))
     for w in said:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     solution = session.solution()
@@ -70,7 +74,7 @@ def smoothed_run(model, filter=None, synchronize=True, **simulate) -> scenarios.
         "method": "Rauch-Tung-Striebel (error state, closed-loop corrections)",
         "epochs": int(len(solution["time"])),
         "recording_mb": round(solution["recording_bytes"] / 1e6, 2),
-        **clock_metadata(session.clock, session.time_offset, session.fits)}
+        **clock_metadata(session)}
     return scenarios.report_inconsistency(smoothed)
 
 
@@ -81,22 +85,27 @@ def _quietly(run):
         return run(), list(said)
 
 
-def clock_metadata(clock, applied, fits=None) -> dict:
-    """The synchronization's entries of the smoothed run's metadata: the IMU time offset
-    applied [s], the estimate's correlation, epochs and reason it was not taken, and the
-    fixes' fit (mean negative log-likelihood per fix) of the run on the IMU's clock and of
-    the run with the estimate, when both ran."""
+def clock_metadata(session) -> dict:
+    """The synchronization's entries of the smoothed run's metadata (``session`` a
+    synchronized :class:`navcore.components.smoothing.SmoothingSession`): the IMU time offset
+    applied [s], the course estimate, its correlation, epochs and reason it was not taken,
+    and every offset run with its fixes' fit (mean negative log-likelihood per fix), the
+    search's bounds when it ran."""
+    clock = session.clock
     if clock is None:
         return {}
-    out = {"imu_time_offset_s": round(float(applied), 4),
+    out = {"imu_time_offset_s": round(float(session.time_offset), 4),
            "imu_time_offset_estimate_s": round(float(clock.tau), 4),
            "imu_time_offset_correlation": (None if clock.correlation != clock.correlation
                                            else round(float(clock.correlation), 4)),
            "imu_time_offset_epochs": int(clock.epochs)}
     if clock.reason:
         out["imu_time_offset_not_estimated"] = clock.reason
-    if fits is not None:
-        out["imu_time_offset_fit_per_fix"] = [round(float(f), 3) for f in fits]
+    out["imu_time_offset_runs"] = len(session.fits)
+    out["imu_time_offset_fit_per_fix"] = {f"{k:+.3f}": round(float(v), 4)
+                                          for k, v in sorted(session.fits.items())}
+    if session.searched:
+        out["imu_time_offset_search"] = dataclasses.asdict(session.search)
     return out
 
 

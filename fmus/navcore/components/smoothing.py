@@ -11,8 +11,10 @@ A replayed log's IMU may be stamped late against the GNSS clock (a logger's late
 session then synchronizes (:meth:`SmoothingSession.synchronize`, after the first run): it
 estimates the offset from the IMU and the fixes that run saw
 (:mod:`navcore.filters.imu_time_offset`) and, when it matters, asks for the run again with
-the fixes on the IMU's clock, and keeps that run when its fixes fit the filter better; the
-smoothed solution is then read back on the GNSS clock.
+the fixes on the IMU's clock, and keeps that run when its fixes fit the filter better; with
+no estimate, or one that fits worse, it searches the offset whose run fits the fixes best
+(:mod:`navcore.filters.time_offset_search`).  The smoothed solution is then read back on
+the GNSS clock.
 
 Supported: :data:`SMOOTHABLE` (the filters whose forward covariances are the model's own:
 ``Kf``).  The adaptive and robust filters rescale P, Q or R inside their updates (fading
@@ -21,11 +23,14 @@ would not be theirs; the UKF family carries no transition matrix.
 """
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from ..errors import NavcoreError
 from ..filters.ins_gnss_kf import KfEngine
-from ..filters import imu_time_offset
+from ..filters import imu_time_offset, time_offset_search
+from ..filters.time_offset_search import OffsetSearch
 from ..filters.rts_smoother import KfRecording, smooth
 from .smoothing_clock import ClockInputs, FixFit
 from .kf_components import Kf
@@ -133,19 +138,22 @@ def _recording_class(base, session):
 
 class SmoothingSession:
     """One smoothed run of filter ``model_name``: run :attr:`component_class` (direct
-    backend); then, to synchronize the IMU's clock, :meth:`synchronize` and, when it says
-    so, the run again and :meth:`keeps_synchronization`; then :meth:`solution`."""
+    backend); then :meth:`synchronize` (which may ask for more runs); then
+    :meth:`solution`.  ``search``: the likelihood search of the IMU's time offset
+    (:class:`navcore.filters.time_offset_search.OffsetSearch`; None: the course estimate
+    only)."""
 
-    def __init__(self, model_name: str):
+    def __init__(self, model_name: str, search: Optional[OffsetSearch] = OffsetSearch()):
         if model_name not in SMOOTHABLE:
             raise NavcoreError(f"the smoother supports the filters {', '.join(SMOOTHABLE)}, "
                                f"not {model_name} (its updates rescale P, Q or R, or it has "
                                "no transition matrix): run it without smoothing")
         self.recordings = []
+        self.search = search
         self.time_offset = 0.0           # [s] the IMU's stamps less the GNSS time
-        self.clock = None                # the estimate (TimeOffset) once synchronized
-        self.fits = None                 # (first run's, second run's) FixFit.mean
-        self._first = None               # the first run's component during the second
+        self.clock = None                # the course estimate (TimeOffset) once synchronized
+        self.fits = {}                   # offset [s] -> the fixes' fit (FixFit.mean) of its run
+        self.searched = False            # whether the likelihood search ran
         self.component_class = _recording_class(SMOOTHABLE[model_name], self)
 
     def _started(self):
@@ -155,31 +163,51 @@ class SmoothingSession:
                                "data): nothing to smooth")
         return started[-1]
 
-    def synchronize(self) -> bool:
-        """After the first run: estimate the IMU's time offset from the inputs its filter
-        received (:mod:`navcore.filters.imu_time_offset`).  True when the offset applies
-        (at least half an IMU interval): run again (the fixes then go to the filter on the
-        IMU's clock), then :meth:`keeps_synchronization`."""
-        first = self._started()
-        self.clock = first.clock_inputs.estimate()
-        if not self.clock.applies(first.clock_inputs.imu_interval()):
-            return False
-        self._first, self.time_offset, self.recordings = first, self.clock.tau, []
-        return True
+    def synchronize(self, rerun, first=None):
+        """After the first run (``first``: what it returned, handed back if it stays the
+        best): synchronize the IMU's clock with the GNSS clock, calling ``rerun()`` for each
+        further run (the fixes then go to the filter at ``gnss_time + time_offset``), and
+        keep the run whose fixes fit its filter best (:class:`FixFit`: the mean negative
+        log-likelihood of the innovations).  The offsets run: the course estimate
+        (:mod:`navcore.filters.imu_time_offset`) when it applies (at least half an IMU
+        interval); when there is none or its run does not fit significantly better than
+        the run on the IMU's own clock (a walker's heading leads the course), the likelihood
+        search
+        (:mod:`navcore.filters.time_offset_search`) within its bounds, if the run moved
+        (the course's moving fix epochs: without motion the offset is not observable).  An
+        offset is kept only when it passes the likelihood-ratio test against none
+        (:func:`navcore.filters.time_offset_search.significant`).  Returns what the kept
+        run's ``rerun()`` (or ``first``) returned; :attr:`time_offset` is its offset."""
+        start = self._started()
+        self.clock = start.clock_inputs.estimate()
+        self.fits = {0.0: start.fit.mean()}
+        best = [0.0, self.fits[0.0], start, first]
 
-    def keeps_synchronization(self) -> bool:
-        """After the second run: whether its fixes fit its filter better than the first
-        run's fit theirs (:class:`navcore.components.smoothing_clock.FixFit`: the mean
-        negative log-likelihood of the innovations, the likelihood ratio of "late by the
-        estimate" against "on time").  If not, the session goes back to the first run (its
-        recording, no offset) and says False: the estimate read a lag that is not the
-        clock's (a walker's heading leads the course)."""
-        second = self._started()
-        self.fits = (self._first.fit.mean(), second.fit.mean())
-        if self.fits[1] < self.fits[0]:
-            return True
-        self.time_offset, self.recordings = 0.0, [self._first]
-        return False
+        def fit_at(offset):
+            self.time_offset, self.recordings = offset, []
+            returned = rerun()
+            run = self._started()
+            fit = self.fits[offset] = run.fit.mean()
+            if fit < best[1]:
+                best[:] = [offset, fit, run, returned]
+            return fit
+
+        def kept():
+            return time_offset_search.significant(self.fits[0.0], best[1], start.fit.n)
+
+        if self.clock.applies(start.clock_inputs.imu_interval()):
+            fit_at(float(self.clock.tau))
+        if self.search is not None and not kept():
+            if self.clock.epochs >= imu_time_offset.MIN_EPOCHS:
+                self.searched = True
+                time_offset_search.search(fit_at, self.fits, self.search)
+        elif self.search is not None and self.search.around_start > 0:
+            self.searched = True
+            time_offset_search.refine(fit_at, best[0], self.fits, self.search)
+        if not kept():
+            best = [0.0, self.fits[0.0], start, first]
+        self.time_offset, self.recordings = best[0], [best[2]]
+        return best[3]
 
     def solution(self):
         """The smoothed solution of the run (:func:`navcore.filters.rts_smoother.smooth`; on

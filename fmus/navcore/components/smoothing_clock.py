@@ -1,8 +1,8 @@
 """What the smoother's runs keep to synchronize the IMU's clock with the GNSS clock
 (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`): the inputs the
 estimate compares (:class:`ClockInputs`) and how well a run's fixes fit its filter
-(:class:`FixFit`), which decides between the run on the IMU's own clock and the run with
-the estimated offset."""
+(:class:`FixFit`), which decides which run (which offset) is smoothed and is the cost the
+likelihood search (:mod:`navcore.filters.time_offset_search`) minimizes."""
 from __future__ import annotations
 
 import math
