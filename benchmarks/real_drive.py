@@ -20,7 +20,8 @@ RTKLIB solution ``gnss_*.pos`` (the reference: centimetre RTK fixes), the logger
    the drive's parameters :data:`DRIVE_PARAMETERS`, the ones of the peer's configuration
    file ``--config`` over them (:mod:`gnss_imu_config`: a walk as well as the drive), and
    ``--set`` over both) and scores each
-   at the epochs of the reference fixes: RMS N/E/D over the run, RMS with fixes (outside the
+   at the epochs of the reference fixes (its solution carried to the antenna by the lever
+   arm, as the fixes are the antenna's): RMS N/E/D over the run, RMS with fixes (outside the
    outages), the 3-D error five fixes after each outage, the share of epochs inside +/-3
    sigma per axis, the mean position NEES (diagonal sigmas) and the warnings of the run.
 
@@ -53,7 +54,8 @@ from navcore.filters.process_noise_factor import CONSUMER_IMU_NOISE_FACTOR  # no
 from navcore.errors import NavcoreError  # noqa: E402
 from navcore.filters.time_offset_search import OffsetSearch  # noqa: E402
 from navcore.ins import earth  # noqa: E402
-from navcore.ins.rotations import euler_to_dcm  # noqa: E402
+from navcore.ins.lever_arm import antenna_position_offset  # noqa: E402
+from navcore.ins.rotations import euler_to_dcm, euler_to_dcm_array  # noqa: E402
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
 from orchestrator.cli.convert import convert_imu_csv, convert_rtklib, imu_csv_spec  # noqa: E402
 from orchestrator.errors import NavfmuWarning  # noqa: E402
@@ -236,9 +238,14 @@ def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=T
     return run, list(dict.fromkeys(said))
 
 
-def fix_epoch_errors(run, first: float):
+def fix_epoch_errors(run, first: float, lever=None):
     """(seconds after the first fix, NED position error [m], reported sigmas [m]) at the
-    rows where a new reference fix has just arrived (the truth holds between fixes)."""
+    rows where a new reference fix has just arrived (the truth holds between fixes).
+
+    The reference fixes are the antenna's, the filters' position the IMU's: with the lever
+    arm ``lever`` (body FRD, IMU to antenna [m], :func:`lever_arm`) the solution is carried
+    to the antenna with its own attitude (``r + C_bn l``) before it is compared, as the
+    filters compare it with the fixes they take."""
     col = run.results.column
     tt = col("replay", "truth_time")
     fresh = np.r_[False, np.diff(tt) != 0]
@@ -250,8 +257,17 @@ def fix_epoch_errors(run, first: float):
                            (col("filter", "nav_lon")[ok] - col("replay", "truth_lon")[ok])
                            * (re + h) * np.cos(lat),
                            -(col("filter", "nav_h")[ok] - h)])
+    if lever is not None and np.any(lever):
+        C_bn = euler_to_dcm_array(*(col("filter", f"nav_{a}")[ok]
+                                    for a in ("roll", "pitch", "yaw")))
+        err += antenna_position_offset(C_bn, np.asarray(lever, dtype=float))
     std = np.column_stack([col("filter", f"std_p{a}")[ok] for a in "ned"])
     return run.time_origin + tt[ok] - first, err, std
+
+
+def lever_arm(parameters) -> np.ndarray:
+    """The antenna's lever arm ``filter.lever_arm_x/y/z`` of ``parameters`` [m] (0 unset)."""
+    return np.array([float(parameters.get(f"filter.lever_arm_{a}", 0.0)) for a in "xyz"])
 
 
 def score(t, err, std, outages):
@@ -471,7 +487,7 @@ def main(argv=None) -> int:
         try:
             run, said = run_filter(work / "log", name, parameters, smooth, not args.no_sync,
                                    search)
-            t, err, std = fix_epoch_errors(run, first)
+            t, err, std = fix_epoch_errors(run, first, lever_arm(parameters))
             smoother = run.results.metadata.get("smoother", {})
             clock = {k: v for k, v in smoother.items() if k in (
                 "imu_time_offset_s", "imu_time_offset_runs", "imu_time_offset_fit_per_fix")}
