@@ -1,7 +1,8 @@
 """The GNSS antenna lever arm (navcore.ins.lever_arm): the filters' measurement model against
 the rigid-body kinematics of an antenna on a turning vehicle (analytic: r = C l, v = omega x
 r), in the Kf and the UKF family; the receiver's offset antenna against the same case; and
-aircraft_500s flown with an offset antenna, with and without the lever arm in the filter."""
+aircraft_500s flown with an offset antenna, with and without the lever arm in the filter; a
+replayed log's truth is the IMU's point, the point of the filters' nav_* outputs."""
 from __future__ import annotations
 
 import dataclasses
@@ -21,6 +22,8 @@ from orchestrator.cosim.master import Simulation
 from orchestrator.errors import NavfmuWarning
 from orchestrator.results import metrics
 from orchestrator.running import scenarios
+from orchestrator.running.replay import sensor_log_from_results
+from navcore.sensors.sensorlog import SensorLog, write_log
 
 LAT, LON, H = 0.7, 2.0, 100.0
 YAW_RATE = 0.1                   # rad/s, a right turn
@@ -102,6 +105,47 @@ def test_offset_antenna_in_aircraft_500s():
     # the numbers docs/guide/lever_arm.md states (north RMS: centred, ignored, modelled)
     assert [errors[k][1]["n"] for k in ("centred", "ignored", "modelled")] == pytest.approx(
         [0.875, 4.496, 0.879], abs=0.0015)
+
+
+def test_replayed_truth_is_the_imus_point_not_the_antennas(tmp_path):
+    """A run with the antenna 4 m ahead, 1 m right and 2 m above the IMU and noiseless fixes,
+    recorded and replayed with the filter's lever arm: the recorded truth (the trajectory's,
+    the IMU's point) scores the replay exactly as the simulation (N/E/D RMS over 60-120 s
+    2.600/1.795/0.707 m); the same log with the antenna's fixes as its truth is off by the
+    lever arm (4.667/2.628/1.860 m, mean error moved by -C_bn l: about 4 m south, 1 m west,
+    2 m down), the mistake docs/guide/sensor_logs.md warns of."""
+    model = scenarios.load_scenario(fmu_build.ROOT / "models" / "aircraft_500s")
+    arm = {"lever_arm_x": 4.0, "lever_arm_y": 1.0, "lever_arm_z": -2.0}
+    params = {f"{c}.{k}": v for k, v in arm.items() for c in ("gnss", "filter")}
+    params.update({f"gnss.{q}_sigma_{a}": 0.0 for q in ("pos", "vel") for a in "ned"})
+    window = (60.0, 120.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NavfmuWarning)      # the Kf's NIS warning
+        sim = scenarios.simulate_scenario(model, backend="direct", parameters=params,
+                                          stop_time=window[1], window=window, log=None)
+    log = sensor_log_from_results(sim.results)
+    fixes = {k: log.gnss[k] for k in ("time", "lat", "lon", "h", "vn", "ve", "vd")}
+    antenna = {**fixes, **{k: 0.0 * fixes["time"] for k in ("roll", "pitch", "yaw")}}
+    write_log(tmp_path / "imu", log)
+    write_log(tmp_path / "antenna", SensorLog(log.imu, log.gnss, antenna))
+    filter_arm = {f"filter.{k}": v for k, v in arm.items()}
+    rms, mean = {}, {}
+    for name in ("imu", "antenna"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NavfmuWarning)
+            run = scenarios.simulate_scenario(model, backend="direct", parameters=filter_arm,
+                                              replay=tmp_path / name, window=window, log=None)
+        e = metrics.navigation_errors(run.results, "filter")
+        late = e["valid"] & (e["time"] >= window[0])
+        rms[name] = [run.metrics["filter"]["position_rms_m"][a] for a in "ned"]
+        mean[name] = np.array([e[f"pos_{a}"][late].mean() for a in "ned"])
+    expected = [sim.metrics["filter"]["position_rms_m"][a] for a in "ned"]
+    assert rms["imu"] == pytest.approx(expected, abs=1e-9)
+    assert rms["imu"] == pytest.approx([2.600, 1.795, 0.707], abs=0.002)
+    assert rms["antenna"] == pytest.approx([4.667, 2.628, 1.860], abs=0.002)
+    shift = mean["antenna"] - mean["imu"]
+    assert math.hypot(shift[0], shift[1]) == pytest.approx(math.hypot(4.0, 1.0), rel=0.05)
+    assert shift[2] == pytest.approx(2.0, abs=0.25)
 
 
 @pytest.mark.parametrize("model_dir", sorted(p.parent.name for p in (

@@ -5,8 +5,9 @@ replayed and scored.  The trimmed drive is the car standing (12 s of IMU, 4 Hz R
 at 9-11 s is what each must bridge.  With the drive's configuration (a consumer IMU's
 datasheet figures times imu_noise_factor, the receiver's sigmas inflated for its correlated
 errors) every filter stays within 2 times the Kf's error over the run (horizontally;
-vertically 4 times) and after the outage, and 90 % or more of its errors per axis are inside its +/-3 sigma (these two: slow).  And
-the scoring: the solution is carried to the antenna whose fixes are the truth."""
+vertically 4 times) and after the outage, and 90 % or more of its errors per axis are inside
+its +/-3 sigma (these two: slow).  And the scoring: the solution is carried to the antenna
+whose fixes are the truth."""
 from __future__ import annotations
 
 import importlib.util

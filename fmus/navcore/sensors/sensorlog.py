@@ -21,7 +21,10 @@ every title must be one of the file's columns below, with exactly that unit.
     ``outlier`` (1 where an outlier was injected, for evaluation only).
 ``truth.csv`` (optional; reference trajectory for the metrics)
     ``time [s]``, ``lat [rad]``, ``lon [rad]``, ``h [m]``, ``vn/ve/vd [m/s]``,
-    ``roll/pitch/yaw [rad]`` (ZYX Euler angles).
+    ``roll/pitch/yaw [rad]`` (ZYX Euler angles).  Position and velocity are the IMU's (the
+    point of the filters' ``nav_*``, which the metrics compare with it), not the GNSS
+    antenna's: a recorded run's truth is its trajectory's, gnss-ins-sim's and KF-GINS's
+    references are the IMU's.
 
 Rules a log must satisfy (:func:`read_log` checks them and names file and line):
 
