@@ -18,7 +18,10 @@ Tasks (the table of docs/speed.md "Campaigns on a recorded log"):
   ``--batch B`` (``B`` runs, 4 for B = 1), one worker; every run replays the log through the
   filter with the parameters of :data:`PARAMETERS`;
 * ``sim-B20``, ``sim-B64``: ``navfmu montecarlo models/aircraft_500s --filters Kf`` with B
-  runs in one batch (simulated sensors).
+  runs in one batch (simulated sensors);
+* ``compare``, ``compare-direct``: ``navfmu compare models/replay_gnss_ins_sim --replay LOG
+  --filters`` the four filters of :data:`COMPARED` (CSV written, no plots), through the FMUs
+  and with ``--backend direct``; its runs: the filters.
 
 The log: ``--log`` (a navfmu sensor log folder), else ``--drive`` (a folder of RTKLIB files
 laid out as the public drive_0708 of rtklibexplorer/GNSS_IMU, converted by
@@ -60,10 +63,13 @@ SCENARIO = "models/replay_gnss_ins_sim"
 PARAMETERS = {**{k: v for k, v in DRIVE_PARAMETERS.items() if not k.startswith("filter.r_vel")},
               "filter.r_from_receiver": False, "filter.r_pos_n": 0.1, "filter.r_pos_e": 0.1,
               "filter.r_pos_d": 0.2}
-#: task -> (kind, batch size); runs: the batch size (4 for B = 1)
+#: task -> (kind, batch size); runs: the batch size (4 for B = 1), a comparison's filters
 TASKS = {"run": ("run", 1), "run-direct": ("run", 1), "mc-B1": ("replay", 1),
          "mc-B8": ("replay", 8), "mc-B20": ("replay", 20), "mc-B64": ("replay", 64),
-         "sim-B20": ("sim", 20), "sim-B64": ("sim", 64)}
+         "sim-B20": ("sim", 20), "sim-B64": ("sim", 64),
+         "compare": ("compare", 4), "compare-direct": ("compare", 4)}
+#: the filters of the ``compare`` tasks (every one takes the parameters of PARAMETERS)
+COMPARED = ("Kf", "Iakf", "SageHusaFading", "Ukf")
 SIM_SCENARIO, SIM_STOP = "models/aircraft_500s", 500.0
 #: simulated seconds of the untimed warm-up campaign (the drive's filter starts at its first
 #: valid fix, 36 s in)
@@ -95,10 +101,14 @@ def task_args(task: str, log: Path, stop: float, out: Path, origin: float = 0.0)
     the log's time origin (``run --replay --stop`` takes the log's time)."""
     kind, batch = TASKS[task]
     cli = [sys.executable, "-m", "orchestrator.cli"]
+    backend = ["--backend", "direct"] if task.endswith("-direct") else []
+    replayed = ["--replay", str(log), "--stop", repr(origin + stop), "--out", str(out),
+                "--no-plots", *backend, *_sets()]
     if kind == "run":
-        backend = ["--backend", "direct"] if task == "run-direct" else []
-        return (cli + ["run", SCENARIO, "--replay", str(log), "--stop", repr(origin + stop),
-                       "--out", str(out), "--no-plots", *backend, *_sets()], 1, stop)
+        return cli + ["run", SCENARIO, *replayed], 1, stop
+    if kind == "compare":
+        return (cli + ["compare", SCENARIO, "--filters", ",".join(COMPARED), *replayed],
+                batch, stop)
     runs = 4 if batch == 1 else batch
     if kind == "replay":
         return (cli + ["montecarlo", SCENARIO, "--runs", str(runs), "--filters", "Kf",
@@ -206,7 +216,8 @@ def measure(args, log: Path, work: Path, binary, config, stop: float, origin: fl
         # untimed: FMUs built, and the compiled kernels of every task kind in the disk cache
         # (a first run after a change to navcore compiles them, several seconds)
         build_fmus(checkout, "replay_speed")
-        for task in ("run", "run-direct", "mc-B8", "sim-B20"):
+        compared = [t for t in tasks if TASKS[t][0] == "compare"]
+        for task in ("run", "run-direct", "mc-B8", "sim-B20", *compared):
             argv, _, _ = task_args(task, log, WARM_UP_STOP, work / f"warm-{label}-{task}",
                                    origin)
             measured(argv, checkout, checkout_env(checkout), "the warm-up")

@@ -26,6 +26,7 @@ from campaign_helpers import MODELS
 
 RUNS = 4
 REFUSED = 2          # the run refused in the middle
+REFUSAL_AT = 2.5     # [s] the AHRS run's refusal
 
 
 def _ins_sets(model, short_log=None):
@@ -53,12 +54,16 @@ def _ins_sets(model, short_log=None):
 
 
 def _ahrs_sets(model, short_log=None):
-    """AHRS runs: P0, R of both sensors, Q per run, their IMU and magnetometer errors; run
-    REFUSED refused at the start (the AHRS inputs are all connected, and nothing a run owns
-    refuses it later)."""
+    """AHRS runs: P0, R of both sensors, Q per run, their IMU and magnetometer errors and a
+    window of louder gyro noise each (``noise_level_windows``); run REFUSED's window, from
+    REFUSAL_AT on, makes its angle increments larger than pi: its filter refuses the input
+    in the middle of the run (the AHRS inputs are all connected)."""
     return [{"trajectory.seed": 11 + 7 * b, "trajectory.gyro_bias_dph": 1.0 + b,
+             "trajectory.gyro_arw_dpsh": 200.0 if b == REFUSED else 0.5 + 0.1 * b,
+             "trajectory.noise_level_windows": (f"{REFUSAL_AT},1000,1000" if b == REFUSED
+                                                else f"{1 + b},{2 + b},{2 + b}"),
              "trajectory.mag_noise_T": (0.5 + 0.25 * b) * 1e-7,
-             "filter.p0_att": -1.0 if b == REFUSED else 0.02 + 0.01 * b,
+             "filter.p0_att": 0.02 + 0.01 * b,
              "filter.r_accel_mps2": 0.1 + 0.05 * b, "filter.r_mag_T": (1.0 + b) * 1e-7,
              "filter.q_gyro_arw_dpsh": 0.1 + 0.05 * b} for b in range(RUNS)]
 
@@ -116,7 +121,10 @@ def test_runs_differing_in_all_they_own_record_their_single_runs(scenario, filte
     # the runs do differ, and the refused runs were refused in the middle where they can be
     finished = [o for o in outcomes if not isinstance(o, Exception)]
     assert not np.array_equal(finished[0].data["filter"], finished[1].data["filter"])
-    if make_sets is _ins_sets or make_sets == "replay":
+    if make_sets is _ahrs_sets:
+        assert "input 'imu_dtheta_" in str(outcomes[REFUSED])
+        assert f"(step from t = {REFUSAL_AT} s" in str(outcomes[REFUSED])   # mid-run
+    else:
         assert "gnss_std_n" in str(outcomes[REFUSED])
         assert "(step from t = " in str(outcomes[REFUSED])       # refused while stepping
     if make_sets == "replay":

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from ..results import mission_metrics, outputs
-from ..running import prechecks, scenarios, smoothing
+from ..running import prechecks, scenarios, shared_replay, smoothing
 from .cli_options import DEFAULT_OUT, parse_sets, parse_window
 from ..running.comparison import paper_comparison, report_table
 from ..running.comparison_text import format_comparison
@@ -73,6 +73,15 @@ def _simulate_all(model, filters, out, stop, backend, window, parameters, fmt, r
             raise NavfmuError("--log-sensors needs the run's rows in memory: use --format csv "
                               "or npz with it")
         stream_dir = outputs.stream_folder(out)
+    try:
+        if shared_replay.shareable(model, filters, replay, fmt):
+            with progress_bars() as progress_bar:
+                return shared_replay.simulate_filters(
+                    model, filters, backend, stop, parameters, window,
+                    progress_bar(",".join(filters)), algorithm, lambda m: echo(m, err=True),
+                    replay, replay_options, isolation)
+    except NavfmuError:
+        pass                # one by one: the first failing filter's own error
     runs = []
     with progress_bars() as progress_bar:
         for f in filters:
