@@ -5,7 +5,7 @@ replayed and scored.  The trimmed drive is the car standing (12 s of IMU, 4 Hz R
 at 9-11 s is what each must bridge.  With the drive's configuration (a consumer IMU's
 datasheet figures times imu_noise_factor, the receiver's sigmas inflated for its correlated
 errors) every filter stays within 2 times the Kf's error over the run (horizontally;
-vertically 4 times) and after the outage, and 90 % or more of its errors per axis are inside
+vertically 1.5 times) and after the outage, and 90 % or more of its errors per axis are inside
 its +/-3 sigma (these two: slow).  And the scoring: the solution is carried to the antenna
 whose fixes are the truth."""
 from __future__ import annotations
@@ -69,11 +69,12 @@ def test_every_filter_is_within_twice_the_kf_and_honest_about_its_error(rows):
     got, _ = rows
     kf = got["Kf"]
     for name, r in got.items():
-        # horizontally within twice the Kf; vertically within four times: in the 2 s outage
-        # at rest the UKF family drifts 7.5-7.7 cm RMS against the Kf's 2.3 cm (measured at
-        # the antenna; the IMU's 5 cm from it had been 4.6 cm of every filter's error north)
+        # horizontally within twice the Kf; vertically within 1.5 times: the UKF family
+        # 2.6-2.9 cm RMS against the Kf's 2.3 cm (measured at the antenna; the IMU's 5 cm
+        # from it had been 4.6 cm of every filter's error north).  It was 7.5-7.7 cm while
+        # the alignment kept the configured 10 deg level sigma: tests/test_ukf_static_outage.py
         assert np.linalg.norm(r["rms"][:2]) <= 2.0 * np.linalg.norm(kf["rms"][:2]), name
-        assert r["rms"][2] <= 4.0 * kf["rms"][2], (name, r["rms"], kf["rms"])
+        assert r["rms"][2] <= 1.5 * kf["rms"][2], (name, r["rms"], kf["rms"])
         assert r["after"][0] <= 2.0 * kf["after"][0], (name, r["after"], kf["after"])
         assert min(r["inside_3sigma_pct"]) >= 90.0, (name, r["inside_3sigma_pct"])
         assert 0.0 < r["nees"] < 9.0, (name, r["nees"])

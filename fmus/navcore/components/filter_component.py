@@ -19,7 +19,7 @@ from ..core.component import Component, InputError
 from ..errors import DivergenceError, StepSizeError
 from ..ins.constants import DPH, DPSH, UG
 from ..filters.initial_state import (FROM_FIX, INIT_CHECK_SIGMAS, INIT_MODES, Initializer,
-                                     disagreement)
+                                     disagreement, level_sigma)
 from ..filters.static_alignment import RestDetector
 from ..filters.initial_biases import (StaticBiasEstimator, bias_sigmas, check_static_mode,
                                       given_biases)
@@ -276,6 +276,11 @@ class InsGnssFilter(Component):
         if p["init_mode"] == "static":
             state = self._static_alignment(state, config)
             lat, lon, h, v, roll, pitch, yaw = state
+        elif p["init_mode"] == "align":
+            # levelled at rest as 'static' is: its level is known to the accelerometer bias
+            # over g, not to the configured p0_att_level (a 10 deg prior made the UKF's
+            # points predict a -g E[1 - cos phi] = -0.3 m/s^2 vertical error that is not there)
+            config.p0[6:8] = level_sigma(config.p0[12:14], earth.gravity(lat, h))
         if config.lever_arm is not None:   # the fix is the antenna's: back to the IMU
             lat, lon, h, _ = antenna_fix(lat, lon, h, v, euler_to_dcm(roll, pitch, yaw),
                                          -config.lever_arm, np.zeros(3))

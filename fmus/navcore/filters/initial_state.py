@@ -31,6 +31,8 @@
     cosine of the latitude): the heading error is about the gyro bias / (Earth rate cos(lat))
     rad, so 0.01 deg/h gives 0.05 deg at 40 deg latitude while a MEMS gyro of 10 deg/h gives
     no heading at all (use ``gnss`` there).
+    Roll and pitch start with the level's own sigma (:func:`level_sigma` of the accelerometer
+    bias sigma), as with ``static``, not the configured ``p0_att_level``.
 
 Until the state is known the filter integrates nothing: it follows the IMU's time tags
 (``nav_time``), outputs the given state with ``aligned`` = false (the metrics skip those
@@ -92,6 +94,16 @@ def level(f_body):
     """(roll, pitch) [rad] from the specific force at rest ``f_body`` (FRD, = -gravity)."""
     fx, fy, fz = (float(x) for x in f_body)
     return math.atan2(-fy, -fz), math.atan2(fx, math.hypot(fy, fz))
+
+
+def level_sigma(accel_bias_sigma, g, f_std=(0.0, 0.0), n=1):
+    """1-sigma [rad] of roll and pitch levelled on the mean specific force of ``n`` intervals
+    at rest (:func:`level`): ``hypot(accelerometer bias sigma, f_std / sqrt(n)) / g``, the
+    larger of the two horizontal axes (a horizontal accelerometer bias b tilts the level by
+    b / g and the rest cannot tell them apart; ``f_std`` the spread of the specific force,
+    m/s^2).  ``accel_bias_sigma`` (the first two used) [m/s^2], ``g`` [m/s^2]."""
+    return float(np.max(np.hypot(np.asarray(accel_bias_sigma, dtype=float)[:2],
+                                 np.asarray(f_std, dtype=float)[:2] / math.sqrt(n)))) / g
 
 
 def coarse_alignment(f_body, w_body):

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..core.component import Limits, real
 from .initial_biases import STATIC_ACCEL_SPREAD, STATIC_RATE_SPREAD, gyro_bias_at_rest
-from .initial_state import level
+from .initial_state import level, level_sigma
 
 #: default window of the motion detector [s]
 DEFAULT_STATIC_WINDOW = 1.0
@@ -136,11 +136,9 @@ class RestDetector:
                 "rest, or raise static_accel_std / static_rate_std")
         w, w_std, f, f_std = self.rest.spreads()
         roll, pitch = level(f)
-        sqrt_n = math.sqrt(self.rest.n)
-        level_sigma = float(np.max(np.hypot(np.asarray(accel_bias_sigma)[:2],
-                                            f_std[:2] / sqrt_n))) / g
         bias, bias_sigma = gyro_bias_at_rest(w, w_std, f, self.rest.n, lat)
-        return roll, pitch, level_sigma, bias, bias_sigma, None
+        return (roll, pitch, level_sigma(accel_bias_sigma, g, f_std, self.rest.n), bias,
+                bias_sigma, None)
 
 
 __all__ = ["DEFAULT_STATIC_WINDOW", "RestDetector", "STATIC_PARAMETERS"]
