@@ -250,7 +250,9 @@ def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=T
 
 def fix_epoch_errors(run, first: float, lever=None):
     """(seconds after the first fix, NED position error [m], reported sigmas [m]) at the
-    rows where a new reference fix has just arrived (the truth holds between fixes).
+    rows where a new reference fix has just arrived (the truth holds between fixes); on an
+    IMU grid that the fixes do not fall on, the solution at that row less its velocity
+    times the time since the fix.
 
     The reference fixes are the antenna's, the filters' position the IMU's: with the lever
     arm ``lever`` (body FRD, IMU to antenna [m], :func:`lever_arm`) the solution is carried
@@ -260,13 +262,16 @@ def fix_epoch_errors(run, first: float, lever=None):
     tt = col("replay", "truth_time")
     fresh = np.r_[False, np.diff(tt) != 0]
     ok = fresh & (col("filter", "aligned") > 0.5) & np.isfinite(col("replay", "truth_lat"))
-    ok &= np.abs(col("filter", "nav_time") - tt) < 0.5 * run.model.base_step + 1e-9
+    late = col("filter", "nav_time") - tt        # the first IMU epoch at or after the fix
+    ok &= np.abs(late) < run.model.base_step + 1e-9
     lat, h = col("replay", "truth_lat")[ok], col("replay", "truth_h")[ok]
     rn, re = earth.radii(lat)
     err = np.column_stack([(col("filter", "nav_lat")[ok] - lat) * (rn + h),
                            (col("filter", "nav_lon")[ok] - col("replay", "truth_lon")[ok])
                            * (re + h) * np.cos(lat),
                            -(col("filter", "nav_h")[ok] - h)])
+    # an IMU grid off the fixes' (a calibrated clock): the solution carried back to the fix
+    err -= np.column_stack([col("filter", f"nav_v{a}")[ok] for a in "ned"]) * late[ok, None]
     if lever is not None and np.any(lever):
         C_bn = euler_to_dcm_array(*(col("filter", f"nav_{a}")[ok]
                                     for a in ("roll", "pitch", "yaw")))
