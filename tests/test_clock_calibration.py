@@ -1,7 +1,8 @@
 """The offline calibration of a sensor log's IMU clock (orchestrator.running.clock_calibration,
 ``navfmu convert time-offset``): a simulated car's log whose IMU is stamped 0.2 s late is
 calibrated to the lag within 10 ms, and the real-time Kf replaying the calibrated log is as
-good in an outage through a turn as on the log on time; a log without motion is refused in
+good in an outage through a turn as on the log on time, and calibrating it again changes
+nothing; a log without motion is refused in
 one line; a bad log is one error line.
 """
 from __future__ import annotations
@@ -93,6 +94,11 @@ def test_a_late_imu_is_calibrated_and_the_real_time_kf_recovers(logs, tmp_path, 
           f"{fixed:.3f} m; offset {offset:.4f} s")
     assert stale > 5.0 * reference, (stale, reference)
     assert fixed < 1.5 * reference, (fixed, reference)
+    # calibrated once: again, no offset fits better beyond chance, the log stays as it is
+    before = (calibrated / "imu.csv").read_bytes()
+    code, out, err = navfmu_cli("convert", "time-offset", calibrated, *SCENARIO_OPTIONS)
+    assert code == 0 and "\nnot accepted; " in out and f"{calibrated}: unchanged" in out, out
+    assert (calibrated / "imu.csv").read_bytes() == before
 
 
 def test_a_log_without_motion_is_refused_in_one_line(tmp_path, navfmu_cli):

@@ -14,7 +14,8 @@ The calibrated log is written in the sensor-log format unchanged: ``imu.csv``'s 
 the offset (``tau > 0``: the stamps were late), through
 :func:`navcore.sensors.sensorlog.write_log_file` (checked as a replay reads it, moved in
 place whole), so a log read before is read again by its new content
-(:mod:`navcore.sensors.log_cache`).  Calibrating a calibrated log finds about 0.
+(:mod:`navcore.sensors.log_cache`).  A calibrated log calibrated again is left as it is
+(no offset fits better beyond chance).
 """
 from __future__ import annotations
 
@@ -60,11 +61,13 @@ class ClockCalibration:
 def estimate(model, log, filter=None, parameters=None, search=OffsetSearch()) -> ClockCalibration:
     """The IMU time offset of the sensor log ``log`` replayed through ``model`` (a replay
     scenario) with ``filter`` (None: the model's own; a filter the smoother supports) and
-    the parameter overrides ``parameters``; refused in one line when the log does not move
+    the parameter overrides ``parameters`` (the kept run's warnings raised: the fit means
+    something only for a filter set up for the log); refused in one line when the log does not move
     enough to show it (fewer than :data:`navcore.filters.imu_time_offset.MIN_EPOCHS` fix
     epochs while moving)."""
-    session, _, _ = smoothing.synchronized_run(model, filter, True, search, replay=log,
-                                               parameters=parameters, log=None)
+    session, _, said = smoothing.synchronized_run(model, filter, True, search, replay=log,
+                                                  parameters=parameters, log=None)
+    smoothing.raise_held(said)        # a filter that does not fit the log says so (NIS)
     details = smoothing.clock_metadata(session)
     if session.clock.epochs < MIN_EPOCHS:
         raise NavfmuError(f"{log}: the IMU's time offset cannot be estimated: "

@@ -75,8 +75,7 @@ def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
     window = simulate.pop("window", None)
     session, run, said = synchronized_run(model, filter, synchronize, search, **simulate)
     label = scenarios.filter_label(model, filter)
-    for w in said:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    raise_held(said)
     solution = session.solution()
     results = smoothed_results(run.results, solution)
     smoothed = scenarios.measured_run(label + SMOOTHED_SUFFIX, run.model, results, window,
@@ -87,6 +86,12 @@ def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
         "recording_mb": round(solution["recording_bytes"] / 1e6, 2),
         **clock_metadata(session)}
     return scenarios.report_inconsistency(smoothed)
+
+
+def raise_held(said) -> None:
+    """Raise the warnings ``said`` a run held back (:func:`synchronized_run`), as they were."""
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def _quietly(run):
@@ -152,4 +157,4 @@ def smoothed_results(results: Results, solution) -> Results:
 
 
 __all__ = ["SMOOTHED_SUFFIX", "check_smoothable", "clock_metadata", "smoothed_results",
-           "smoothed_run", "synchronized_run"]
+           "raise_held", "smoothed_run", "synchronized_run"]
