@@ -59,7 +59,7 @@ from navcore.ins.rotations import euler_to_dcm, euler_to_dcm_array  # noqa: E402
 from navcore.sensors.sensorlog import SensorLog, read_log, write_log  # noqa: E402
 from orchestrator.cli.convert import convert_imu_csv, convert_rtklib, imu_csv_spec  # noqa: E402
 from orchestrator.errors import NavfmuWarning  # noqa: E402
-from orchestrator.running import scenarios, smoothing  # noqa: E402
+from orchestrator.running import clock_calibration, scenarios, smoothing  # noqa: E402
 
 G0 = 9.80665                       # m/s^2 per g (the logger's unit)
 GPS_EPOCH_UNIX = 315964800.0       # 1980-01-06 in UNIX seconds
@@ -222,6 +222,16 @@ def offset_search(text: str, parser):
         parser.error(f"--offset-search: {exc}")
 
 
+def calibrate_clock(log_dir: Path, parameters) -> dict:
+    """Calibrate the IMU clock of the log in ``log_dir`` in place
+    (:func:`orchestrator.running.clock_calibration.calibrate` through the Kf with
+    ``parameters``, on the fixes the log holds: the outages cut); the offset taken."""
+    model = scenarios.load_scenario(ROOT / "models" / "replay_gnss_ins_sim")
+    found, _ = clock_calibration.calibrate(model, log_dir, "Kf", parameters)
+    print("clock calibration:", found.summary(), flush=True)
+    return {"imu_time_offset_calibrated_s": round(found.offset, 4)}
+
+
 def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=True,
                search=OffsetSearch()):
     """One replay of ``log_dir`` through filter ``name`` (its smoothed solution with
@@ -240,7 +250,9 @@ def run_filter(log_dir: Path, name: str, parameters, smooth=False, synchronize=T
 
 def fix_epoch_errors(run, first: float, lever=None):
     """(seconds after the first fix, NED position error [m], reported sigmas [m]) at the
-    rows where a new reference fix has just arrived (the truth holds between fixes).
+    rows where a new reference fix has just arrived (the truth holds between fixes); on an
+    IMU grid that the fixes do not fall on, the solution at that row less its velocity
+    times the time since the fix.
 
     The reference fixes are the antenna's, the filters' position the IMU's: with the lever
     arm ``lever`` (body FRD, IMU to antenna [m], :func:`lever_arm`) the solution is carried
@@ -250,13 +262,16 @@ def fix_epoch_errors(run, first: float, lever=None):
     tt = col("replay", "truth_time")
     fresh = np.r_[False, np.diff(tt) != 0]
     ok = fresh & (col("filter", "aligned") > 0.5) & np.isfinite(col("replay", "truth_lat"))
-    ok &= np.abs(col("filter", "nav_time") - tt) < 0.5 * run.model.base_step + 1e-9
+    late = col("filter", "nav_time") - tt        # the first IMU epoch at or after the fix
+    ok &= np.abs(late) < run.model.base_step + 1e-9
     lat, h = col("replay", "truth_lat")[ok], col("replay", "truth_h")[ok]
     rn, re = earth.radii(lat)
     err = np.column_stack([(col("filter", "nav_lat")[ok] - lat) * (rn + h),
                            (col("filter", "nav_lon")[ok] - col("replay", "truth_lon")[ok])
                            * (re + h) * np.cos(lat),
                            -(col("filter", "nav_h")[ok] - h)])
+    # an IMU grid off the fixes' (a calibrated clock): the solution carried back to the fix
+    err -= np.column_stack([col("filter", f"nav_v{a}")[ok] for a in "ned"]) * late[ok, None]
     if lever is not None and np.any(lever):
         C_bn = euler_to_dcm_array(*(col("filter", f"nav_{a}")[ok]
                                     for a in ("roll", "pitch", "yaw")))
@@ -457,6 +472,10 @@ def main(argv=None) -> int:
                    help="the smoother's likelihood search of the IMU's time offset: 'off' "
                    "(the course estimate only) or KEY=VALUE,... of OffsetSearch (bound, step, "
                    "tolerance, refinements, around_start)")
+    p.add_argument("--calibrate-clock", action="store_true",
+                   help="calibrate the log's IMU clock first (navfmu convert time-offset: "
+                   "estimated through the Kf on the log with the outages cut, the IMU's "
+                   "times moved onto the GNSS clock), then run every filter on it")
     args = p.parse_args(argv)
     setup = _setup(args, p)
     search = offset_search(args.offset_search, p)
@@ -478,6 +497,9 @@ def main(argv=None) -> int:
     for item in args.set:
         key, _, value = item.partition("=")
         parameters[key] = _value(value)
+    calibrated = {}
+    if args.calibrate_clock:
+        calibrated = calibrate_clock(work / "log", parameters)
     rows = {}
     runs = [(name, False) for name in args.filters.split(",")]
     if args.smooth:
@@ -492,6 +514,7 @@ def main(argv=None) -> int:
             clock = {k: v for k, v in smoother.items() if k in (
                 "imu_time_offset_s", "imu_time_offset_runs", "imu_time_offset_fit_per_fix")}
             rows[label] = {**score(t, err, std, outages), "warnings": said, **clock,
+                           **calibrated,
                            "residual_corr_time_s": correlation_time(t, err, outages),
                            **outage_score(t, err, outages[args.scored_from - 1:] if peer
                                           else outages)}

@@ -88,9 +88,10 @@ def test_every_filter_is_within_twice_the_kf_and_honest_about_its_error(rows):
 LEVER = np.array([0.0, -0.05, 0.0])
 
 
-def _run(yaws):
+def _run(yaws, late=0.0, velocity=(0.0, 0.0, 0.0)):
     """A recorded run whose IMU is exactly where the antenna at the fixed point puts it for
-    each heading in ``yaws`` (level body), one fix per row."""
+    each heading in ``yaws`` (level body), one fix per row; with ``late`` [s] its epochs
+    come that long after the fixes, the IMU moved on by ``velocity`` (NED [m/s])."""
     lat, lon, h = FIRST_FIX
     rn, re = earth.radii(lat)
     n = len(yaws)
@@ -101,10 +102,12 @@ def _run(yaws):
         ("replay", "truth_time"): np.arange(n, dtype=float),
         ("replay", "truth_lat"): np.full(n, lat), ("replay", "truth_lon"): np.full(n, lon),
         ("replay", "truth_h"): np.full(n, h),
-        ("filter", "nav_time"): np.arange(n, dtype=float), ("filter", "aligned"): np.ones(n),
-        ("filter", "nav_lat"): lat - dn / (rn + h),
-        ("filter", "nav_lon"): lon - de / ((re + h) * math.cos(lat)),
-        ("filter", "nav_h"): np.full(n, h), ("filter", "nav_roll"): np.zeros(n),
+        ("filter", "nav_time"): np.arange(n) + late, ("filter", "aligned"): np.ones(n),
+        ("filter", "nav_lat"): lat + (velocity[0] * late - dn) / (rn + h),
+        ("filter", "nav_lon"): lon + (velocity[1] * late - de) / ((re + h) * math.cos(lat)),
+        ("filter", "nav_h"): np.full(n, h - velocity[2] * late),
+        **{("filter", f"nav_v{a}"): np.full(n, v) for a, v in zip("ned", velocity)},
+        ("filter", "nav_roll"): np.zeros(n),
         ("filter", "nav_pitch"): np.zeros(n), ("filter", "nav_yaw"): np.asarray(yaws),
         **{("filter", f"std_p{a}"): np.full(n, 0.01) for a in "ned"},
     }
@@ -126,6 +129,20 @@ def test_the_solution_is_carried_to_the_antenna_before_it_is_compared():
     assert np.linalg.norm(imu, axis=1) == pytest.approx([0.05] * 3, abs=1e-6)
     # heading east, the antenna 5 cm to the body's left is 5 cm north of the IMU
     assert imu[0] == pytest.approx([-0.05, 0.0, 0.0], abs=1e-6)
+
+
+@pytest.mark.parametrize("late", [0.004, 0.008])
+def test_an_imu_grid_off_the_fixes_is_carried_back_to_them(late):
+    """A calibrated clock's IMU epochs fall 4 or 8 ms (of a 10 ms step) after the fixes, the
+    IMU moving at 10 m/s north, 3 east, 1 down: scored at the fixes' instants, no error
+    (left uncorrected: 10.5 m/s times the lag)."""
+    bench = _benchmark()
+    yaws = np.radians([0.0, 90.0, 180.0, -45.0])
+    run = _run(yaws, late, (10.0, 3.0, 1.0))
+    t, err, _ = bench.fix_epoch_errors(run, 100.0, bench.lever_arm(
+        {"filter.lever_arm_y": -0.05}))
+    assert t.tolist() == [1.0, 2.0, 3.0]
+    assert np.abs(err).max() < 1e-6
 
 
 def test_the_lever_arm_of_the_parameters():

@@ -3,10 +3,13 @@ RTKLIB solutions, plain IMU CSV files); the conversions themselves are
 :mod:`orchestrator.cli.convert` and the readers of :mod:`navcore.sensors`."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from ..errors import NavfmuError
 from .cli_options import nonempty_path
+from .option_groups import SSV_HELP
 
 
 @click.group()
@@ -108,6 +111,34 @@ def convert_imu_csv(csv_file, dst, config, force, **options):
 
     spec = conv.imu_csv_spec(config, options)
     click.echo(conv.convert_imu_csv(csv_file, dst, spec, force))
+
+
+@convert.command("time-offset")
+@click.argument("log", type=click.Path(file_okay=False), callback=nonempty_path)
+@click.option("--scenario", type=click.Path(), callback=nonempty_path,
+              help="The replay scenario the log runs through (default: "
+              "models/replay_gnss_ins_sim, its own filter swapped for the Kf).")
+@click.option("--set", "sets", multiple=True, metavar="COMP.VAR=VALUE",
+              help="Override a parameter of the replay (repeatable): the filter's settings "
+              "for this log (lever arm, noise, init_mode).")
+@click.option("--ssv", "ssv", multiple=True, metavar="[COMPONENT=]FILE", help=SSV_HELP)
+def convert_time_offset(log, scenario, sets, ssv):
+    """Calibrate the IMU clock of the sensor log LOG: estimate the IMU's time offset to the
+    GNSS clock from the whole log (replayed through the Kf, as the smoother does) and,
+    when accepted, rewrite LOG/imu.csv with the IMU's times on the GNSS clock."""
+    from ..building.build import ROOT
+    from ..running import clock_calibration, scenarios
+    from ..running.ssv_bindings import overrides
+    from .cli_options import parse_sets
+
+    if not Path(log).is_dir():
+        raise NavfmuError(f"convert time-offset: the sensor log {log} is not a folder")
+    model = scenarios.load_scenario(scenario or ROOT / "models" / "replay_gnss_ins_sim")
+    found, written = clock_calibration.calibrate(model, log, "Kf",
+                                                 overrides(ssv, model, parse_sets(sets)))
+    click.echo(found.summary())
+    click.echo(f"wrote {written}: the IMU's times moved by {-found.offset:+.3f} s"
+               if written else f"{log}: unchanged")
 
 
 __all__ = ["convert"]

@@ -36,25 +36,25 @@ def check_smoothable(model, filter=None) -> None:
     SmoothingSession(scenarios.filter_label(model, filter))
 
 
-def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
-                 **simulate) -> scenarios.Run:
-    """The smoothed run of ``model`` with ``filter`` (None: the model's own): the keyword
-    arguments of :func:`orchestrator.running.scenarios.simulate_scenario` but the backend,
-    which is the direct one.  Refused, before running, for a filter the smoother does not
-    support; the run's own warnings are raised as they are for the real-time run.
+def synchronized_run(model, filter=None, synchronize=True, search=OffsetSearch(),
+                     **simulate):
+    """(session, run, its warnings held back): the recorded run of ``model`` with ``filter``
+    (None: the model's own; the keyword arguments of
+    :func:`orchestrator.running.scenarios.simulate_scenario` but the backend, which is the
+    direct one), refused before running for a filter the smoother does not support.
 
     ``synchronize``: synchronize the IMU's clock with the GNSS clock after the first run
     (:meth:`navcore.components.smoothing.SmoothingSession.synchronize`: the course
     estimate, else the likelihood search, each offset one more run with the fixes on the
-    IMU's clock) and smooth the run whose fixes fit best (only its warnings are raised);
-    ``search``: the likelihood search's bounds and budget
+    IMU's clock); the run returned is the one whose fixes fit best (the session's
+    ``time_offset``).  ``search``: the likelihood search's bounds and budget
     (:class:`navcore.filters.time_offset_search.OffsetSearch`; None: the course estimate
-    only)."""
+    only).  The smoother and the offline calibration of a log's IMU clock
+    (:mod:`orchestrator.running.clock_calibration`) share it."""
     from navcore.components.smoothing import SmoothingSession
 
     label = scenarios.filter_label(model, filter)
     session = SmoothingSession(label, search)
-    window = simulate.pop("window", None)
 
     def recorded_run():
         return scenarios.simulate_scenario(model, filter=filter, backend="direct",
@@ -64,8 +64,18 @@ def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
     run, said = _quietly(recorded_run)
     if synchronize:
         run, said = session.synchronize(lambda: _quietly(recorded_run), first=(run, said))
-    for w in said:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return session, run, said
+
+
+def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
+                 **simulate) -> scenarios.Run:
+    """The smoothed run of ``model`` with ``filter``: :func:`synchronized_run`'s run
+    smoothed (only its warnings are raised, as they are for the real-time run), on the GNSS
+    clock when synchronized."""
+    window = simulate.pop("window", None)
+    session, run, said = synchronized_run(model, filter, synchronize, search, **simulate)
+    label = scenarios.filter_label(model, filter)
+    raise_held(said)
     solution = session.solution()
     results = smoothed_results(run.results, solution)
     smoothed = scenarios.measured_run(label + SMOOTHED_SUFFIX, run.model, results, window,
@@ -76,6 +86,12 @@ def smoothed_run(model, filter=None, synchronize=True, search=OffsetSearch(),
         "recording_mb": round(solution["recording_bytes"] / 1e6, 2),
         **clock_metadata(session)}
     return scenarios.report_inconsistency(smoothed)
+
+
+def raise_held(said) -> None:
+    """Raise the warnings ``said`` a run held back (:func:`synchronized_run`), as they were."""
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def _quietly(run):
@@ -141,4 +157,4 @@ def smoothed_results(results: Results, solution) -> Results:
 
 
 __all__ = ["SMOOTHED_SUFFIX", "check_smoothable", "clock_metadata", "smoothed_results",
-           "smoothed_run"]
+           "raise_held", "smoothed_run", "synchronized_run"]
