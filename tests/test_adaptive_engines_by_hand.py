@@ -641,6 +641,57 @@ def test_igg3_reacquires_one_component_and_weighs_the_others_on_the_inflated_pre
     np.testing.assert_array_equal(result.innovation, z2)
     assert result.outlier is True
     np.testing.assert_array_equal(kf.guard.since_accepted, np.zeros(6))
+    # east position was down-weighted, not taken at full weight: its down-weighting run goes on
+    assert kf.short_weight_fixes.tolist() == [0, 1, 0, 0, 0, 0]
+
+
+def test_igg3_reacquires_a_run_of_down_weighted_fixes():
+    """A component down-weighted (0 < w < 1) at ``recovery_epochs`` fixes in a row is
+    re-acquired as a rejected one is: the prediction inflated for it, full weight.  A fix at
+    full weight in between starts the run again; a fix beyond k1 (an outlier) at the end of a
+    down-weighting run stays rejected (only a run of rejections re-acquires it); time without
+    fixes is no run (one down-weighted fix after an outage is the law's); with ``recovery``
+    off the weights are the law's at every fix."""
+    options = dict(IGG, recovery=True, recovery_epochs=2)
+    kf = after_first_update(Igg3RobustKfEngine(config(), strapdown(), **options))
+    z1, _ = igg_z(kf, [2.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    kf.update(z1)
+    assert 0.0 < kf.weights[0] < 1.0 and kf.guard.n_reacquired == 0
+    np.testing.assert_array_equal(kf.guard.since_accepted, np.zeros(6))
+    assert kf.short_weight_fixes.tolist() == [1, 0, 0, 0, 0, 0]
+    stepped(kf, 2)
+    P_pred = kf.covariance()
+    z2, S_before = igg_z(kf, [2.5, 0.0, 0.0, 0.0, 0.0, 0.0])
+    lam = inflation_factor(z2[:1], P_pred[:1, :1], R0[:1, :1], 1)
+    assert lam > 1.0
+    P_inflated = inflate_navigation(P_pred, lam, kf.p0_var)
+    nav, biases = before(kf)
+    result = kf.update(z2)
+    assert kf.guard.n_reacquired == 1 and kf.weights.tolist() == [1.0] * 6
+    dx, P, _, _ = textbook(P_inflated, z2, R0)
+    check_feedback(kf, nav, biases, dx, P)
+    np.testing.assert_allclose(result.S, P_inflated[:6, :6] + R0, rtol=1e-12)
+    assert kf.short_weight_fixes.tolist() == [0] * 6
+    # a full-weight fix between two down-weighted ones, an outlier after a down-weighted
+    # one: no re-acquisition, the law's weights
+    for recovery, sequence in ((True, [2.0, 1.0, 2.5]), (True, [2.0, 20.0]),
+                               (False, [2.0, 1.0, 2.5])):
+        kf = after_first_update(Igg3RobustKfEngine(config(), strapdown(),
+                                                   **dict(options, recovery=recovery)))
+        for k, u in enumerate(sequence):
+            z, _ = igg_z(kf, [u, 0.0, 0.0, 0.0, 0.0, 0.0])
+            kf.update(z)
+            assert kf.weights[0] == pytest.approx(igg3_by_hand(u, 1.5, 3.0), rel=1e-12)
+            stepped(kf, 3 + k)
+        assert kf.guard.n_reacquired == 0
+    kf = after_first_update(Igg3RobustKfEngine(config(), strapdown(), **options))
+    kf.update(igg_z(kf, [0.0] * 6)[0])                     # the fix interval: one step
+    for k in range(10):                                   # ten fix intervals without a fix
+        stepped(kf, 2 + k)
+    z, _ = igg_z(kf, [2.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    kf.update(z)
+    assert kf.weights[0] == pytest.approx(igg3_by_hand(2.0, 1.5, 3.0), rel=1e-12)
+    assert kf.guard.n_reacquired == 0 and kf.short_weight_fixes.tolist() == [1, 0, 0, 0, 0, 0]
 
 
 def receiver_r(engine, std):

@@ -273,10 +273,24 @@ class Igg3RobustKfEngine(AidBlindTest, GuardedEngine, KfEngine):
     The component's defaults k0 = 1.5, k1 = 3.0 (Yang Yuanxi's usual constants): 13 % of clean
     components are down-weighted a little, 0.3 % rejected.
 
-    Recovery guard (ours, :mod:`navcore.filters.recovery`; off = the plain IGG-III law): a component
-    rejected (w = 0) after ``recovery_epochs`` fix intervals without an accepted value is
-    re-acquired: the prediction is inflated until its innovation is consistent, the weights
-    are computed again on it and the component keeps at least full weight.
+    Recovery guard (ours, :mod:`navcore.filters.recovery`; off = the plain IGG-III law): a
+    component rejected (w = 0) after ``recovery_epochs`` fix intervals without an accepted value
+    (w > 0), or down-weighted (0 < w < 1) at the last of ``recovery_epochs`` fixes in a row
+    without full weight (``short_weight_fixes``), is re-acquired: the prediction is inflated
+    until its innovation is consistent, the weights are computed again on it and the component
+    keeps at least full weight. The down-weighting run is for an INS error that outgrows the
+    predicted covariance without reaching k1 sigma (a low-cost IMU in strong manoeuvres, errors
+    the model lacks): IGG-III then shrinks good fixes at most epochs, the filter coasts and the
+    innovations grow -- on ``uav_maneuver``'s first 120 s (white GNSS errors only) the law ends
+    2.4 times the Kf's position error, with only rejection runs counted 2.0 times, with both 1.2
+    times. A rejected fix is re-acquired only at the end of a run of rejections, never at the
+    end of a down-weighting run: an outlier beyond k1 after a run of down-weighted fixes stays
+    rejected (``aircraft_outliers``' 20-sigma outliers every 10 s: with one count for both, such
+    runs re-acquired outliers and the position error reached 99 m; with the two, every outlier
+    is rejected, the numbers of the law). The down-weighting run counts fixes, not time: an
+    outage is no evidence against the prediction, and a clock that ran through verify's 30 s
+    outage re-acquired the first fix after it, down-weighted for a 2.5-sigma error of its own,
+    and took that error (11 m).
 
     With land aids the weights come from the covariance without the aids' updates since the
     last fix (:mod:`navcore.filters.aid_blind`): an aid never down-weights a fix.
@@ -284,12 +298,14 @@ class Igg3RobustKfEngine(AidBlindTest, GuardedEngine, KfEngine):
     After an update: ``weights`` (m,), ``n_rejected`` (components with w = 0).
     """
 
-    state_fields = ("weights", "n_rejected")
+    state_fields = ("weights", "n_rejected", "short_weight_fixes")
     derived_fields = ("igg_k0", "igg_k1")
 
     def __init__(self, config, nav, *, igg_k0, igg_k1, recovery, recovery_epochs):
         super().__init__(config, nav)
         self.init_guard(recovery=recovery, recovery_epochs=recovery_epochs)
+        #: per component, the fixes in a row it had less than full weight (w < 1)
+        self.short_weight_fixes = np.zeros(self.m, dtype=np.int64)
         self.init_blind()
         self.igg_k0 = float(igg_k0)
         self.igg_k1 = float(igg_k1)
@@ -304,7 +320,9 @@ class Igg3RobustKfEngine(AidBlindTest, GuardedEngine, KfEngine):
         u = z / np.sqrt(np.diag(tested)[:self.m] + np.diag(self.R0))
         w = robust_laws.igg3_weight(u, self.igg_k0, self.igg_k1)
         self.guard.open_epoch()
-        due = self.guard.due(w == 0.0)
+        run = self.short_weight_fixes + 1          # fixes in a row without full weight, this one
+        due = self.guard.due(w == 0.0) | (self.guard.enabled & (w > 0.0) & (w < 1.0)
+                                          & (run >= self.guard.epochs))
         if due.any():                 # recovery guard: re-acquire with an inflated prediction
             P_pred = inflate_navigation(P_pred, self.guard.reacquisition(z, P_pred, self.R0, due),
                                         self.p0_var)
@@ -322,6 +340,7 @@ class Igg3RobustKfEngine(AidBlindTest, GuardedEngine, KfEngine):
         self.apply(dx, P)
         self.fix_taken()
         self.guard.close_epoch(keep)
+        self.short_weight_fixes = np.where(w == 1.0, 0, run)
         self.weights = w
         self.n_rejected = int((~keep).sum())
         r0 = np.diag(self.R0)
