@@ -33,11 +33,13 @@ assumptions, not independent information on the fix.)
 """
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 from .array_checks import symmetrize
 from .ins_gnss_kf import predicted_rows
 
 
-class AidBlindCovariance:
+class AidBlindCovariance(ABC):
     """Mixin of an engine whose law judges the fixes (module docstring): keeps ``blind_P``,
     None while no aid has updated since the last fix, else the covariance without the aids'
     updates since (the engine's :meth:`blind_now` gives it at an aid's update; an engine whose
@@ -55,10 +57,11 @@ class AidBlindCovariance:
         super().aid_update(H, z, R)
         self.blind_P = blind
 
+    @abstractmethod
     def blind_now(self):
         """The covariance without the aids since the last fix, now, before an aid's update
-        (``blind_P`` carried to now, or the engine's own covariance when None)."""
-        raise NotImplementedError
+        (``blind_P`` carried to now, or the engine's own covariance when None); each family
+        carries it its own way (:class:`AidBlindTest`, ``UnscentedAidBlind``)."""
 
     def fix_taken(self):
         """After a fix's update: the covariance is the fixes' again."""
